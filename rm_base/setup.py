@@ -1,0 +1,23 @@
+from setuptools import find_packages, setup
+
+package_name = 'rm_base'
+
+setup(
+    name=package_name,
+    version='0.1.0',
+    packages=find_packages(exclude=['test']),
+    data_files=[
+        ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
+        ('share/' + package_name, ['package.xml']),
+    ],
+    install_requires=['setuptools'],
+    zip_safe=True,
+    maintainer='rm_ros2 developers',
+    maintainer_email='rm-ros2@example.com',
+    description='rm_ros2 framework: plugins, host, control maths, CAN layer, bridge, simulator',
+    license='Apache-2.0',
+    extras_require={'test': ['pytest', 'hypothesis']},
+    entry_points={
+        'console_scripts': [],
+    },
+)

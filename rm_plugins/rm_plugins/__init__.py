@@ -1,0 +1,1 @@
+"""rm_plugins: the robot mechanisms (chassis, gimbal, shooter, gpio, imu) as rm_base plugins."""

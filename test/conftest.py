@@ -1,0 +1,17 @@
+"""Session-wide test setup: ROS isolation before anything imports rclpy."""
+
+import os
+
+import pytest
+from support.ros import isolate_ros_environment, rclpy_context
+
+# Network rule: localhost-only discovery and a private domain, set before any test (or
+# any process a test starts) can touch DDS.
+isolate_ros_environment(os.environ)
+
+
+@pytest.fixture
+def ros_context():
+    """A private rclpy Context on the test domain, shut down after the test."""
+    with rclpy_context() as context:
+        yield context

@@ -1,0 +1,1 @@
+"""Shared helpers for the rm_ros2 test suite."""

@@ -1,0 +1,99 @@
+"""ROS helpers for tests: isolated environment, private contexts, waiting on conditions.
+
+Every ROS process a test starts runs with localhost-only discovery and the session's own
+ROS_DOMAIN_ID (set by test/conftest.py before anything imports rclpy), so parallel runs
+on one machine never cross-talk and no DDS traffic leaves the machine.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import time
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+
+# Domain 42 is the interactive default of scripts/env.sh; tests keep away from it.
+_USER_DOMAIN = 42
+
+
+def pick_domain_id(seed: int) -> int:
+    """Return a ROS domain id in 1..101 derived from seed, never the interactive default."""
+    domain = 1 + seed % 101
+    return domain + 1 if domain == _USER_DOMAIN else domain
+
+
+def isolate_ros_environment(environ: dict[str, str] | os._Environ) -> int:
+    """Force localhost-only discovery and a private domain id into environ; return the id.
+
+    A domain already chosen through RM_TEST_DOMAIN_ID is kept, so a test process and the
+    processes it starts agree.
+    """
+    environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    domain = int(environ.get('RM_TEST_DOMAIN_ID') or pick_domain_id(os.getpid()))
+    environ['RM_TEST_DOMAIN_ID'] = str(domain)
+    environ['ROS_DOMAIN_ID'] = str(domain)
+    return domain
+
+
+def wait_until(
+    predicate: Callable[[], bool],
+    timeout: float,
+    *,
+    spin: Callable[[float], None] | None = None,
+    period: float = 0.01,
+) -> bool:
+    """Poll predicate until it is true or timeout [s] passes; return its last value.
+
+    Args:
+        predicate: condition to wait for.
+        timeout: longest wait [s]; generous values keep tests stable under CPU steal.
+        spin: called with a short timeout [s] between polls (e.g. executor.spin_once),
+            so callbacks run while waiting. Without it the thread sleeps for period.
+        period: poll period [s] when spin is None.
+    """
+    deadline = time.monotonic() + timeout
+    while True:
+        if predicate():
+            return True
+        if time.monotonic() >= deadline:
+            return bool(predicate())
+        if spin is not None:
+            spin(period)
+        else:
+            time.sleep(period)
+
+
+@contextmanager
+def rclpy_context() -> Iterator[object]:
+    """Yield a private, initialised rclpy Context on the test domain; shut it down after."""
+    import rclpy
+    from rclpy.context import Context
+
+    context = Context()
+    rclpy.init(context=context, domain_id=int(os.environ['ROS_DOMAIN_ID']))
+    try:
+        yield context
+    finally:
+        context.try_shutdown()
+
+
+def start_process(args: Sequence[str], **kwargs) -> subprocess.Popen:
+    """Start a child process in the isolated ROS environment (stdout/stderr captured)."""
+    env = dict(os.environ)
+    env.update(kwargs.pop('env', {}))
+    isolate_ros_environment(env)
+    return subprocess.Popen(
+        list(args), env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **kwargs
+    )
+
+
+def stop_process(proc: subprocess.Popen, timeout: float = 10.0) -> tuple[str, str]:
+    """Send SIGINT, wait up to timeout [s] (then kill); return (stdout, stderr)."""
+    if proc.poll() is None:
+        proc.send_signal(subprocess.signal.SIGINT)
+    try:
+        return proc.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        return proc.communicate()
