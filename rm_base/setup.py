@@ -18,6 +18,13 @@ setup(
     license='Apache-2.0',
     extras_require={'test': ['pytest', 'hypothesis']},
     entry_points={
-        'console_scripts': [],
+        'console_scripts': [
+            'can_bridge = rm_base.bridge.main:main',
+            'rm_robot = rm_base.host.main:main',
+        ],
+        # The simulated CAN interface: can.Bus(interface='rm_sim', channel=...).
+        'can.interface': [
+            'rm_sim = rm_base.sim.bus:SimBus',
+        ],
     },
 )
