@@ -1,0 +1,154 @@
+"""DJI DR16 receiver (DT7 remote) DBUS frames: 18 bytes, UART 100000 bps 8E1.
+
+PROTOCOLS.md §5 (DJI Dev-Board-C ``remote_control.c``, rm_control ``rm_dbus``)::
+
+    bits 0..43   four 11-bit stick channels, raw 364..1684, centre 1024
+    bits 44..45  switch A        bits 46..47  switch B      (1 UP, 3 MID, 2 DOWN)
+    bytes 6..11  mouse x, y, z   int16 LE
+    bytes 12, 13 mouse left, right (1 = pressed)
+    bytes 14..15 keyboard bitmap uint16 LE (bit 0 W ... bit 15 B)
+    bytes 16..17 wheel (dial), uint16 LE, raw 364..1684, centre 1024
+
+Channels and the wheel are reported centred (−660..660). A frame with a channel outside
+±660 or a switch value other than 1/2/3 is rejected, as DJI's and rm_control's decoders
+do (a glitch on the UART must never become a stick command).
+
+UNVERIFIED: which physical switch is on bits 44–45. rm_control and RoboRTS say the
+right one, DJI's example comment says the left; the fields are therefore named
+``switch_a`` (bits 44–45) and ``switch_b`` (bits 46–47) — map them in the config.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+import struct
+
+from rm_base.hardware.errors import FrameLengthError, ValueRangeError
+
+FRAME_LENGTH = 18
+CHANNEL_OFFSET = 1024
+CHANNEL_RANGE = 660
+CHANNEL_MASK = 0x7FF
+BAUD_RATE = 100_000
+
+_TAIL = struct.Struct('<3hBBHH')  # bytes 6..17
+
+
+class Switch(enum.IntEnum):
+    """Three-position switch values."""
+
+    UP = 1
+    DOWN = 2
+    MID = 3
+
+
+class Key(enum.IntFlag):
+    """Keyboard bitmap bits."""
+
+    W = 1 << 0
+    S = 1 << 1
+    A = 1 << 2
+    D = 1 << 3
+    SHIFT = 1 << 4
+    CTRL = 1 << 5
+    Q = 1 << 6
+    E = 1 << 7
+    R = 1 << 8
+    F = 1 << 9
+    G = 1 << 10
+    Z = 1 << 11
+    X = 1 << 12
+    C = 1 << 13
+    V = 1 << 14
+    B = 1 << 15
+
+
+@dataclasses.dataclass(frozen=True)
+class DbusFrame:
+    """One decoded DBUS frame.
+
+    Attributes:
+        channels: (ch0, ch1, ch2, ch3), each −660..660 (rm_control: right X, right Y,
+            left X, left Y).
+        switch_a: bits 44–45 (right switch per rm_control; UNVERIFIED).
+        switch_b: bits 46–47.
+        mouse: (x, y, z) int16 speeds.
+        mouse_left: left button pressed.
+        mouse_right: right button pressed.
+        keys: keyboard bitmap (see :class:`Key`).
+        wheel: dial, −660..660.
+    """
+
+    channels: tuple[int, int, int, int] = (0, 0, 0, 0)
+    switch_a: Switch = Switch.MID
+    switch_b: Switch = Switch.MID
+    mouse: tuple[int, int, int] = (0, 0, 0)
+    mouse_left: bool = False
+    mouse_right: bool = False
+    keys: int = 0
+    wheel: int = 0
+
+
+def decode(data: bytes | bytearray) -> DbusFrame:
+    """Decode one 18-byte frame.
+
+    Raises:
+        FrameLengthError: not 18 bytes.
+        ValueRangeError: a channel or the wheel is outside ±660, or a switch reads 0.
+    """
+    if len(data) != FRAME_LENGTH:
+        raise FrameLengthError(f'DBUS frame must be 18 bytes, got {len(data)}')
+    b0, b1, b2, b3, b4, b5 = data[:6]
+    raw = (
+        (b0 | (b1 << 8)) & CHANNEL_MASK,
+        ((b1 >> 3) | (b2 << 5)) & CHANNEL_MASK,
+        ((b2 >> 6) | (b3 << 2) | (b4 << 10)) & CHANNEL_MASK,
+        ((b4 >> 1) | (b5 << 7)) & CHANNEL_MASK,
+    )
+    channels = tuple(r - CHANNEL_OFFSET for r in raw)
+    mx, my, mz, left, right, keys, wheel_raw = _TAIL.unpack_from(data, 6)
+    wheel = wheel_raw - CHANNEL_OFFSET
+    for i, c in enumerate((*channels, wheel)):
+        if not -CHANNEL_RANGE <= c <= CHANNEL_RANGE:
+            name = f'channel {i}' if i < 4 else 'wheel'
+            raise ValueRangeError(f'DBUS {name} {c} outside ±{CHANNEL_RANGE}')
+    s_a = (b5 >> 4) & 0x3
+    s_b = (b5 >> 6) & 0x3
+    if s_a == 0 or s_b == 0:
+        raise ValueRangeError(f'DBUS switch value 0 (switch_a {s_a}, switch_b {s_b})')
+    return DbusFrame(
+        channels, Switch(s_a), Switch(s_b), (mx, my, mz), bool(left), bool(right), keys, wheel
+    )
+
+
+def encode(frame: DbusFrame) -> bytes:
+    """Encode one frame (receiver side, for the simulator and tests).
+
+    Raises:
+        ValueRangeError: a field outside its range.
+    """
+    if len(frame.channels) != 4:
+        raise ValueRangeError(f'DBUS needs 4 channels, got {len(frame.channels)}')
+    for c in (*frame.channels, frame.wheel):
+        if not -CHANNEL_RANGE <= c <= CHANNEL_RANGE:
+            raise ValueRangeError(f'DBUS channel/wheel {c} outside ±{CHANNEL_RANGE}')
+    try:
+        s_a, s_b = Switch(frame.switch_a), Switch(frame.switch_b)
+    except ValueError as err:
+        raise ValueRangeError(f'DBUS switch must be 1, 2 or 3: {err}') from err
+    if not 0 <= frame.keys <= 0xFFFF:
+        raise ValueRangeError(f'DBUS key bitmap {frame.keys} outside uint16')
+    c0, c1, c2, c3 = (c + CHANNEL_OFFSET for c in frame.channels)
+    bits = c0 | (c1 << 11) | (c2 << 22) | (c3 << 33) | (s_a << 44) | (s_b << 46)
+    try:
+        tail = _TAIL.pack(
+            *frame.mouse,
+            int(frame.mouse_left),
+            int(frame.mouse_right),
+            frame.keys,
+            frame.wheel + CHANNEL_OFFSET,
+        )
+    except struct.error as err:
+        raise ValueRangeError(f'DBUS mouse {frame.mouse!r} does not fit int16: {err}') from err
+    return bits.to_bytes(6, 'little') + tail
