@@ -13,6 +13,8 @@ import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 
+TEST_ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
 # Domain 42 is the interactive default of scripts/env.sh; tests keep away from it.
 _USER_DOMAIN = 42
 
@@ -79,10 +81,14 @@ def rclpy_context() -> Iterator[object]:
 
 
 def start_process(args: Sequence[str], **kwargs) -> subprocess.Popen:
-    """Start a child process in the isolated ROS environment (stdout/stderr captured)."""
+    """Start a child process in the isolated ROS environment (stdout/stderr captured).
+
+    The test tree is put on the child's PYTHONPATH, so `python -m support.<module>` works.
+    """
     env = dict(os.environ)
     env.update(kwargs.pop('env', {}))
     isolate_ros_environment(env)
+    env['PYTHONPATH'] = os.pathsep.join(p for p in (TEST_ROOT, env.get('PYTHONPATH')) if p)
     return subprocess.Popen(
         list(args), env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **kwargs
     )

@@ -1,0 +1,35 @@
+# rm_ros2 — the two commands a user needs are `make run` and `make test`.
+# Both set the workspace up on first use (scripts/setup.sh is idempotent and fast when
+# nothing changed). Every ROS process started from here runs with localhost-only DDS
+# discovery (scripts/env.sh), unless ROS_AUTOMATIC_DISCOVERY_RANGE is already set.
+
+ROBOT ?= standard
+PYTEST_ARGS ?=
+
+.PHONY: all setup test run lint lock clean
+
+all: test
+
+setup:
+	@scripts/setup.sh
+
+## test: the whole suite (unit, integration, replay, linters)
+test: setup
+	@scripts/with_env.sh python -m pytest $(PYTEST_ARGS)
+
+## run: the standard robot on the simulated CAN bus (ROBOT=hero for the hero)
+run: setup
+	@scripts/with_env.sh rm_bringup_run --robot $(ROBOT) --sim
+
+lint: setup
+	@scripts/with_env.sh ruff check .
+
+## lock: regenerate requirements/lock.txt from a fresh venv built from requirements.in
+lock:
+	rm -rf .venv-lock && python3.11 -m venv .venv-lock
+	.venv-lock/bin/python -m pip install --quiet -r requirements/requirements.in
+	.venv-lock/bin/python scripts/make_lock.py
+	rm -rf .venv-lock
+
+clean:
+	rm -rf build install log .venv .pytest_cache .ruff_cache .hypothesis
