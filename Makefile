@@ -19,7 +19,7 @@ test: setup
 
 ## run: the standard robot on the simulated CAN bus (ROBOT=hero for the hero)
 run: setup
-	@scripts/with_env.sh rm_bringup_run --robot $(ROBOT) --sim
+	@scripts/with_env.sh bringup --robot $(ROBOT) --sim
 
 lint: setup
 	@scripts/with_env.sh ruff check .

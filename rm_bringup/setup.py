@@ -22,6 +22,9 @@ setup(
     license='Apache-2.0',
     extras_require={'test': ['pytest']},
     entry_points={
-        'console_scripts': [],
+        'console_scripts': [
+            'bringup = rm_bringup.bringup:main',
+            'rmcli = rm_bringup.cli.main:main',
+        ],
     },
 )

@@ -15,4 +15,12 @@ source "$_rm_root/install/setup.bash"
 export ROS_AUTOMATIC_DISCOVERY_RANGE=${ROS_AUTOMATIC_DISCOVERY_RANGE:-LOCALHOST}
 export ROS_DOMAIN_ID=${ROS_DOMAIN_ID:-42}
 export RM_ROS2_ROOT="$_rm_root"
+# The project's own executables (rmcli, bringup, rm_robot, can_bridge) live where
+# `ros2 run` looks (install/<pkg>/lib/<pkg>); put them on PATH for the shell too.
+for _rm_pkg in rm_bringup rm_base; do
+  case ":$PATH:" in *":$_rm_root/install/$_rm_pkg/lib/$_rm_pkg:"*) ;;
+    *) PATH="$_rm_root/install/$_rm_pkg/lib/$_rm_pkg:$PATH" ;; esac
+done
+export PATH
+unset _rm_pkg
 unset _rm_root

@@ -109,3 +109,40 @@ def test_round_trip_on_the_integer_grid(joint, ints):
     assert (data[0] << 8 | data[1], data[2] << 4 | data[3] >> 4) == (q, dq)
     assert ((data[6] & 0xF) << 4) | (data[7] >> 4) == t
     assert piper.unpack_joint_mit(can_id, data, lim)[0] == joint
+
+
+# --- feedback (piper_sdk docstrings) -----------------------------------------------------
+def test_joint_feedback_layout():
+    # joint 3 = 90.000 deg = 90000 = 0x00015F90, joint 4 = -1.5 deg = -1500 = 0xFFFFFA24
+    can_id, data = piper.encode_joint_feedback(3, math.radians(90.0), math.radians(-1.5))
+    assert (can_id, data) == (0x2A6, h('00 01 5F 90 FF FF FA 24'))
+    joint, a, b = piper.decode_joint_feedback(can_id, data)
+    assert joint == 3
+    assert (math.degrees(a), math.degrees(b)) == pytest.approx((90.0, -1.5))
+    assert piper.joint_feedback_id(4) == (0x2A6, 1)
+    assert piper.joint_feedback_id(5) == (0x2A7, 0)
+
+
+def test_high_speed_feedback_layout():
+    # speed 1.5 rad/s = 1500 = 0x05DC; current -2.0 A = -2000 = 0xF830; position raw 7
+    can_id, data = piper.encode_high_speed_feedback(2, 1.5, -2.0, 7)
+    assert (can_id, data) == (0x252, h('05 DC F8 30 00 00 00 07'))
+    assert piper.decode_high_speed_feedback(can_id, data) == (2, 1.5, -2.0, 7)
+
+
+def test_feedback_errors():
+    with pytest.raises(ValueRangeError, match='not a Piper joint feedback id'):
+        piper.decode_joint_feedback(0x2A8, bytes(8))
+    with pytest.raises(FrameLengthError, match='8 bytes, got 6'):
+        piper.decode_high_speed_feedback(0x251, bytes(6))
+    with pytest.raises(ValueRangeError, match='starts at joint 1, 3 or 5'):
+        piper.encode_joint_feedback(2, 0.0, 0.0)
+    with pytest.raises(ValueRangeError, match='not finite'):
+        piper.encode_high_speed_feedback(1, math.nan, 0.0)
+
+
+@given(st.integers(0, 2), st.integers(-(2**31), 2**31 - 1), st.integers(-(2**31), 2**31 - 1))
+def test_joint_feedback_round_trip(index, a, b):
+    data = a.to_bytes(4, 'big', signed=True) + b.to_bytes(4, 'big', signed=True)
+    joint, ra, rb = piper.decode_joint_feedback(0x2A5 + index, data)
+    assert piper.encode_joint_feedback(joint, ra, rb) == (0x2A5 + index, data)
