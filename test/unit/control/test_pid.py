@@ -139,6 +139,12 @@ def test_when_angle_error_wraps_negative_expect_shortest_way_positive():
     assert pid.update(-3.0, 3.0, 0.001) == pytest.approx(2.0 * math.pi - 6.0)
 
 
+def test_when_angle_error_is_half_a_turn_expect_minus_pi():
+    pid = Pid(PidGains(kp=1.0, angle_mode=True))
+    # e = pi - 0 = pi: both ways are equally short; as wrap_to_pi, [-pi, pi) maps +pi to -pi
+    assert pid.update(math.pi, 0.0, 0.001) == -math.pi
+
+
 def test_when_not_angle_mode_expect_error_not_wrapped():
     pid = Pid(PidGains(kp=1.0))
     # e = 3 - (-3) = 6, as is
