@@ -19,7 +19,7 @@ import math
 from dataclasses import dataclass
 
 from rm_base.control._validation import require_non_negative, require_positive
-from rm_base.errors import InputRejectedError
+from rm_base.errors import ConfigError, InputRejectedError
 
 _INF = math.inf
 _PI = math.pi
@@ -80,7 +80,9 @@ class PidGains:
         }
         for name, value in checked.items():
             object.__setattr__(self, name, value)
-        object.__setattr__(self, 'angle_mode', bool(self.angle_mode))
+        # A YAML 'false' string or a 0/1 must not silently pick a mode.
+        if not isinstance(self.angle_mode, bool):
+            raise ConfigError(f'{owner}.angle_mode must be a bool, got {self.angle_mode!r}')
 
 
 class Pid:

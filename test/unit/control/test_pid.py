@@ -232,6 +232,11 @@ def test_when_gain_invalid_expect_config_error(field, value):
         PidGains(**{field: value})
 
 
+def test_when_angle_mode_not_bool_expect_config_error():
+    with pytest.raises(ConfigError, match='angle_mode'):
+        PidGains(angle_mode='false')
+
+
 def test_when_gains_built_from_ints_expect_floats():
     assert isinstance(PidGains(kp=2).kp, float)
 

@@ -108,6 +108,10 @@ def test_when_omni_wheels_all_roll_same_way_expect_config_error():
         WheelKinematics(wheels)
 
 
+def test_when_wheel_built_from_numpy_floats_expect_accepted():
+    assert Wheel(np.float32(0.5), 0.0, np.float32(0.25)).x == 0.5
+
+
 def test_when_wheel_radius_zero_expect_config_error():
     with pytest.raises(ConfigError, match='radius'):
         Wheel(0.0, 0.0, 0.0)
