@@ -1,6 +1,23 @@
-"""Simulated CAN interface ``rm_sim`` and motor/robot physics (no rclpy)."""
+"""Simulated CAN interface ``rm_sim`` and motor/robot physics (no rclpy).
 
+``can.Bus(interface='rm_sim', channel='can0', motors=[...])`` opens a :class:`SimBus`;
+:class:`SimWorld` holds the channels, motors, robot body and IMUs that share one clock.
+"""
+
+from rm_base.sim.body import Joint, Mount, RobotBody, body_from_config
+from rm_base.sim.bus import DEFAULT_RX_QUEUE_SIZE, SimBus
+from rm_base.sim.devices import (
+    CheetahDevice,
+    DamiaoDevice,
+    DeviceStats,
+    DjiDevice,
+    SimDevice,
+    check_channel,
+    device_from_config,
+)
 from rm_base.sim.errors import SimConfigError, SimError, SimLookupError, SimStateError
+from rm_base.sim.faults import Fault, FaultKind
+from rm_base.sim.imu import SimImu, expand_path, imu_from_config
 from rm_base.sim.motor import (
     DJI_ENCODER_COUNTS,
     MOTOR_DEFAULTS,
@@ -10,17 +27,51 @@ from rm_base.sim.motor import (
     MotorType,
     motor_params,
 )
+from rm_base.sim.world import (
+    ChannelStats,
+    SimChannel,
+    SimWorld,
+    Timing,
+    channel_names,
+    find_channel,
+    load_config,
+)
 
 __all__ = [
+    'DEFAULT_RX_QUEUE_SIZE',
     'DJI_ENCODER_COUNTS',
     'MOTOR_DEFAULTS',
+    'ChannelStats',
+    'CheetahDevice',
+    'DamiaoDevice',
+    'DeviceStats',
+    'DjiDevice',
     'DriveMode',
+    'Fault',
+    'FaultKind',
+    'Joint',
     'MotorModel',
     'MotorParams',
     'MotorType',
+    'Mount',
+    'RobotBody',
+    'SimBus',
+    'SimChannel',
     'SimConfigError',
+    'SimDevice',
     'SimError',
+    'SimImu',
     'SimLookupError',
     'SimStateError',
+    'SimWorld',
+    'Timing',
+    'body_from_config',
+    'channel_names',
+    'check_channel',
+    'device_from_config',
+    'expand_path',
+    'find_channel',
+    'imu_from_config',
+    'load_config',
     'motor_params',
 ]

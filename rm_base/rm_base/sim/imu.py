@@ -1,0 +1,311 @@
+"""A simulated HiPNUC IMU that writes real 0x91 frames to a pseudo-terminal.
+
+The IMU reads its orientation, angular velocity and specific force from the
+:class:`~rm_base.sim.body.RobotBody` it is mounted on (chassis or gimbal) and sends them
+at a fixed rate as HiPNUC 0x91 (IMUSOL) frames, encoded with
+:mod:`rm_base.hardware.protocols.hipnuc`. The frames go into the master side of a
+pseudo-terminal (``os.openpty``); its slave device is symlinked at a configured path, so
+the driver opens that path with pyserial exactly as it opens ``/dev/ttyUSB0`` on a robot.
+
+Like a real UART nobody reads, the terminal's buffer can fill up; then its stale input is
+flushed and the frame is dropped (counted). pyserial flushes the input when it opens the
+port, so a reader never starts with old frames.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import math
+import os
+import termios
+import tty
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from rm_base.geometry import (
+    quaternion_from_rotation_matrix,
+    rotation_matrix_from_rpy,
+    rpy_from_quaternion,
+)
+from rm_base.hardware.protocols import hipnuc
+from rm_base.sim.body import Mount, RobotBody
+from rm_base.sim.errors import SimConfigError
+
+_NS_PER_S = 1_000_000_000
+_NS_PER_MS = 1_000_000
+#: A UART byte is 10 bits on the wire (start, 8 data, stop).
+_BITS_PER_BYTE = 10
+_FRAME_BYTES = hipnuc.HEADER_LENGTH + 76
+
+
+def expand_path(path: str) -> str:
+    """Expand ``~`` and environment variables (``${ROS_DOMAIN_ID}``) in a path.
+
+    Raises:
+        SimConfigError: a variable is not set (the ``$`` would stay in the path).
+    """
+    expanded = os.path.expanduser(os.path.expandvars(path))
+    if '$' in expanded:
+        raise SimConfigError(f'IMU path {path!r} uses an unset environment variable')
+    return expanded
+
+
+class SimImu:
+    """A HiPNUC IMU fixed to the chassis or the gimbal, on a pseudo-terminal.
+
+    Attributes:
+        name: name in the world.
+        path: the configured path (symlink to the terminal), expanded.
+        device_path: the pseudo-terminal's slave device (``/dev/pts/N``).
+        mount: the body it is fixed to.
+        rate_hz: frames per second.
+        frames_written: frames written to the terminal.
+        frames_dropped: frames dropped because nobody read the terminal.
+    """
+
+    def __init__(
+        self,
+        body: RobotBody,
+        *,
+        name: str = 'imu',
+        path: str,
+        mount: Mount = Mount.GIMBAL,
+        rate_hz: float = 100.0,
+        baudrate: int = 115200,
+        mount_rpy: Sequence[float] = (0.0, 0.0, 0.0),
+        temperature: int = 25,
+        pressure: float = 101325.0,
+        magnetic_field: Sequence[float] = (0.0, 0.0, 0.0),
+    ):
+        """Open the pseudo-terminal and create the symlink.
+
+        Args:
+            body: the robot body the IMU reads its motion from.
+            name: name in the world.
+            path: where to put the symlink; ``~`` and ``${VAR}`` are expanded, missing
+                directories are created, a stale symlink is replaced.
+            mount: chassis or gimbal.
+            rate_hz: frame rate [Hz].
+            baudrate: the real link's baud rate [bit/s]; only checks that ``rate_hz``
+                frames fit on it (82 bytes each).
+            mount_rpy: sensor orientation on its body (roll, pitch, yaw) [rad].
+            temperature: reported temperature [°C].
+            pressure: reported air pressure [Pa].
+            magnetic_field: world magnetic field (x, y, z) [µT], rotated into the sensor.
+
+        Raises:
+            SimConfigError: bad parameters, or the path exists and is not a symlink.
+        """
+        if not (math.isfinite(rate_hz) and rate_hz > 0.0):
+            raise SimConfigError(f'{name}: rate_hz must be > 0, got {rate_hz}')
+        needed = rate_hz * _FRAME_BYTES * _BITS_PER_BYTE
+        if needed > baudrate:
+            raise SimConfigError(
+                f'{name}: {rate_hz} Hz of {_FRAME_BYTES}-byte frames needs {needed:.0f} bit/s, '
+                f'more than {baudrate} baud'
+            )
+        if len(mount_rpy) != 3 or len(magnetic_field) != 3:
+            raise SimConfigError(f'{name}: mount_rpy and magnetic_field need 3 values each')
+        self.name = name
+        self.body = body
+        self.mount = mount
+        self.rate_hz = float(rate_hz)
+        self.temperature = int(temperature)
+        self.pressure = float(pressure)
+        self.magnetic_field = np.array(magnetic_field, dtype=float)
+        self.mount_rotation = rotation_matrix_from_rpy(*(float(v) for v in mount_rpy))
+        self.frames_written = 0
+        self.frames_dropped = 0
+        self.path = expand_path(path)
+        self._period_ns = round(_NS_PER_S / rate_hz)
+        self._next_ns = 0
+        self._closed = False
+
+        if os.path.lexists(self.path) and not os.path.islink(self.path):
+            raise SimConfigError(f'{name}: {self.path} exists and is not a symlink')
+        self._master, self._slave = os.openpty()
+        try:
+            # Raw mode: no echo, no CR/LF translation, no XON/XOFF on 0x11/0x13 bytes.
+            tty.setraw(self._slave)
+            os.set_blocking(self._master, False)
+            self.device_path = os.ttyname(self._slave)
+            directory = os.path.dirname(self.path)
+            if directory:
+                os.makedirs(directory, exist_ok=True)
+            if os.path.islink(self.path):
+                os.unlink(self.path)
+            os.symlink(self.device_path, self.path)
+        except OSError as err:
+            self._close_fds()
+            raise SimConfigError(
+                f'{name}: cannot create the terminal at {self.path}: {err}'
+            ) from err
+
+    # -- measurement -----------------------------------------------------------------------
+
+    def sensor_rotation(self) -> np.ndarray:
+        """Rotation matrix world <- sensor."""
+        return self.body.orientation(self.mount) @ self.mount_rotation
+
+    def sample(self) -> dict[str, tuple[float, ...]]:
+        """What the sensor measures now, in the sensor frame (SI).
+
+        Returns:
+            ``acc`` specific force [m/s²] (reads +g up at rest), ``gyr`` [rad/s],
+            ``mag`` [µT], ``quat`` (w, x, y, z) world <- sensor, ``euler`` (roll, pitch,
+            yaw) [rad] of that rotation (R = Rz(yaw) Ry(pitch) Rx(roll)).
+        """
+        rotation = self.sensor_rotation()
+        to_sensor = rotation.T
+        gravity = np.array([0.0, 0.0, hipnuc.STANDARD_GRAVITY])
+        acc = to_sensor @ (self.body.world_acceleration() + gravity)
+        gyr = to_sensor @ self.body.angular_velocity(self.mount)
+        mag = to_sensor @ self.magnetic_field
+        q = quaternion_from_rotation_matrix(rotation)
+        roll, pitch, yaw = rpy_from_quaternion(q)
+        return {
+            'acc': tuple(acc.tolist()),
+            'gyr': tuple(gyr.tolist()),
+            'mag': tuple(mag.tolist()),
+            'quat': (q.w, q.x, q.y, q.z),
+            'euler': (roll, pitch, yaw),
+        }
+
+    def frame(self, now_ns: int) -> bytes:
+        """One complete 0x91 frame for the current motion, stamped ``now_ns``."""
+        s = self.sample()
+        payload = hipnuc.encode_imusol(
+            acc=s['acc'],
+            gyr=s['gyr'],
+            mag=s['mag'],
+            euler=s['euler'],
+            quat=s['quat'],
+            temperature=self.temperature,
+            pressure=self.pressure,
+            system_time_ms=(now_ns // _NS_PER_MS) & 0xFFFFFFFF,
+        )
+        return hipnuc.encode_frame(payload)
+
+    # -- output ----------------------------------------------------------------------------
+
+    def tick(self, now_ns: int) -> bool:
+        """Write a frame if one is due at ``now_ns``; return whether one was due."""
+        if self._closed or now_ns < self._next_ns:
+            return False
+        self._next_ns += self._period_ns
+        if self._next_ns <= now_ns:
+            self._next_ns = now_ns + self._period_ns
+        self.write(self.frame(now_ns))
+        return True
+
+    def write(self, data: bytes) -> None:
+        """Write bytes to the terminal; if its buffer is full, flush stale input and retry."""
+        for attempt in range(2):
+            try:
+                written = os.write(self._master, data)
+            except BlockingIOError:
+                written = 0
+            except OSError as err:  # EIO: the terminal went away
+                if err.errno != errno.EIO:
+                    raise
+                written = 0
+            if written == len(data):
+                self.frames_written += 1
+                return
+            if attempt == 0:
+                with contextlib.suppress(termios.error):
+                    termios.tcflush(self._slave, termios.TCIFLUSH)
+                if written:
+                    # A partial frame went out: the reader's parser resynchronises on it.
+                    data = data[written:]
+        self.frames_dropped += 1
+
+    def close(self) -> None:
+        """Close the terminal and remove the symlink (idempotent)."""
+        if self._closed:
+            return
+        self._closed = True
+        with contextlib.suppress(OSError):
+            if os.path.islink(self.path) and os.readlink(self.path) == self.device_path:
+                os.unlink(self.path)
+        self._close_fds()
+
+    def _close_fds(self) -> None:
+        for fd in (self._master, self._slave):
+            with contextlib.suppress(OSError):
+                os.close(fd)
+
+    @property
+    def closed(self) -> bool:
+        """True after :meth:`close`."""
+        return self._closed
+
+    def __enter__(self) -> SimImu:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+_IMU_KEYS = frozenset(
+    {
+        'name',
+        'path',
+        'mount',
+        'rate_hz',
+        'baudrate',
+        'mount_rpy',
+        'temperature',
+        'pressure',
+        'magnetic_field',
+    }
+)
+
+
+def imu_from_config(config: Mapping[str, Any], body: RobotBody) -> SimImu:
+    """Build an IMU from a plain dict.
+
+    Keys: ``path`` (required; e.g. ``'/tmp/rm_sim_${ROS_DOMAIN_ID}/imu'``), ``name``
+    (``'imu'``), ``mount`` (``'gimbal'`` default or ``'chassis'``), ``rate_hz`` (100),
+    ``baudrate`` (115200), ``mount_rpy`` [rad] ((0, 0, 0)), ``temperature`` [°C] (25),
+    ``pressure`` [Pa] (101325), ``magnetic_field`` [µT] ((0, 0, 0)).
+
+    Raises:
+        SimConfigError: a missing, unknown or invalid key.
+    """
+    if not isinstance(config, Mapping):
+        raise SimConfigError(f'an IMU config must be a mapping, got {config!r}')
+    unknown = sorted(set(config) - _IMU_KEYS)
+    if unknown:
+        raise SimConfigError(f'IMU: unknown key(s) {unknown}; known: {sorted(_IMU_KEYS)}')
+    if not isinstance(config.get('path'), str):
+        raise SimConfigError(f'IMU needs a path (string), got {config.get("path")!r}')
+    try:
+        mount = Mount(config.get('mount', 'gimbal'))
+    except ValueError:
+        raise SimConfigError(
+            f"IMU mount must be 'gimbal' or 'chassis', got {config.get('mount')!r}"
+        ) from None
+    kwargs = {
+        k: config[k]
+        for k in ('name', 'rate_hz', 'baudrate', 'temperature', 'pressure')
+        if k in config
+    }
+    for key in ('mount_rpy', 'magnetic_field'):
+        if key in config:
+            value = config[key]
+            if not isinstance(value, Sequence) or not all(
+                isinstance(v, int | float) and math.isfinite(v) for v in value
+            ):
+                raise SimConfigError(f'IMU {key} must be 3 finite numbers, got {value!r}')
+            kwargs[key] = value
+    for key in ('rate_hz', 'pressure'):
+        if key in kwargs and not isinstance(kwargs[key], int | float):
+            raise SimConfigError(f'IMU {key} must be a number, got {kwargs[key]!r}')
+    for key in ('baudrate', 'temperature'):
+        if key in kwargs and (isinstance(kwargs[key], bool) or not isinstance(kwargs[key], int)):
+            raise SimConfigError(f'IMU {key} must be an int, got {kwargs[key]!r}')
+    return SimImu(body, path=config['path'], mount=mount, **kwargs)
