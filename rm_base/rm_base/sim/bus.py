@@ -94,6 +94,7 @@ class SimBus(can.BusABC):
         self.receive_own_messages = receive_own_messages
         self.preserve_timestamps = preserve_timestamps
         self.rx_overflows = 0
+        self._filters = None  # until BusABC.__init__ sets them; frames may arrive before
         self._queue: queue.Queue[can.Message] = queue.Queue(rx_queue_size)
         self._open = False
         try:
@@ -135,6 +136,10 @@ class SimBus(can.BusABC):
 
     def _deliver(self, msg: can.Message) -> None:
         """Called by the channel with a frame for this bus."""
+        # Filter on arrival, as the kernel does for socketcan: recv(timeout=0) then never
+        # returns None while a matching frame waits behind a filtered-out one.
+        if not self._matches_filters(msg):
+            return
         try:
             self._queue.put_nowait(msg)
         except queue.Full:
@@ -146,7 +151,7 @@ class SimBus(can.BusABC):
             msg = self._queue.get(block=True, timeout=timeout)
         except queue.Empty:
             return None, False
-        return msg, False
+        return msg, True
 
     def send(self, msg: can.Message, timeout: float | None = None) -> None:
         """Put a frame on the simulated bus (``timeout`` is unused: delivery is immediate).

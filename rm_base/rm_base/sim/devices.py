@@ -32,6 +32,7 @@ from typing import Any, ClassVar
 
 from rm_base.hardware.errors import HardwareConfigError, ProtocolError, ValueRangeError
 from rm_base.hardware.protocols import cheetah, damiao, dji, mit
+from rm_base.sim._schedule import RateSchedule
 from rm_base.sim.errors import SimConfigError
 from rm_base.sim.faults import Fault, FaultKind
 from rm_base.sim.motor import MotorModel, MotorParams, MotorType, motor_params
@@ -61,23 +62,6 @@ class DeviceStats:
     tx_frames: int = 0
     garbage_frames: int = 0
     timeouts: int = 0
-
-
-class _Schedule:
-    """Fixed-rate events on the simulation clock (integer ns, no drift)."""
-
-    def __init__(self, rate_hz: float):
-        self.period_ns = round(_NS_PER_S / rate_hz)
-        self.next_ns: int | None = None  # the first call is due and sets the phase
-
-    def due(self, now_ns: int) -> bool:
-        if self.next_ns is not None and now_ns < self.next_ns:
-            return False
-        if self.next_ns is None or self.next_ns + self.period_ns <= now_ns:
-            self.next_ns = now_ns + self.period_ns  # first event, or far behind: new phase
-        else:
-            self.next_ns += self.period_ns
-        return True
 
 
 class SimDevice(ABC):
@@ -114,7 +98,7 @@ class SimDevice(ABC):
         #: The config dict the device was built from, if any.
         self.config: dict[str, Any] | None = None
         self._faults: dict[FaultKind, Fault] = {}
-        self._garbage: _Schedule | None = None
+        self._garbage: RateSchedule | None = None
         self._rng = random.Random(seed)
 
     # -- routing -------------------------------------------------------------------------
@@ -215,7 +199,7 @@ class SimDevice(ABC):
             self.model.temperature_override = fault.temperature
             self.model.temperature = fault.temperature
         elif fault.kind is FaultKind.GARBAGE:
-            self._garbage = _Schedule(fault.rate_hz)
+            self._garbage = RateSchedule(fault.rate_hz)
 
     def clear_faults(self, kind: FaultKind | None = None) -> None:
         """Remove one kind of fault, or all of them (None).
@@ -295,7 +279,9 @@ class DjiDevice(SimDevice):
         self.command_raw = 0
         self._last_command_ns: int | None = None
         self._timed_out = True
-        self._feedback = _Schedule(feedback_rate_hz)
+        self._feedback = RateSchedule(
+            feedback_rate_hz, first_ns=round(_NS_PER_S / feedback_rate_hz)
+        )
         self._listen = frozenset({self.command_id})
         self._transmit = frozenset({self.feedback_id})
 

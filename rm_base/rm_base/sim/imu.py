@@ -31,6 +31,7 @@ from rm_base.geometry import (
     rpy_from_quaternion,
 )
 from rm_base.hardware.protocols import hipnuc
+from rm_base.sim._schedule import RateSchedule
 from rm_base.sim.body import Mount, RobotBody
 from rm_base.sim.errors import SimConfigError
 
@@ -120,8 +121,7 @@ class SimImu:
         self.frames_written = 0
         self.frames_dropped = 0
         self.path = expand_path(path)
-        self._period_ns = round(_NS_PER_S / rate_hz)
-        self._next_ns = 0
+        self._schedule = RateSchedule(rate_hz, first_ns=round(_NS_PER_S / rate_hz))
         self._closed = False
 
         if os.path.lexists(self.path) and not os.path.islink(self.path):
@@ -193,11 +193,8 @@ class SimImu:
 
     def tick(self, now_ns: int) -> bool:
         """Write a frame if one is due at ``now_ns``; return whether one was due."""
-        if self._closed or now_ns < self._next_ns:
+        if self._closed or not self._schedule.due(now_ns):
             return False
-        self._next_ns += self._period_ns
-        if self._next_ns <= now_ns:
-            self._next_ns = now_ns + self._period_ns
         self.write(self.frame(now_ns))
         return True
 

@@ -1,0 +1,190 @@
+"""Simulated HiPNUC IMU: real 0x91 frames on a pseudo-terminal, read through pyserial."""
+
+import math
+import os
+import time
+
+import numpy as np
+import pytest
+import serial
+from rm_base.geometry import quaternion_from_rpy
+from rm_base.hardware.protocols import hipnuc
+from rm_base.sim import SimConfigError, SimWorld
+
+from .helpers import unique_channel
+
+FREE = {'coulomb_friction': 0.0, 'viscous_friction': 0.0}
+WHEELS = ['wheel_fl', 'wheel_fr', 'wheel_rl', 'wheel_rr']
+G = hipnuc.STANDARD_GRAVITY
+
+
+def robot(imu, *, yaw=0.0, gimbal_yaw=0.0, pitch=0.0):
+    motors = [{'type': 'm3508', 'id': i + 1, 'name': n, **FREE} for i, n in enumerate(WHEELS)]
+    motors += [
+        {'type': 'gm6020', 'id': 1, 'name': 'yaw', 'initial_position': gimbal_yaw, **FREE},
+        {'type': 'gm6020', 'id': 2, 'name': 'pitch', 'initial_position': pitch, **FREE},
+    ]
+    body = {
+        'initial_pose': [0.0, 0.0, yaw],
+        'chassis': {
+            'type': 'mecanum',
+            'motors': WHEELS,
+            'wheelbase': 0.4,
+            'track': 0.3,
+            'wheel_radius': 0.076,
+        },
+        'gimbal': {'yaw': {'motor': 'yaw'}, 'pitch': {'motor': 'pitch'}},
+    }
+    return {
+        'timing': 'stepped',
+        'channels': {unique_channel(): motors},
+        'body': body,
+        'imus': [imu],
+    }
+
+
+def read_samples(port, count, timeout=10.0):
+    """Read until the parser has count samples (the frames are already in the pty)."""
+    parser = hipnuc.HipnucParser()
+    samples = []
+    deadline = time.monotonic() + timeout
+    while len(samples) < count and time.monotonic() < deadline:
+        samples += parser.feed(port.read(port.in_waiting or 1))
+    assert parser.crc_errors == 0
+    return samples
+
+
+def assert_quat_close(got_wxyz, expected_xyzw, tol=1e-6):
+    x, y, z, w = expected_xyzw
+    got = np.array(got_wxyz)
+    want = np.array([w, x, y, z])
+    # q and -q are the same rotation.
+    assert min(np.abs(got - want).max(), np.abs(got + want).max()) < tol
+
+
+@pytest.fixture
+def imu_path(tmp_path, monkeypatch):
+    monkeypatch.setenv('RM_SIM_TEST_DIR', str(tmp_path))
+    return '${RM_SIM_TEST_DIR}/dev/imu'
+
+
+def test_imu_frames_read_through_pyserial_match_the_gimbal_orientation(imu_path, tmp_path):
+    # Chassis heading 0.5 rad, gimbal yaw joint 0.3, pitch joint -0.2 (nose up):
+    # the gimbal IMU's orientation is Rz(0.8) Ry(-0.2); at rest it measures gravity only.
+    config = robot(
+        {'path': imu_path, 'mount': 'gimbal', 'rate_hz': 100}, yaw=0.5, gimbal_yaw=0.3, pitch=-0.2
+    )
+    with SimWorld.from_config(config) as world:
+        link = tmp_path / 'dev' / 'imu'
+        assert link.is_symlink()
+        with serial.Serial(str(link), 115200, timeout=1.0) as port:
+            world.step(50)  # 100 Hz: 5 frames in 50 ms
+            samples = read_samples(port, 5)
+    assert len(samples) == 5
+    sample = samples[-1]
+    assert_quat_close(sample.quat, quaternion_from_rpy(0.0, -0.2, 0.8))
+    assert sample.euler == pytest.approx((0.0, -0.2, 0.8), abs=1e-6)
+    # Specific force seen from a frame pitched by p: Ry(p)^T (0, 0, g) = g (-sin p, 0, cos p);
+    # nose up (p < 0), the sensor's x axis points partly up and reads +g sin 0.2.
+    assert sample.acc == pytest.approx((G * math.sin(0.2), 0.0, G * math.cos(0.2)), abs=1e-5)
+    assert sample.gyr == pytest.approx((0.0, 0.0, 0.0), abs=1e-9)
+    assert sample.system_time_ms == 50
+    assert [s.system_time_ms for s in samples] == [10, 20, 30, 40, 50]
+
+
+def test_chassis_imu_measures_the_chassis_spin(imu_path):
+    config = robot({'path': imu_path, 'mount': 'chassis', 'rate_hz': 200, 'baudrate': 921600})
+    with SimWorld.from_config(config) as world:
+        imu = world.imu()
+        # In-place rotation at 1 rad/s: FL, RL back, FR, RR forward at (lx+ly)/r rad/s.
+        speed = (0.2 + 0.15) / 0.076
+        for name, sign in zip(WHEELS, (-1, 1, -1, 1), strict=True):
+            world.motor(name).model.reset(velocity=sign * speed)
+        with serial.Serial(imu.path, 921600, timeout=1.0) as port:
+            world.step(100)
+            samples = read_samples(port, 20)
+    last = samples[-1]
+    assert last.gyr == pytest.approx((0.0, 0.0, 1.0), abs=1e-6)
+    assert last.euler[2] == pytest.approx(0.1, abs=1e-5)  # 100 ms at 1 rad/s
+
+
+def test_imu_mount_rotation_is_applied(imu_path):
+    # Mounted upside down (roll pi): gravity reads -g on the sensor's z.
+    config = robot({'path': imu_path, 'mount': 'chassis', 'mount_rpy': [math.pi, 0.0, 0.0]})
+    with SimWorld.from_config(config) as world:
+        sample = world.imu().sample()
+    assert sample['acc'] == pytest.approx((0.0, 0.0, -G), abs=1e-9)
+
+
+def test_imu_writes_frames_at_its_rate(imu_path):
+    with SimWorld.from_config(robot({'path': imu_path, 'rate_hz': 50})) as world:
+        world.step(1000)
+        assert world.imu().frames_written == 50
+
+
+def test_when_nobody_reads_expect_writes_never_block(imu_path):
+    # 1 kHz of 82-byte frames for 2 s is 164 kB, far beyond a terminal's buffer.
+    config = robot({'path': imu_path, 'rate_hz': 1000, 'baudrate': 2_000_000})
+    with SimWorld.from_config(config) as world:
+        world.step(2000)
+        imu = world.imu()
+        assert imu.frames_written + imu.frames_dropped == 2000
+        assert imu.frames_written > 0
+
+
+def test_frame_is_a_valid_hipnuc_frame(imu_path):
+    with SimWorld.from_config(robot({'path': imu_path})) as world:
+        frame = world.imu().frame(1234 * 1_000_000)
+    assert len(frame) == 82
+    sample = hipnuc.decode_payload(hipnuc.decode_frame(frame))
+    assert sample.system_time_ms == 1234
+    assert sample.temperature == 25
+
+
+def test_when_closed_expect_symlink_removed(imu_path, tmp_path):
+    world = SimWorld.from_config(robot({'path': imu_path}))
+    link = tmp_path / 'dev' / 'imu'
+    assert link.is_symlink()
+    world.close()
+    assert not os.path.lexists(link)
+    assert world.imu().closed
+
+
+def test_when_stale_symlink_exists_expect_replaced(imu_path, tmp_path):
+    (tmp_path / 'dev').mkdir()
+    (tmp_path / 'dev' / 'imu').symlink_to('/dev/null')
+    with SimWorld.from_config(robot({'path': imu_path})) as world:
+        assert os.readlink(tmp_path / 'dev' / 'imu') == world.imu().device_path
+
+
+def test_when_path_is_a_regular_file_expect_config_error(imu_path, tmp_path):
+    (tmp_path / 'dev').mkdir()
+    (tmp_path / 'dev' / 'imu').write_text('')
+    with pytest.raises(SimConfigError, match='exists and is not a symlink'):
+        SimWorld.from_config(robot({'path': imu_path}))
+
+
+def test_when_path_uses_unset_variable_expect_config_error(monkeypatch):
+    monkeypatch.delenv('RM_SIM_UNSET_VAR', raising=False)
+    with pytest.raises(SimConfigError, match='unset environment variable'):
+        SimWorld.from_config(robot({'path': '/tmp/${RM_SIM_UNSET_VAR}/imu'}))
+
+
+def test_when_rate_exceeds_baudrate_expect_config_error(imu_path):
+    # 200 Hz * 82 bytes * 10 bits = 164000 bit/s > 115200.
+    with pytest.raises(SimConfigError, match='more than 115200 baud'):
+        SimWorld.from_config(robot({'path': imu_path, 'rate_hz': 200}))
+
+
+@pytest.mark.parametrize(
+    ('change', 'message'),
+    [
+        ({'mount': 'turret'}, "mount must be 'gimbal' or 'chassis'"),
+        ({'rate': 100}, r"unknown key\(s\) \['rate'\]"),
+        ({'mount_rpy': [0, 0]}, '3 values'),
+        ({'baudrate': 115200.5}, 'baudrate must be an int'),
+    ],
+)
+def test_when_bad_imu_config_expect_config_error(imu_path, change, message):
+    with pytest.raises(SimConfigError, match=message):
+        SimWorld.from_config(robot({'path': imu_path, **change}))

@@ -1,0 +1,166 @@
+"""SimWorld: building from config, the clock, the registry, the real-time thread."""
+
+import pytest
+from rm_base.sim import (
+    SimBus,
+    SimConfigError,
+    SimLookupError,
+    SimStateError,
+    SimWorld,
+    Timing,
+    channel_names,
+    find_channel,
+    load_config,
+)
+from support.ros import wait_until
+
+from .helpers import drain, unique_channel
+
+
+def test_from_config_builds_channels_and_motors(make_world):
+    can0, can1 = unique_channel(), unique_channel()
+    world = make_world(
+        {
+            'tick_rate_hz': 500,
+            'channels': {
+                can0: [{'type': 'm3508', 'id': 1, 'name': 'wheel_fl'}],
+                can1: [{'type': 'gm6020', 'id': 1, 'name': 'yaw'}],
+            },
+        }
+    )
+    assert world.timing is Timing.STEPPED
+    assert world.period == pytest.approx(0.002)
+    assert set(world.motors) == {'wheel_fl', 'yaw'}
+    assert world.channel(can0).devices == [world.motor('wheel_fl')]
+    assert find_channel(can1) is world.channel(can1)
+    assert {can0, can1} <= set(channel_names())
+
+
+def test_when_world_closed_expect_channel_names_released(make_world):
+    name = unique_channel()
+    world = make_world({'channels': {name: []}})
+    world.close()
+    world.close()  # idempotent
+    assert find_channel(name) is None
+    with pytest.raises(SimStateError, match='closed'):
+        world.step()
+
+
+def test_when_channel_owned_by_another_world_expect_config_error(make_world):
+    name = unique_channel()
+    make_world({'channels': {name: []}})
+    with pytest.raises(SimConfigError, match='belongs to another simulated world'):
+        make_world({'channels': {name: []}})
+
+
+def test_when_config_fails_expect_partial_world_released():
+    name = unique_channel()
+    with pytest.raises(SimConfigError, match='unknown motor type'):
+        SimWorld.from_config({'channels': {name: [{'type': 'nope', 'id': 1}]}})
+    assert find_channel(name) is None
+
+
+@pytest.mark.parametrize(
+    ('config', 'message'),
+    [
+        ({'channel': {}}, r"unknown key\(s\) \['channel'\]"),
+        ({'timing': 'fast'}, "timing must be 'realtime' or 'stepped'"),
+        ({'tick_rate_hz': 1}, 'tick_rate_hz must be 10..100000'),
+        ({'seed': 1.5}, 'seed must be an int'),
+        ({'channels': ['can0']}, 'channels must map names'),
+        ({'imus': {'path': '/tmp/x'}}, 'imus must be a list'),
+    ],
+)
+def test_when_bad_world_config_expect_config_error(config, message):
+    with pytest.raises(SimConfigError, match=message):
+        SimWorld.from_config(config)
+
+
+def test_step_and_advance_move_the_clock_in_ticks(make_world):
+    world = make_world({})
+    world.step(3)
+    assert world.time_ns == 3_000_000
+    world.advance(0.0104)  # rounds to 10 ticks
+    assert world.time == pytest.approx(0.013)
+    with pytest.raises(ValueError, match='n must be an int >= 0'):
+        world.step(-1)
+    with pytest.raises(ValueError, match='seconds must be finite'):
+        world.advance(float('nan'))
+
+
+def test_lookups_name_what_exists(make_world):
+    world = make_world({'channels': {unique_channel(): [{'type': 'm3508', 'id': 1}]}})
+    with pytest.raises(SimLookupError, match=r"no motor 'x'.*\['m3508_1'\]"):
+        world.motor('x')
+    with pytest.raises(SimLookupError, match="no channel 'x'"):
+        world.channel('x')
+    with pytest.raises(SimLookupError, match="no IMU 'imu'"):
+        world.imu()
+
+
+def test_stepped_world_has_no_physics_thread(make_world):
+    with pytest.raises(SimStateError, match='no physics thread'):
+        make_world({}).start()
+
+
+def test_when_physics_raises_expect_on_error_hook_decides():
+    errors = []
+
+    def on_error(error):
+        errors.append(error)
+        return len(errors) < 3  # go on twice, then stop
+
+    with SimWorld(on_error=on_error) as world:
+        world.add_channel(unique_channel(), [{'type': 'm3508', 'id': 1, 'name': 'w'}])
+        device = world.motor('w')
+
+        def broken(now_ns, dt):
+            raise RuntimeError('boom')
+
+        device.control = broken
+        world.start()
+        assert wait_until(lambda: not world.running, timeout=10.0)
+        assert len(errors) == 3
+        assert isinstance(world.error, RuntimeError)
+
+
+def test_realtime_world_advances_with_the_wall_clock():
+    with SimWorld() as world:
+        world.start()
+        world.start()  # no-op while running
+        assert wait_until(lambda: world.time >= 0.05, timeout=10.0)
+        world.stop()
+        stopped_at = world.time_ns
+        world.step()  # stepping is allowed again once the thread is stopped
+        assert world.time_ns == stopped_at + world.period_ns
+
+
+def test_same_config_gives_the_same_frames(make_world):
+    def run():
+        name = unique_channel()
+        world = make_world(
+            {
+                'channels': {
+                    name: [
+                        {'type': 'm3508', 'id': 1, 'initial_velocity': 3.0},
+                        {'type': 'dm4310', 'id': 2, 'enabled': True, 'initial_position': 0.3},
+                    ]
+                }
+            }
+        )
+        with SimBus(name, world=world) as bus:
+            world.step(50)
+            return [(f.arbitration_id, bytes(f.data)) for f in drain(bus)]
+
+    assert run() == run()
+
+
+def test_load_config_reads_yaml(tmp_path):
+    path = tmp_path / 'world.yaml'
+    path.write_text('timing: stepped\nchannels:\n  can9: []\n')
+    assert load_config(path) == {'timing': 'stepped', 'channels': {'can9': []}}
+    (tmp_path / 'list.yaml').write_text('- 1\n')
+    with pytest.raises(SimConfigError, match='does not hold a mapping'):
+        load_config(tmp_path / 'list.yaml')
+    with pytest.raises(SimConfigError, match='cannot read world config'):
+        load_config(tmp_path / 'missing.yaml')
