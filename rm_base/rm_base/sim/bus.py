@@ -94,7 +94,8 @@ class SimBus(can.BusABC):
         self.receive_own_messages = receive_own_messages
         self.preserve_timestamps = preserve_timestamps
         self.rx_overflows = 0
-        self._filters = None  # until BusABC.__init__ sets them; frames may arrive before
+        # Frames may arrive between attach and BusABC.__init__, which sets the filters again.
+        self._filters = can_filters or None
         self._queue: queue.Queue[can.Message] = queue.Queue(rx_queue_size)
         self._open = False
         try:

@@ -35,7 +35,7 @@ from rm_base.hardware.protocols import cheetah, damiao, dji, mit
 from rm_base.sim._schedule import RateSchedule
 from rm_base.sim.errors import SimConfigError
 from rm_base.sim.faults import Fault, FaultKind
-from rm_base.sim.motor import MotorModel, MotorParams, MotorType, motor_params
+from rm_base.sim.motor import DriveMode, MotorModel, MotorParams, MotorType, motor_params
 
 #: A frame a device sends: (11-bit arbitration id, data bytes).
 Frame = tuple[int, bytes]
@@ -312,22 +312,20 @@ class DjiDevice(SimDevice):
             self.model.command_current(value)
 
     def _control(self, now_ns: int, dt: float) -> None:
-        if self.overheated:
+        if self._timed_out:
             self.model.command_current(0.0)
             return
-        if self._timed_out or self.command_timeout_ns is None:
-            if self._timed_out:
-                self.model.command_current(0.0)
-            return
-        if self._last_command_ns is not None and (
-            now_ns - self._last_command_ns > self.command_timeout_ns
-        ):
+        timeout = self.command_timeout_ns
+        last = self._last_command_ns
+        if timeout is not None and last is not None and now_ns - last > timeout:
             self._timed_out = True
             self.stats.timeouts += 1
             self.model.command_current(0.0)
-            return
-        # Re-apply: an over-temperature cut-out may have zeroed the output meanwhile.
-        self._apply(self.spec.si_from_raw(self.command_raw))
+        elif self.overheated:
+            self.model.command_current(0.0)
+        else:
+            # Re-applied each tick: an over-temperature cut-out may have zeroed the output.
+            self._apply(self.spec.si_from_raw(self.command_raw))
 
     def _periodic(self, now_ns: int) -> list[Frame]:
         if not self._feedback.due(now_ns):
@@ -664,7 +662,7 @@ class CheetahDevice(_MitDevice):
     def _control(self, now_ns: int, dt: float) -> None:
         if not self.enabled or self.overheated:
             self._limp()
-        elif self.model.mode.value == 'current':
+        elif self.model.mode is DriveMode.CURRENT:
             self._apply_mit(self.command)  # back from an over-temperature cut-out
 
     def _reply(self) -> Frame:

@@ -257,9 +257,11 @@ class SimWorld:
     """Everything simulated that shares one clock.
 
     Build one from a config with :meth:`from_config`, or piece by piece with
-    :meth:`add_channel`, :meth:`add_motor`, :meth:`set_body` and :meth:`add_imu`. Use it as
-    a context manager (or call :meth:`close`) so the physics thread stops, the IMU
-    terminals close and the channel names are released.
+    :meth:`add_channel`, :meth:`add_motor`, :meth:`set_body` and :meth:`add_imu`; then
+    either :meth:`start` its real-time thread or drive it with :meth:`step`. (A world that a
+    :class:`~rm_base.sim.bus.SimBus` builds is started by the bus.) Use it as a context
+    manager (or call :meth:`close`) so the physics thread stops, the IMU terminals close and
+    the channel names are released.
 
     Attributes:
         timing: who drives the clock.

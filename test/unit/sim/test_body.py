@@ -211,3 +211,21 @@ def test_omni_and_explicit_wheel_chassis(make_world):
         world.motor(name).model.reset(velocity=4.0)
     world.step(100)
     assert world.body.yaw == pytest.approx(0.1, rel=1e-9)
+
+
+def test_explicit_wheel_list_chassis(make_world):
+    # Three omni wheels given one by one, all rolling +x except one rolling +y at the
+    # front: wheel i speed = (n_i . v) / r. Driving vx = 0.1 needs 2 rad/s on the
+    # x-rolling wheels and 0 on the other.
+    config = robot_config()
+    wheels = [
+        {'motor': 'wheel_fl', 'x': 0.0, 'y': 0.2, 'radius': 0.05},
+        {'motor': 'wheel_fr', 'x': 0.0, 'y': -0.2, 'radius': 0.05, 'direction': -1},
+        {'motor': 'wheel_rl', 'x': 0.2, 'y': 0.0, 'radius': 0.05, 'rolling_direction': math.pi / 2},
+    ]
+    config['body'] = {'chassis': {'type': 'wheels', 'wheels': wheels}}
+    world = make_world(config)
+    world.motor('wheel_fl').model.reset(velocity=2.0)
+    world.motor('wheel_fr').model.reset(velocity=-2.0)
+    world.step(1000)
+    assert (world.body.x, world.body.y, world.body.yaw) == pytest.approx((0.1, 0.0, 0.0))

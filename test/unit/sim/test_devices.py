@@ -413,3 +413,19 @@ def test_motor_parameters_are_overridable_from_config(make_bus):
     assert params.load_inertia == 0.5
     assert params.max_current == 10.0
     assert params.torque_constant == 0.3  # the rest keeps the M3508 defaults
+
+
+def test_when_dji_cut_out_configured_expect_zero_current_while_hot(make_bus):
+    bus = make_bus([{'type': 'm3508', 'id': 1, 'overtemp_c': 100.0, 'command_timeout': 0}])
+    device = bus.sim.motor('m3508_1')
+    device.model.locked = True
+    send(bus, 0x200, dji.pack_command([4096]))
+    bus.sim.step()
+    assert device.model.current == pytest.approx(5.0)
+    bus.sim.inject('m3508_1', Fault.over_temperature(101.0))
+    bus.sim.step()
+    assert device.model.current == 0.0
+    bus.sim.clear_faults('m3508_1')
+    device.model.temperature = 90.0
+    bus.sim.step()
+    assert device.model.current == pytest.approx(5.0)  # the held command comes back
