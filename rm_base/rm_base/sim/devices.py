@@ -181,7 +181,9 @@ class SimDevice(ABC):
         self.stats.tx_frames += len(frames)
         garbage = self._faults.get(FaultKind.GARBAGE)
         if garbage is not None and self._garbage is not None and self._garbage.due(now_ns):
-            if garbage.random_ids:
+            if garbage.can_id is not None:
+                can_id = garbage.can_id
+            elif garbage.random_ids:
                 can_id = self._rng.randrange(_STD_ID_MAX + 1)
             else:
                 can_id = min(self.transmit_ids)

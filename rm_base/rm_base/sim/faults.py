@@ -33,6 +33,8 @@ class Fault:
         temperature: OVER_TEMPERATURE only: forced winding temperature [°C].
         rate_hz: GARBAGE only: frames per second, at most the world's tick rate.
         random_ids: GARBAGE only: random 11-bit ids instead of the motor's feedback id.
+        can_id: GARBAGE only: send on this 11-bit id instead (a rogue node on, e.g., a
+            command id); wins over ``random_ids``.
     """
 
     kind: FaultKind
@@ -40,6 +42,7 @@ class Fault:
     temperature: float = 130.0
     rate_hz: float = 100.0
     random_ids: bool = False
+    can_id: int | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.kind, FaultKind):
@@ -52,6 +55,12 @@ class Fault:
             raise SimConfigError(f'fault temperature must be -40..255 °C, got {self.temperature}')
         if not (math.isfinite(self.rate_hz) and self.rate_hz > 0.0):
             raise SimConfigError(f'garbage rate_hz must be > 0, got {self.rate_hz}')
+        if self.can_id is not None and (
+            isinstance(self.can_id, bool)
+            or not isinstance(self.can_id, int)
+            or not 0 <= self.can_id <= 0x7FF
+        ):
+            raise SimConfigError(f'garbage can_id must be an int in 0..0x7FF, got {self.can_id!r}')
 
     @classmethod
     def offline(cls) -> Fault:
@@ -69,9 +78,11 @@ class Fault:
         return cls(FaultKind.OVER_TEMPERATURE, temperature=temperature)
 
     @classmethod
-    def garbage(cls, rate_hz: float = 100.0, random_ids: bool = False) -> Fault:
-        """Emit ``rate_hz`` frames/s of random bytes on the feedback id (or random ids)."""
-        return cls(FaultKind.GARBAGE, rate_hz=rate_hz, random_ids=random_ids)
+    def garbage(
+        cls, rate_hz: float = 100.0, random_ids: bool = False, can_id: int | None = None
+    ) -> Fault:
+        """Emit ``rate_hz`` frames/s of random bytes on the feedback id (or elsewhere)."""
+        return cls(FaultKind.GARBAGE, rate_hz=rate_hz, random_ids=random_ids, can_id=can_id)
 
     @classmethod
     def from_config(cls, config: Mapping[str, Any]) -> Fault:
@@ -104,5 +115,5 @@ _PARAMS: dict[FaultKind, frozenset[str]] = {
     FaultKind.OFFLINE: frozenset(),
     FaultKind.JAM: frozenset({'load_torque'}),
     FaultKind.OVER_TEMPERATURE: frozenset({'temperature'}),
-    FaultKind.GARBAGE: frozenset({'rate_hz', 'random_ids'}),
+    FaultKind.GARBAGE: frozenset({'rate_hz', 'random_ids', 'can_id'}),
 }

@@ -182,23 +182,28 @@ class SimChannel:
             if msg.is_error_frame:
                 self.stats.unclaimed += 1
                 return
-            now_ns = self.world.time_ns
-            claimed = False
             replies: list[Frame] = []
-            for device in self.devices:
-                if msg.arbitration_id in device.listen_ids:
-                    claimed = True
-                    replies += device.receive(
-                        msg.arbitration_id,
-                        bytes(msg.data),
-                        now_ns,
-                        is_extended_id=msg.is_extended_id,
-                        is_remote_frame=msg.is_remote_frame,
-                        is_fd=msg.is_fd,
-                    )
+            claimed = self._route(
+                msg.arbitration_id,
+                bytes(msg.data),
+                replies,
+                is_extended_id=msg.is_extended_id,
+                is_remote_frame=msg.is_remote_frame,
+                is_fd=msg.is_fd,
+            )
             if not claimed:
                 self.stats.unclaimed += 1
             self.deliver_frames(replies)
+
+    def _route(self, can_id: int, data: bytes, replies: list[Frame], **flags: bool) -> bool:
+        """Hand a frame to every motor listening on its id; collect their replies."""
+        claimed = False
+        now_ns = self.world.time_ns
+        for device in self.devices:
+            if can_id in device.listen_ids:
+                claimed = True
+                replies += device.receive(can_id, data, now_ns, **flags)
+        return claimed
 
     def deliver_frames(self, frames: Iterable[Frame]) -> None:
         """Deliver frames sent by the motors to every attached bus."""
@@ -229,6 +234,14 @@ class SimChannel:
         for device in self.devices:
             frames += device.emit(now_ns)
         self.deliver_frames(frames)
+        if self._state is can.BusState.ERROR:
+            return
+        # Every node hears every frame: a motor's frame can reach another motor (only a
+        # garbage frame can, the config check keeps feedback ids off command ids).
+        replies: list[Frame] = []
+        for can_id, data in frames:
+            self._route(can_id, data, replies)
+        self.deliver_frames(replies)
 
 
 def _copy(msg: can.Message, timestamp: float, channel: str, *, is_rx: bool) -> can.Message:

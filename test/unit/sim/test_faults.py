@@ -171,3 +171,14 @@ def test_when_fault_for_unknown_motor_expect_lookup_error(make_bus):
         bus.sim.inject('x', Fault.offline())
     with pytest.raises(SimConfigError, match='unknown fault kind'):
         bus.sim.clear_faults('w', 'melt')
+
+
+def test_when_garbage_on_a_command_id_expect_other_motors_hear_it(make_bus):
+    # A rogue node spamming 0x200 drives the C620 with id 1 with random slot values.
+    bus = make_bus([{'type': 'm3508', 'id': 1, 'name': 'victim'}, {'type': 'gm6020', 'id': 3}])
+    bus.sim.inject('gm6020_3', Fault.garbage(rate_hz=1000.0, can_id=0x200))
+    bus.sim.step(5)
+    victim = bus.sim.motor('victim')
+    assert victim.stats.rx_frames == 5
+    assert victim.command_raw != 0
+    assert len(frames_on(drain(bus), 0x200)) == 5
