@@ -18,7 +18,8 @@ Which world a bus joins:
    by the buses.
 
 A world built here (3, 4) runs in real time unless ``timing='stepped'``; then the test
-drives it with ``bus.sim.step()``.
+drives it with ``bus.sim.step(n)`` (ticks) or ``bus.sim.advance(seconds)``. Opening a bus
+on a real-time world that is not running starts its physics thread.
 """
 
 from __future__ import annotations

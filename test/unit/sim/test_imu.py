@@ -9,7 +9,7 @@ import pytest
 import serial
 from rm_base.geometry import quaternion_from_rpy
 from rm_base.hardware.protocols import hipnuc
-from rm_base.sim import SimConfigError, SimWorld
+from rm_base.sim import SimBus, SimConfigError, SimWorld
 
 from .helpers import unique_channel
 
@@ -188,3 +188,18 @@ def test_when_rate_exceeds_baudrate_expect_config_error(imu_path):
 def test_when_bad_imu_config_expect_config_error(imu_path, change, message):
     with pytest.raises(SimConfigError, match=message):
         SimWorld.from_config(robot({'path': imu_path, **change}))
+
+
+def test_bus_built_world_carries_the_imu_and_closes_it(imu_path, tmp_path):
+    config = robot({'path': imu_path})
+    channel = next(iter(config['channels']))
+    bus = SimBus(channel, world=config)
+    try:
+        imu = bus.sim.imu()
+        with serial.Serial(imu.path, 115200, timeout=1.0) as port:
+            bus.sim.step(20)
+            assert len(read_samples(port, 2)) == 2
+    finally:
+        bus.shutdown()
+    assert imu.closed
+    assert not os.path.lexists(tmp_path / 'dev' / 'imu')
