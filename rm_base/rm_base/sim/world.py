@@ -195,12 +195,19 @@ class SimChannel:
                 self.stats.unclaimed += 1
             self.deliver_frames(replies)
 
-    def _route(self, can_id: int, data: bytes, replies: list[Frame], **flags: bool) -> bool:
-        """Hand a frame to every motor listening on its id; collect their replies."""
+    def _route(
+        self,
+        can_id: int,
+        data: bytes,
+        replies: list[Frame],
+        source: SimDevice | None = None,
+        **flags: bool,
+    ) -> bool:
+        """Hand a frame to every motor (but its sender) listening on its id; collect replies."""
         claimed = False
         now_ns = self.world.time_ns
         for device in self.devices:
-            if can_id in device.listen_ids:
+            if can_id in device.listen_ids and device is not source:
                 claimed = True
                 replies += device.receive(can_id, data, now_ns, **flags)
         return claimed
@@ -230,17 +237,17 @@ class SimChannel:
                     )
 
     def _emit(self, now_ns: int) -> None:
-        frames: list[Frame] = []
+        sent: list[tuple[SimDevice, Frame]] = []
         for device in self.devices:
-            frames += device.emit(now_ns)
-        self.deliver_frames(frames)
+            sent += [(device, frame) for frame in device.emit(now_ns)]
+        self.deliver_frames(frame for _, frame in sent)
         if self._state is can.BusState.ERROR:
             return
         # Every node hears every frame: a motor's frame can reach another motor (only a
         # garbage frame can, the config check keeps feedback ids off command ids).
         replies: list[Frame] = []
-        for can_id, data in frames:
-            self._route(can_id, data, replies)
+        for device, (can_id, data) in sent:
+            self._route(can_id, data, replies, device)
         self.deliver_frames(replies)
 
 

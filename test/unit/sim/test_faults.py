@@ -182,3 +182,10 @@ def test_when_garbage_on_a_command_id_expect_other_motors_hear_it(make_bus):
     assert victim.stats.rx_frames == 5
     assert victim.command_raw != 0
     assert len(frames_on(drain(bus), 0x200)) == 5
+
+
+def test_a_motor_does_not_hear_its_own_garbage(make_bus):
+    bus = make_bus([{'type': 'm3508', 'id': 1, 'name': 'w'}])
+    bus.sim.inject('w', Fault.garbage(rate_hz=1000.0, can_id=0x200))
+    bus.sim.step(5)
+    assert bus.sim.motor('w').stats.rx_frames == 0
