@@ -1,4 +1,4 @@
-"""Control maths: PID controllers, tracking differentiator, ramps and filters.
+"""Control maths: PID, tracking differentiator, ramps, filters and mechanism helpers.
 
 Pure Python on plain floats (no ROS, no I/O, no threads), cheap enough for 1 kHz loops.
 Every ``update`` raises ``rm_base.errors.InputRejectedError`` on NaN/inf input or a
@@ -6,23 +6,55 @@ non-positive dt, and every config dataclass raises ``rm_base.errors.ConfigError`
 construction with a bad value.
 """
 
+from rm_base.control.chassis_modes import (
+    ChassisModeController,
+    ChassisModeParams,
+    ChassisMotionMode,
+    FollowParams,
+    GyroParams,
+    TwistParams,
+    TwistWaveform,
+    twist_waveform,
+)
 from rm_base.control.filters import LowPassFilter, MovingAverage
 from rm_base.control.incremental_pid import IncrementalPid, IncrementalPidGains
 from rm_base.control.pid import Pid, PidGains
+from rm_base.control.power_limit import (
+    ChassisPowerModel,
+    PowerLimitResult,
+    estimate_power,
+    fit_power_model,
+    limit_power,
+    power_limit_scale,
+)
 from rm_base.control.ramp import RampLimiter, RampLimits, ramp_step
 from rm_base.control.tracking_differentiator import TdParams, TrackingDifferentiator, fhan
 
 __all__ = [
+    'ChassisModeController',
+    'ChassisModeParams',
+    'ChassisMotionMode',
+    'ChassisPowerModel',
+    'FollowParams',
+    'GyroParams',
     'IncrementalPid',
     'IncrementalPidGains',
     'LowPassFilter',
     'MovingAverage',
     'Pid',
     'PidGains',
+    'PowerLimitResult',
     'RampLimiter',
     'RampLimits',
     'TdParams',
     'TrackingDifferentiator',
+    'TwistParams',
+    'TwistWaveform',
+    'estimate_power',
     'fhan',
+    'fit_power_model',
+    'limit_power',
+    'power_limit_scale',
     'ramp_step',
+    'twist_waveform',
 ]
