@@ -18,6 +18,8 @@ from rm_base.control.chassis_modes import (
 )
 from rm_base.control.filters import LowPassFilter, MovingAverage
 from rm_base.control.incremental_pid import IncrementalPid, IncrementalPidGains
+from rm_base.control.jam_detector import JamDetector, JamDetectorParams
+from rm_base.control.lookup import LookupTable
 from rm_base.control.pid import Pid, PidGains
 from rm_base.control.power_limit import (
     ChassisPowerModel,
@@ -39,6 +41,9 @@ __all__ = [
     'GyroParams',
     'IncrementalPid',
     'IncrementalPidGains',
+    'JamDetector',
+    'JamDetectorParams',
+    'LookupTable',
     'LowPassFilter',
     'MovingAverage',
     'Pid',
