@@ -14,7 +14,7 @@ def h(text):
     return bytes.fromhex(text)
 
 
-# --- command vectors -------------------------------------------------------------------
+# --- command vectors ---
 @pytest.mark.parametrize(
     ('name', 'raws', 'expected'),
     [
@@ -65,7 +65,7 @@ def test_d3_d5_gm6020_voltage_frame_ids():
     ]
 
 
-# --- feedback vectors ------------------------------------------------------------------
+# --- feedback vectors ---
 @pytest.mark.parametrize(
     ('name', 'kind', 'can_id', 'esc_id', 'data', 'expected'),
     [
@@ -98,7 +98,7 @@ def test_f3_c610_has_no_temperature_and_10a_scale():
     assert spec.feedback_amps(fb.current_raw) == pytest.approx(-5.0)  # -5000 * 10/10000
 
 
-# --- ids, limits, config ----------------------------------------------------------------
+# --- ids, limits, config ---
 @pytest.mark.parametrize(
     ('kind', 'esc_id', 'slot', 'fb'),
     [
@@ -191,7 +191,7 @@ def test_when_feedback_angle_above_8191_expect_error():
         dji.encode_feedback(0, 0, 0, 256)
 
 
-# --- collisions ---------------------------------------------------------------------------
+# --- collisions ---
 def test_gm6020_id_n_collides_with_c620_id_n_plus_4():
     with pytest.raises(HardwareConfigError, match='yaw and wheel share command frame 0x1FF slot 0'):
         dji.check_collisions([('c620', 5), ('gm6020_voltage', 1)], names=['wheel', 'yaw'])
@@ -215,7 +215,7 @@ def test_distinct_motors_do_not_collide():
     )
 
 
-# --- round trips ----------------------------------------------------------------------------
+# --- round trips ---
 int16 = st.integers(-32768, 32767)
 
 

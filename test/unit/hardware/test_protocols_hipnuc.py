@@ -145,7 +145,7 @@ def test_encoders_reject_bad_values():
         )
 
 
-# --- streaming parser ------------------------------------------------------------------------
+# --- streaming parser ---
 def test_parser_finds_frames_in_garbage_and_split_reads():
     p = hipnuc.HipnucParser()
     stream = b'\x00\x5a\x11' + H1 + b'\xff\x5a' + H3 + H2

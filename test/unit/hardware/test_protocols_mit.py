@@ -19,7 +19,7 @@ DM4310 = damiao.dm_limits('DM4310')
 DM8009 = damiao.dm_limits('DM8009')
 
 
-# --- float <-> uint ---------------------------------------------------------------------
+# --- float <-> uint ---
 def test_float_to_uint_truncates_like_the_c_code():
     # (1.0 + 12.5) * 65535 / 25 = 35388.9 -> 35388 (M2 position)
     assert mit.float_to_uint(1.0, -12.5, 12.5, 16) == 35388
@@ -38,7 +38,7 @@ def test_uint_to_float_rejects_values_wider_than_the_field():
         mit.uint_to_float(4096, -1.0, 1.0, 12)
 
 
-# --- MIT command vectors -----------------------------------------------------------------
+# --- MIT command vectors ---
 @pytest.mark.parametrize(
     ('name', 'limits', 'cmd', 'ints', 'data'),
     [
@@ -108,7 +108,7 @@ def test_pack_mit_uints_rejects_wide_fields():
         mit.pack_mit_uints(0, 4096, 0, 0, 0)
 
 
-# --- Damiao feedback ----------------------------------------------------------------------
+# --- Damiao feedback ---
 @pytest.mark.parametrize(
     ('name', 'limits', 'data', 'expected'),
     [
@@ -165,7 +165,7 @@ def test_damiao_encode_feedback_rejects_bad_fields():
         )
 
 
-# --- Damiao other modes -----------------------------------------------------------------------
+# --- Damiao other modes ---
 @pytest.mark.parametrize(
     ('name', 'can_id', 'motor', 'pos', 'vlim', 'data'),
     [
@@ -216,7 +216,7 @@ def test_pos_vel_rejects_nan():
         damiao.pack_pos_vel(math.inf, 1.0)
 
 
-# --- system frames -----------------------------------------------------------------------------
+# --- system frames ---
 @pytest.mark.parametrize(
     ('command', 'last'),
     [
@@ -248,7 +248,7 @@ def test_system_frame_id_with_and_without_mode_offset():
     assert damiao.system_frame_id(1, DmMode.MIT) == 0x001
 
 
-# --- limits table ---------------------------------------------------------------------------------
+# --- limits table ---
 def test_model_limits_table_and_overrides():
     assert damiao.dm_limits('dm8009') == MitLimits(12.5, 45.0, 54.0)
     assert damiao.dm_limits('DM10010L').t_max == 200.0
@@ -263,7 +263,7 @@ def test_model_limits_table_and_overrides():
         MitLimits(1.0, 1.0, 1.0, kd_min=6.0)
 
 
-# --- Cheetah ------------------------------------------------------------------------------------
+# --- Cheetah ---
 def test_c2_cheetah_reply():
     # p 0x8000: 32768*25/65535-12.5 = 0.000191; v 0x800: 2048*130/4095-65 = 0.015873;
     # t 0x800: 2048*36/4095-18 = 0.004396

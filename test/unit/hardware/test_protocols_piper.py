@@ -111,7 +111,7 @@ def test_round_trip_on_the_integer_grid(joint, ints):
     assert piper.unpack_joint_mit(can_id, data, lim)[0] == joint
 
 
-# --- feedback (piper_sdk docstrings) -----------------------------------------------------
+# --- feedback (piper_sdk docstrings) ---
 def test_joint_feedback_layout():
     # joint 3 = 90.000 deg = 90000 = 0x00015F90, joint 4 = -1.5 deg = -1500 = 0xFFFFFA24
     can_id, data = piper.encode_joint_feedback(3, math.radians(90.0), math.radians(-1.5))

@@ -1,0 +1,34 @@
+"""Shared helpers of the hardware-layer tests (imported as a plain module)."""
+
+import itertools
+import os
+
+from rm_base.hardware.config import JointConfig
+
+MS = 1_000_000  # ns
+T0 = 1_000 * MS
+
+_channels = itertools.count()
+
+
+class FakeClock:
+    """A monotonic clock [ns] that only moves when the test says so."""
+
+    def __init__(self, start_ns: int = T0) -> None:
+        self.now_ns = start_ns
+
+    def __call__(self) -> int:
+        return self.now_ns
+
+    def advance_ms(self, ms: float) -> int:
+        self.now_ns += int(ms * MS)
+        return self.now_ns
+
+
+def unique_channel() -> str:
+    """A python-can virtual channel no other test uses."""
+    return f'rm-hw-test-{os.getpid()}-{next(_channels)}'
+
+
+def joint(name='j', type='m3508', bus='can0', id=1, **extra):
+    return JointConfig.from_dict(name, {'type': type, 'bus': bus, 'id': id, **extra})
