@@ -1,0 +1,446 @@
+"""A managed python-can bus: send, a receive thread that dispatches frames, reconnects.
+
+:class:`ManagedBus` wraps one ``can.Bus`` (any interface). Its receive thread only hands
+frames to their owners — handlers registered per arbitration id — and never does control
+work. A bus error, bus-off or an adapter that disappears is logged and counted, the bus
+is closed and reopened with exponential back-off, and nothing raises into the caller:
+:meth:`ManagedBus.send` returns False while the bus is down.
+
+Optionally every frame sent and received is written to a python-can log file
+(``can.Logger``: .asc, .blf, .log, .csv, .trc, .txt) by a writer thread, so file I/O never
+runs on the 1 kHz path.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import enum
+import logging
+import queue
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+import can
+
+from rm_base.hardware.config import BusConfig
+from rm_base.hardware.errors import BusError
+
+_log = logging.getLogger(__name__)
+
+#: Handler of a received frame: ``handler(msg, now_ns) -> matched``.
+FrameHandler = Callable[[can.Message, int], bool]
+BusFactory = Callable[..., can.BusABC]
+
+# Nominal frame lengths without bit stuffing: SOF..EOF plus 3 bits of interframe space.
+_STD_FRAME_OVERHEAD_BITS = 47
+_EXT_FRAME_OVERHEAD_BITS = 67
+
+
+def frame_bits(msg: can.Message) -> int:
+    """Nominal number of bits a classic CAN frame occupies on the wire (no stuffing).
+
+    Used for the bus-load estimate; CAN FD frames are counted at the nominal rate, which
+    overestimates their load.
+    """
+    overhead = _EXT_FRAME_OVERHEAD_BITS if msg.is_extended_id else _STD_FRAME_OVERHEAD_BITS
+    return overhead + 8 * len(msg.data)
+
+
+class BusState(enum.Enum):
+    """Life cycle of a :class:`ManagedBus`."""
+
+    NEW = 'new'  # constructed, never opened
+    UP = 'up'  # open and working
+    DOWN = 'down'  # failed; being reopened with back-off
+    CLOSED = 'closed'  # shut down
+
+
+@dataclasses.dataclass(frozen=True)
+class BusStats:
+    """Counters of one bus (monotonic since construction, except the load).
+
+    Attributes:
+        name: bus name.
+        state: :class:`BusState` value.
+        frames_sent: frames handed to the driver successfully.
+        frames_received: frames received (data frames).
+        frames_unmatched: received frames no handler claimed.
+        send_errors: failed sends (driver error, buffer full, bus down).
+        receive_errors: errors raised by the driver while receiving.
+        error_frames: CAN error frames reported by the driver.
+        handler_errors: exceptions raised by frame handlers (bugs; logged).
+        reopen_count: successful (re)opens after the first open.
+        open_failures: failed attempts to open.
+        generation: number of successful opens (changes when the bus comes back).
+        load_bps: estimated bits per second on the wire since the previous stats() call.
+        load_fraction: load_bps / bitrate, or None without a bitrate.
+        last_error: text of the last error, or None.
+    """
+
+    name: str
+    state: str
+    frames_sent: int
+    frames_received: int
+    frames_unmatched: int
+    send_errors: int
+    receive_errors: int
+    error_frames: int
+    handler_errors: int
+    reopen_count: int
+    open_failures: int
+    generation: int
+    load_bps: float
+    load_fraction: float | None
+    last_error: str | None
+
+
+class _LogSink:
+    """Writes frames to a python-can writer from its own thread."""
+
+    def __init__(self, path: str, name: str) -> None:
+        try:
+            self._writer = can.Logger(path)
+        except (ValueError, OSError) as err:
+            raise BusError(f'bus {name}: cannot open CAN log {path!r}: {err}') from err
+        self._queue: queue.SimpleQueue[can.Message | None] = queue.SimpleQueue()
+        self._thread = threading.Thread(target=self._run, name=f'canlog-{name}', daemon=True)
+        self._thread.start()
+
+    def put(self, msg: can.Message) -> None:
+        self._queue.put(msg)
+
+    def _run(self) -> None:
+        while (msg := self._queue.get()) is not None:
+            try:
+                self._writer.on_message_received(msg)
+            except Exception:
+                _log.exception('CAN log writer failed; frame dropped')
+
+    def stop(self) -> None:
+        self._queue.put(None)
+        self._thread.join(timeout=5.0)
+        self._writer.stop()
+
+
+class ManagedBus:
+    """One CAN bus with a receive thread, dispatch by arbitration id and reconnection.
+
+    Handlers run on the receive thread; they must be quick (decode and store). A handler
+    returns True if the frame was for it; a frame nobody claims is counted as unmatched.
+
+    Example:
+        >>> bus = ManagedBus(BusConfig('vcan', 'virtual', 'doc'))
+        >>> bus.add_handler(0x201, lambda msg, now_ns: True)
+        >>> with bus:
+        ...     bus.start()
+        ...     bus.send(can.Message(arbitration_id=0x200, data=bytes(8), is_extended_id=False))
+        True
+    """
+
+    def __init__(
+        self,
+        config: BusConfig,
+        *,
+        clock_ns: Callable[[], int] = time.perf_counter_ns,
+        bus_factory: BusFactory = can.Bus,
+    ) -> None:
+        """Create the bus object; nothing is opened until :meth:`open` or :meth:`start`.
+
+        Args:
+            config: bus configuration.
+            clock_ns: monotonic clock [ns] used to stamp received frames and for the load
+                estimate (reconnect back-off always runs on real time).
+            bus_factory: builds the python-can bus (``can.Bus``; tests pass fakes).
+        """
+        self.config = config
+        self.name = config.name
+        self._clock_ns = clock_ns
+        self._factory = bus_factory
+        self._bus: can.BusABC | None = None
+        self._state = BusState.NEW
+        self._handlers: dict[int, tuple[FrameHandler, ...]] = {}
+        self._reopen_listeners: list[Callable[[int], None]] = []
+        self._failure_listeners: list[Callable[[int], None]] = []
+        self._stop = threading.Event()
+        self._reopen_requested = False
+        self._thread: threading.Thread | None = None
+        self._lock = threading.Lock()  # open/close and shutdown
+        self._backoff_s = config.reconnect_initial_s
+        self._reopen_delay_s = config.reconnect_initial_s
+        self._consecutive_send_failures = 0
+        self._log_sink = _LogSink(config.log_file, config.name) if config.log_file else None
+        # counters (single writer each: the sending thread or the receive thread)
+        self._sent = 0
+        self._received = 0
+        self._unmatched = 0
+        self._send_errors = 0
+        self._receive_errors = 0
+        self._error_frames = 0
+        self._handler_errors = 0
+        self._reopen_count = 0
+        self._open_failures = 0
+        self._generation = 0
+        self._bits = 0
+        self._load_mark: tuple[int, int] = (clock_ns(), 0)
+        self._last_error: str | None = None
+
+    # --- configuration -----------------------------------------------------------------
+    def add_handler(self, arbitration_id: int, handler: FrameHandler) -> None:
+        """Register ``handler`` for frames with ``arbitration_id`` (several may share one)."""
+        self._handlers[arbitration_id] = (*self._handlers.get(arbitration_id, ()), handler)
+
+    def add_reopen_listener(self, listener: Callable[[int], None]) -> None:
+        """Call ``listener(now_ns)`` whenever the bus comes back, before any frame is sent."""
+        self._reopen_listeners.append(listener)
+
+    def add_failure_listener(self, listener: Callable[[int], None]) -> None:
+        """Call ``listener(now_ns)`` whenever the bus fails (after it was up)."""
+        self._failure_listeners.append(listener)
+
+    def _notify(self, listeners: list[Callable[[int], None]]) -> None:
+        now = self._clock_ns()
+        for listener in listeners:
+            try:
+                listener(now)
+            except Exception:
+                _log.exception('bus %s: listener failed', self.name)
+
+    # --- life cycle ------------------------------------------------------------------------
+    @property
+    def state(self) -> BusState:
+        """Current :class:`BusState`."""
+        return self._state
+
+    @property
+    def generation(self) -> int:
+        """Number of successful opens; changes each time the bus comes back."""
+        return self._generation
+
+    def open(self) -> bool:
+        """Try to open the bus now.
+
+        Returns:
+            True if the bus is up. On failure the error is logged and counted, and the
+            receive thread (if started) keeps retrying with back-off.
+
+        Raises:
+            BusError: the bus was shut down.
+        """
+        with self._lock:
+            if self._state is BusState.CLOSED:
+                raise BusError(f'bus {self.name} is shut down')
+            if self._bus is not None:
+                return True
+            return self._open_locked()
+
+    def _open_locked(self) -> bool:
+        cfg = self.config
+        kwargs: dict[str, Any] = dict(cfg.options)
+        if cfg.bitrate is not None:
+            kwargs.setdefault('bitrate', cfg.bitrate)
+        if cfg.fd:
+            kwargs.setdefault('fd', True)
+            if cfg.data_bitrate is not None:
+                kwargs.setdefault('data_bitrate', cfg.data_bitrate)
+        try:
+            bus = self._factory(
+                interface=cfg.interface, channel=cfg.channel, ignore_config=True, **kwargs
+            )
+        except (can.CanError, OSError, ValueError, ImportError) as err:
+            self._open_failures += 1
+            self._note_error(f'open failed: {err!r}')
+            self._state = BusState.DOWN
+            self._schedule_reopen()
+            return False
+        first = self._generation == 0
+        if not first:
+            # before the bus is published, so no frame goes out before the owners know
+            self._notify(self._reopen_listeners)
+        self._consecutive_send_failures = 0
+        self._reopen_requested = False
+        self._backoff_s = cfg.reconnect_initial_s
+        self._bus = bus
+        self._generation += 1
+        self._state = BusState.UP
+        if first:
+            _log.info('bus %s up (%s %s)', self.name, cfg.interface, cfg.channel)
+        else:
+            self._reopen_count += 1
+            _log.warning('bus %s is back (reopen #%d)', self.name, self._reopen_count)
+        return True
+
+    def _schedule_reopen(self) -> None:
+        self._reopen_delay_s = self._backoff_s
+        _log.warning('bus %s down; reopening in %.3f s', self.name, self._backoff_s)
+        self._backoff_s = min(self._backoff_s * 2.0, self.config.reconnect_max_s)
+
+    def _close_locked(self) -> None:
+        bus, self._bus = self._bus, None
+        if bus is not None:
+            try:
+                bus.shutdown()
+            except Exception as err:
+                _log.debug('bus %s: shutdown of the failed bus raised %r', self.name, err)
+
+    def _fail(self, reason: str) -> None:
+        """Close the bus after an error and schedule a reopen (receive thread)."""
+        with self._lock:
+            if self._state is BusState.CLOSED:
+                return
+            self._note_error(reason)
+            self._close_locked()
+            self._state = BusState.DOWN
+            self._notify(self._failure_listeners)
+            self._schedule_reopen()
+
+    def start(self) -> None:
+        """Open the bus (if possible) and start the receive thread. Idempotent.
+
+        Raises:
+            BusError: the bus was shut down.
+        """
+        self.open()
+        if self._thread is None:
+            self._thread = threading.Thread(
+                target=self._run, name=f'canrx-{self.name}', daemon=True
+            )
+            self._thread.start()
+
+    def shutdown(self) -> None:
+        """Stop the receive thread, close the bus and the log. Idempotent."""
+        with self._lock:
+            if self._state is BusState.CLOSED:
+                return
+            self._state = BusState.CLOSED
+        self._stop.set()
+        if self._thread is not None and self._thread is not threading.current_thread():
+            self._thread.join(timeout=5.0)
+            if self._thread.is_alive():
+                _log.error('bus %s: receive thread did not stop within 5 s', self.name)
+        with self._lock:
+            self._close_locked()
+        if self._log_sink is not None:
+            self._log_sink.stop()
+        _log.info('bus %s shut down', self.name)
+
+    def __enter__(self) -> ManagedBus:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.shutdown()
+
+    # --- sending -----------------------------------------------------------------------------
+    def send(self, msg: can.Message) -> bool:
+        """Send one frame; never raises for bus trouble.
+
+        Returns:
+            True if the driver accepted the frame; False if the bus is down or the send
+            failed (counted; after ``send_failures_to_reopen`` consecutive failures the
+            bus is reopened).
+        """
+        bus = self._bus
+        if bus is None:
+            self._send_errors += 1
+            return False
+        try:
+            bus.send(msg, timeout=self.config.send_timeout_s)
+        except (can.CanError, OSError, ValueError) as err:
+            self._send_errors += 1
+            self._consecutive_send_failures += 1
+            if self._consecutive_send_failures == 1:
+                self._note_error(f'send failed: {err!r}')
+            if self._consecutive_send_failures >= self.config.send_failures_to_reopen:
+                self._reopen_requested = True
+            return False
+        self._consecutive_send_failures = 0
+        self._sent += 1
+        self._bits += frame_bits(msg)
+        if self._log_sink is not None:
+            self._log_sink.put(msg)
+        return True
+
+    # --- receiving ---------------------------------------------------------------------------
+    def _run(self) -> None:
+        stop = self._stop
+        timeout = self.config.receive_timeout_s
+        while not stop.is_set():
+            bus = self._bus
+            if bus is not None and self._reopen_requested:
+                self._fail('too many consecutive send failures')
+                continue
+            if bus is None:
+                if stop.wait(self._reopen_delay_s):
+                    break
+                with self._lock:
+                    if self._state is not BusState.CLOSED and self._bus is None:
+                        self._open_locked()
+                continue
+            try:
+                msg = bus.recv(timeout)
+            except (can.CanError, OSError, ValueError) as err:
+                if stop.is_set():
+                    break
+                self._receive_errors += 1
+                self._fail(f'receive failed: {err!r}')
+                continue
+            if msg is not None:
+                self.dispatch(msg, self._clock_ns())
+
+    def dispatch(self, msg: can.Message, now_ns: int) -> int:
+        """Hand a received frame to its handlers (the receive thread calls this).
+
+        Returns:
+            Number of handlers that claimed the frame.
+        """
+        if msg.is_error_frame:
+            self._error_frames += 1
+            return 0
+        self._received += 1
+        self._bits += frame_bits(msg)
+        if self._log_sink is not None:
+            self._log_sink.put(msg)
+        claimed = 0
+        for handler in self._handlers.get(msg.arbitration_id, ()):
+            try:
+                if handler(msg, now_ns):
+                    claimed += 1
+            except Exception:
+                self._handler_errors += 1
+                _log.exception('bus %s: handler for 0x%X failed', self.name, msg.arbitration_id)
+        if not claimed:
+            self._unmatched += 1
+        return claimed
+
+    # --- diagnostics ---------------------------------------------------------------------------
+    def _note_error(self, text: str) -> None:
+        self._last_error = text
+        _log.warning('bus %s: %s', self.name, text)
+
+    def stats(self) -> BusStats:
+        """Counters and the bus load since the previous call."""
+        now = self._clock_ns()
+        bits = self._bits
+        then, bits_then = self._load_mark
+        self._load_mark = (now, bits)
+        elapsed_s = (now - then) / 1e9
+        load = (bits - bits_then) / elapsed_s if elapsed_s > 0 else 0.0
+        bitrate = self.config.bitrate
+        return BusStats(
+            name=self.name,
+            state=self._state.value,
+            frames_sent=self._sent,
+            frames_received=self._received,
+            frames_unmatched=self._unmatched,
+            send_errors=self._send_errors,
+            receive_errors=self._receive_errors,
+            error_frames=self._error_frames,
+            handler_errors=self._handler_errors,
+            reopen_count=self._reopen_count,
+            open_failures=self._open_failures,
+            generation=self._generation,
+            load_bps=load,
+            load_fraction=load / bitrate if bitrate else None,
+            last_error=self._last_error,
+        )

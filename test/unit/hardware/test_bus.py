@@ -1,0 +1,256 @@
+"""ManagedBus: dispatch, reconnection with back-off, counters, load, logging, shutdown."""
+
+import logging
+import threading
+
+import can
+import pytest
+from rm_base.hardware.bus import BusState, ManagedBus, frame_bits
+from rm_base.hardware.config import BusConfig
+from rm_base.hardware.errors import BusError, HardwareConfigError
+from support.ros import wait_until
+
+from .helpers import FakeClock
+
+TIMEOUT = 10.0  # [s] generous: condition waits only
+
+
+def virtual(channel, **extra):
+    return BusConfig.from_dict('vcan', {'interface': 'virtual', 'channel': channel, **extra})
+
+
+def frame(can_id, data=b'\x01\x02'):
+    return can.Message(arbitration_id=can_id, data=data, is_extended_id=False)
+
+
+class FakeBus(can.BusABC):
+    """A bus whose receive and send can be broken on demand."""
+
+    def __init__(self, channel=None, **kwargs):
+        super().__init__(channel=channel)
+        self.kwargs = kwargs
+        self.broken = threading.Event()
+        self.fail_send = False
+        self.sent = []
+        self.closed = False
+
+    def _recv_internal(self, timeout):
+        if self.broken.wait(timeout):
+            raise can.CanOperationError('adapter gone')
+        return None, False
+
+    def send(self, msg, timeout=None):
+        if self.fail_send:
+            raise can.CanOperationError('Transmit buffer full')
+        self.sent.append(msg)
+
+    def shutdown(self):
+        self.closed = True
+        super().shutdown()
+
+
+class Factory:
+    """Builds FakeBus objects; ``plan`` lists, per attempt, True (open) or False (fail)."""
+
+    def __init__(self, plan=()):
+        self.plan = list(plan)
+        self.buses = []
+        self.attempts = 0
+
+    def __call__(self, **kwargs):
+        self.attempts += 1
+        if self.plan and not self.plan.pop(0):
+            raise can.CanInitializationError('no such device')
+        bus = FakeBus(**kwargs)
+        self.buses.append(bus)
+        return bus
+
+
+def fake(**extra):
+    cfg = {
+        'interface': 'fake',
+        'channel': 'x',
+        'reconnect_initial_s': 0.01,
+        'reconnect_max_s': 0.04,
+        'receive_timeout_s': 0.01,
+        **extra,
+    }
+    return BusConfig.from_dict('fake0', cfg)
+
+
+# --- dispatch over a python-can virtual bus ---
+def test_frames_are_dispatched_by_arbitration_id(channel):
+    got = []
+    with ManagedBus(virtual(channel)) as bus, can.Bus(interface='virtual', channel=channel) as peer:
+        bus.add_handler(0x201, lambda msg, now: got.append(('a', msg.arbitration_id)) or True)
+        bus.add_handler(0x201, lambda msg, now: False)  # shares the id, does not match
+        bus.add_handler(0x205, lambda msg, now: got.append(('b', msg.arbitration_id)) or True)
+        bus.start()
+        for can_id in (0x201, 0x205, 0x300):
+            peer.send(frame(can_id))
+        assert wait_until(lambda: bus.stats().frames_received == 3, TIMEOUT)
+        assert got == [('a', 0x201), ('b', 0x205)]
+        assert bus.stats().frames_unmatched == 1
+        assert bus.send(frame(0x200))
+        assert peer.recv(TIMEOUT).arbitration_id == 0x200
+
+
+def test_handler_exceptions_are_counted_and_do_not_stop_the_bus(channel):
+    def broken(msg, now):
+        raise RuntimeError('bug')
+
+    with ManagedBus(virtual(channel)) as bus, can.Bus(interface='virtual', channel=channel) as peer:
+        bus.add_handler(0x201, broken)
+        bus.start()
+        peer.send(frame(0x201))
+        peer.send(frame(0x201))
+        assert wait_until(lambda: bus.stats().handler_errors == 2, TIMEOUT)
+        assert bus.state is BusState.UP
+
+
+def test_bus_load_is_estimated_from_frame_bits(channel):
+    clock = FakeClock()
+    bus = ManagedBus(virtual(channel, bitrate=1_000_000), clock_ns=clock)
+    with bus:
+        bus.start()
+        bus.stats()  # reset the load window
+        for _ in range(1000):
+            assert bus.send(frame(0x200, bytes(8)))
+        clock.advance_ms(1000)
+        stats = bus.stats()
+    # 1000 standard 8-byte frames of 47 + 64 bits in 1 s
+    assert frame_bits(frame(0x200, bytes(8))) == 111
+    assert stats.load_bps == pytest.approx(111_000)
+    assert stats.load_fraction == pytest.approx(0.111)
+    assert stats.frames_sent == 1000
+
+
+# --- errors and reconnection ---
+def test_when_the_adapter_disappears_expect_reopen_with_exponential_backoff(caplog):
+    factory = Factory(plan=[True, False, False, False, True])
+    reopened, failed = [], []
+    bus = ManagedBus(fake(), bus_factory=factory)
+    bus.add_reopen_listener(reopened.append)
+    bus.add_failure_listener(failed.append)
+    caplog.set_level(logging.WARNING, logger='rm_base.hardware.bus')
+    with bus:
+        bus.start()
+        assert bus.state is BusState.UP and bus.generation == 1
+        factory.buses[0].broken.set()  # recv raises CanOperationError
+        assert wait_until(lambda: bus.generation == 2, TIMEOUT)
+        stats = bus.stats()
+    assert factory.buses[0].closed
+    assert stats.receive_errors == 1
+    assert stats.open_failures == 3
+    assert stats.reopen_count == 1
+    assert 'adapter gone' in stats.last_error or 'no such device' in stats.last_error
+    delays = [
+        r.getMessage().split('reopening in ')[1]
+        for r in caplog.records
+        if 'reopening in' in r.getMessage()
+    ]
+    # first delay 10 ms, doubled on each failure, capped at 40 ms
+    assert delays == ['0.010 s', '0.020 s', '0.040 s', '0.040 s']
+    assert len(reopened) == 1
+    assert len(failed) == 1  # failed opens while down are not new failures
+
+
+def test_when_open_fails_at_start_expect_retries_in_the_background():
+    factory = Factory(plan=[False, True])
+    with ManagedBus(fake(), bus_factory=factory) as bus:
+        bus.start()  # does not raise
+        assert wait_until(lambda: bus.state is BusState.UP, TIMEOUT)
+        assert bus.generation == 1  # the first successful open is not a "reopen"
+        assert bus.stats().reopen_count == 0
+
+
+def test_when_sends_keep_failing_expect_a_reopen():
+    factory = Factory()
+    with ManagedBus(fake(send_failures_to_reopen=5), bus_factory=factory) as bus:
+        bus.start()
+        factory.buses[0].fail_send = True
+        for _ in range(5):
+            assert not bus.send(frame(0x200))
+        assert wait_until(lambda: bus.generation == 2, TIMEOUT)
+        assert bus.send(frame(0x200))
+        assert factory.buses[1].sent[-1].arbitration_id == 0x200
+        assert bus.stats().send_errors == 5
+
+
+def test_send_while_down_returns_false_and_counts():
+    factory = Factory(plan=[False] * 1000)
+    with ManagedBus(fake(reconnect_initial_s=5.0, reconnect_max_s=5.0), bus_factory=factory) as bus:
+        bus.start()
+        assert bus.state is BusState.DOWN
+        assert not bus.send(frame(0x200))
+        assert bus.stats().send_errors == 1
+
+
+def test_error_frames_are_counted():
+    with ManagedBus(fake(), bus_factory=Factory()) as bus:
+        err = can.Message(is_error_frame=True)
+        assert bus.dispatch(err, 0) == 0
+        assert bus.stats().error_frames == 1
+        assert bus.stats().frames_received == 0
+
+
+def test_bus_options_are_passed_to_python_can():
+    factory = Factory()
+    cfg = fake(bitrate=500_000, fd=True, data_bitrate=2_000_000, options={'serial': 'abc'})
+    with ManagedBus(cfg, bus_factory=factory) as bus:
+        bus.start()
+    kwargs = factory.buses[0].kwargs
+    assert kwargs == {
+        'bitrate': 500_000,
+        'fd': True,
+        'data_bitrate': 2_000_000,
+        'serial': 'abc',
+        'interface': 'fake',
+        'ignore_config': True,
+    }
+
+
+# --- shutdown and logging ---
+def test_shutdown_is_idempotent_and_final():
+    factory = Factory()
+    bus = ManagedBus(fake(), bus_factory=factory)
+    bus.start()
+    bus.shutdown()
+    bus.shutdown()
+    assert bus.state is BusState.CLOSED
+    assert factory.buses[0].closed
+    assert not bus.send(frame(0x200))
+    with pytest.raises(BusError, match='shut down'):
+        bus.start()
+
+
+@pytest.mark.parametrize('suffix', ['.asc', '.csv', '.log', '.blf'])
+def test_frames_are_logged_with_python_can_writers(tmp_path, channel, suffix):
+    path = tmp_path / f'can{suffix}'
+    bus = ManagedBus(virtual(channel, log_file=str(path)))
+    with bus, can.Bus(interface='virtual', channel=channel) as peer:
+        bus.add_handler(0x205, lambda msg, now: True)
+        bus.start()
+        bus.send(frame(0x200, bytes.fromhex('03e8')))
+        peer.send(frame(0x205, bytes.fromhex('1fff')))
+        assert wait_until(lambda: bus.stats().frames_received == 1, TIMEOUT)
+    with can.LogReader(str(path)) as reader:
+        ids = sorted(msg.arbitration_id for msg in reader)
+    assert ids == [0x200, 0x205]
+
+
+def test_unknown_log_suffix_is_an_error(tmp_path, channel):
+    with pytest.raises(BusError, match='cannot open CAN log'):
+        ManagedBus(virtual(channel, log_file=str(tmp_path / 'x.nope')))
+
+
+def test_bus_config_errors():
+    with pytest.raises(HardwareConfigError, match=r'buses\.b\.interface is required'):
+        BusConfig.from_dict('b', {'channel': 'can0'})
+    with pytest.raises(HardwareConfigError, match=r"unknown key\(s\) \['bitrat'\]"):
+        BusConfig.from_dict('b', {'interface': 'virtual', 'bitrat': 1})
+    with pytest.raises(HardwareConfigError, match='reconnect_max_s must be >='):
+        BusConfig.from_dict(
+            'b', {'interface': 'virtual', 'reconnect_initial_s': 1.0, 'reconnect_max_s': 0.5}
+        )
+    assert BusConfig.from_dict('can0', {'interface': 'socketcan'}).channel == 'can0'
