@@ -1,0 +1,605 @@
+"""The shared actuator base: commands, control modes, safety and SI conversion.
+
+:class:`Actuator` owns every public method, check and log line. A motor family overrides
+only protected hooks:
+
+* ``_feedback_ids()`` — arbitration ids whose frames may be for this actuator;
+* ``_match(msg)`` — whether a frame with one of those ids is really this one's;
+* ``_decode(msg)`` — device values at the motor's measuring shaft
+  (angle [rad], velocity [rad/s], torque [N·m], temperature [°C] or None, error code);
+* ``_set_output(effort, command)`` / ``_set_zero_output()`` — turn the joint effort
+  computed by :meth:`Actuator.update` into device units (for example a DJI raw current);
+* ``_pack()`` — the actuator's own CAN frame, or None if a command group packs it.
+
+Conversion at the edge: the base turns decoded values into joint (output-shaft) SI values
+the moment a frame arrives::
+
+    position = direction * (angle / gear_ratio - zero_offset) [+ whole turns, see below]
+    velocity = direction * velocity / gear_ratio
+    effort   = direction * torque * gear_ratio
+
+Safety, independent of any plugin: every output is clamped to ``max_effort``; a joint
+without feedback for ``feedback_timeout_s`` is offline; over-temperature, a device fault,
+no command for ``command_timeout_s``, a failed bus (from the failure until it is back, at
+least one tick after that, and until a command newer than the recovery) and shutdown all
+hold the output at zero (``MODE_OFF`` applied). A NaN/inf command is
+rejected, counted, and the previous (safe) target stays in force.
+"""
+
+from __future__ import annotations
+
+import enum
+import logging
+import math
+from typing import Any, ClassVar, NamedTuple
+
+import can
+
+from rm_base.control import Pid
+from rm_base.hardware.config import JointConfig, SafetyConfig
+from rm_base.hardware.errors import CommandRejectedError, HardwareConfigError, ProtocolError
+
+_log = logging.getLogger(__name__)
+_TAU = 2.0 * math.pi
+
+
+class Mode(enum.IntEnum):
+    """Joint control modes; values are those of rm_msgs/ActuatorCmd.MODE_*."""
+
+    OFF = 0  # no output: zero current, the joint is limp
+    EFFORT = 1  # effort [N·m] as given
+    VELOCITY = 2  # velocity [rad/s], PID at the scheduler rate
+    POSITION = 3  # position [rad], cascade position -> velocity (+ velocity feed-forward)
+    MIT = 4  # tau = kp*(position - q) + kd*(velocity - dq) + effort
+
+
+MODE_OFF = Mode.OFF
+MODE_EFFORT = Mode.EFFORT
+MODE_VELOCITY = Mode.VELOCITY
+MODE_POSITION = Mode.POSITION
+MODE_MIT = Mode.MIT
+
+
+class HoldReason(enum.Enum):
+    """Why a joint's output is held at zero (``NONE``: it is not)."""
+
+    NONE = 'none'
+    OFF = 'off'  # commanded MODE_OFF
+    NO_COMMAND = 'no_command'  # never commanded
+    COMMAND_TIMEOUT = 'command_timeout'
+    OFFLINE = 'offline'  # no feedback within feedback_timeout_s
+    OVER_TEMPERATURE = 'over_temperature'
+    DEVICE_FAULT = 'device_fault'  # the device reports an error code
+    BUS_RECOVERY = 'bus_recovery'  # the bus came back; waiting for a fresh command
+    ERROR = 'error'  # an internal exception in this joint's update
+    SHUTDOWN = 'shutdown'
+
+
+#: Holds that are normal operation, logged at INFO (the others at WARNING).
+_QUIET_HOLDS = frozenset({HoldReason.OFF, HoldReason.NO_COMMAND, HoldReason.SHUTDOWN})
+
+
+class JointCommand(NamedTuple):
+    """A validated joint command, stamped when it was accepted.
+
+    Attributes:
+        mode: :class:`Mode`.
+        position: [rad].
+        velocity: [rad/s].
+        effort: [N·m].
+        kp: [N·m/rad].
+        kd: [N·m·s/rad].
+        stamp_ns: clock time of acceptance [ns].
+    """
+
+    mode: Mode
+    position: float
+    velocity: float
+    effort: float
+    kp: float
+    kd: float
+    stamp_ns: int
+
+
+class JointState(NamedTuple):
+    """One joint's state, fields as rm_msgs/ActuatorState (output shaft, SI).
+
+    Attributes:
+        name: joint name.
+        position: [rad], continuous (multi-turn).
+        velocity: [rad/s].
+        effort: [N·m] measured.
+        temperature: [°C]; NaN where the device reports none (C610).
+        online: feedback seen within the feedback timeout.
+        error_code: device error code, 0 = none.
+        mode: mode actually applied (MODE_OFF while held safe).
+        command: effort actually commanded this tick [N·m], after every clamp.
+    """
+
+    name: str
+    position: float
+    velocity: float
+    effort: float
+    temperature: float
+    online: bool
+    error_code: int
+    mode: int
+    command: float
+
+
+class Feedback(NamedTuple):
+    """Latest decoded feedback at the joint (written whole by the receive thread)."""
+
+    stamp_ns: int
+    position: float
+    velocity: float
+    effort: float
+    temperature: float | None
+    error_code: int
+    device_velocity: float
+
+
+class Defaults(NamedTuple):
+    """Per-type defaults for the optional joint keys.
+
+    Attributes:
+        gear_ratio: motor turns per joint turn.
+        torque_constant: [N·m/A] at the joint with this gear ratio (None: not current-driven).
+        max_effort: [N·m].
+        max_velocity: [rad/s].
+        temperature_limit: [°C].
+    """
+
+    gear_ratio: float
+    torque_constant: float | None
+    max_effort: float
+    max_velocity: float
+    temperature_limit: float
+
+
+class Unwrapper:
+    """Counts whole wraps of a float reading that wraps over ``span`` (no drift).
+
+    ``rm_base.geometry.encoder.EncoderUnwrapper`` does this for integer encoder ticks (DJI);
+    this one is for float readings such as a Damiao position wrapping over 2·PMAX.
+    """
+
+    __slots__ = ('_half', '_last', '_span', '_turns')
+
+    def __init__(self, span: float) -> None:
+        self._span = span
+        self._half = span / 2.0
+        self._last: float | None = None
+        self._turns = 0
+
+    def update(self, reading: float) -> float:
+        """Return the continuous value for a new reading."""
+        last = self._last
+        if last is not None:
+            delta = reading - last
+            if delta > self._half:
+                self._turns -= 1
+            elif delta < -self._half:
+                self._turns += 1
+        self._last = reading
+        return reading + self._turns * self._span
+
+    @property
+    def turns(self) -> int:
+        """Whole spans added so far (negative when unwrapped downwards)."""
+        return self._turns
+
+
+def _clamp(x: float, limit: float) -> float:
+    return limit if x > limit else -limit if x < -limit else x
+
+
+class Actuator:
+    """Base of every motor family; see the module docstring for the hooks.
+
+    Thread model: :meth:`handle_frame` runs on the bus receive thread and replaces the
+    feedback snapshot in one assignment; :meth:`set_command` (any thread) replaces the
+    command in one assignment; :meth:`update` and :meth:`pack_command` run on the
+    scheduler thread only.
+    """
+
+    #: Type name in the config (``m3508``...), set by each concrete class.
+    type_name: ClassVar[str] = ''
+    #: Defaults of the optional joint keys (a family may set it per instance before
+    #: calling ``Actuator.__init__``, e.g. from a motor model).
+    defaults: Defaults
+    #: Family-specific config keys (``JointConfig.options``).
+    option_keys: ClassVar[frozenset[str]] = frozenset()
+    #: Start the multi-turn position within half a turn of zero (single-turn encoders).
+    start_near_zero: ClassVar[bool] = False
+    #: Id of this actuator's own command frame (families that pack one set it).
+    command_id: int
+
+    def __init__(self, config: JointConfig, safety: SafetyConfig | None = None) -> None:
+        """Build the actuator from its config.
+
+        Args:
+            config: the joint.
+            safety: safety rules (defaults if None).
+
+        Raises:
+            HardwareConfigError: unknown option or invalid value.
+        """
+        safety = safety or SafetyConfig()
+        unknown = set(config.options) - self.option_keys
+        if unknown:
+            raise HardwareConfigError(
+                f'joints.{config.name}: unknown key(s) {sorted(unknown)} for type '
+                f'{self.type_name!r}; its options: {sorted(self.option_keys)}'
+            )
+        d = self.defaults
+        self.config = config
+        self.name = config.name
+        self.bus_name = config.bus
+        self.direction = config.direction
+        self.gear_ratio = config.gear_ratio if config.gear_ratio is not None else d.gear_ratio
+        if config.torque_constant is not None:
+            self.torque_constant = config.torque_constant
+        elif d.torque_constant is not None:
+            # the default is at the stock gearbox; scale it with a configured gear ratio
+            self.torque_constant = d.torque_constant * self.gear_ratio / d.gear_ratio
+        else:
+            self.torque_constant = None
+        self.max_effort = config.max_effort if config.max_effort is not None else d.max_effort
+        self.max_velocity = (
+            config.max_velocity if config.max_velocity is not None else d.max_velocity
+        )
+        self.temperature_limit = (
+            config.temperature_limit
+            if config.temperature_limit is not None
+            else d.temperature_limit
+        )
+        self.zero_offset = config.zero_offset
+        self._feedback_timeout_ns = int(safety.feedback_timeout_s * 1e9)
+        self._command_timeout_ns = int(safety.command_timeout_s * 1e9)
+        self._temperature_resume = self.temperature_limit - safety.temperature_hysteresis_c
+        self._velocity_pid = Pid(config.velocity_pid)
+        self._position_pid = Pid(config.position_pid)
+        # shared state (single assignment each)
+        self._feedback: Feedback | None = None
+        self._command: JointCommand | None = None
+        self._bus_down = False
+        self._recovered_ns: int | None = None
+        self._zero_since_recovery = False
+        self._shutdown = False
+        # scheduler-thread state
+        self._turn_shift = 0.0
+        self._hold = HoldReason.NO_COMMAND
+        self._applied_mode = Mode.OFF
+        self._last_mode = Mode.OFF
+        self._effort_out = 0.0
+        self._online = False
+        self._overheated = False
+        # counters
+        self.frames_decoded = 0
+        self.decode_errors = 0
+        self.commands_accepted = 0
+        self.commands_rejected = 0
+        self.update_errors = 0
+        self.last_rejection: str | None = None
+
+    # --- hooks ---
+    def _feedback_ids(self) -> tuple[int, ...]:
+        raise NotImplementedError
+
+    def _match(self, msg: can.Message) -> bool:
+        return True
+
+    def _decode(self, msg: can.Message) -> tuple[float, float, float, float | None, int]:
+        raise NotImplementedError
+
+    def _set_output(self, effort: float, command: JointCommand, feedback: Feedback) -> float:
+        """Compute the device command for ``effort`` [N·m]; return the effort really applied."""
+        raise NotImplementedError
+
+    def _set_zero_output(self) -> None:
+        raise NotImplementedError
+
+    def _pack(self) -> can.Message | None:
+        return None
+
+    def _is_fault(self, error_code: int) -> bool:
+        return error_code != 0
+
+    def _after_update(self, now_ns: int) -> None:
+        """Called at the end of every update (e.g. to schedule an enable frame)."""
+
+    # --- feedback (receive thread) ---
+    def feedback_ids(self) -> tuple[int, ...]:
+        """Arbitration ids to route to :meth:`handle_frame`."""
+        return self._feedback_ids()
+
+    def handle_frame(self, msg: can.Message, now_ns: int) -> bool:
+        """Decode a frame if it is this actuator's and store the joint-side SI values.
+
+        Args:
+            msg: received frame.
+            now_ns: receive time on the scheduler's clock [ns].
+
+        Returns:
+            True if the frame was for this actuator (even if it was malformed).
+        """
+        if not self._match(msg):
+            return False
+        try:
+            angle, velocity, torque, temperature, error_code = self._decode(msg)
+        except ProtocolError as err:
+            self.decode_errors += 1
+            if self.decode_errors == 1 or self.decode_errors % 1000 == 0:
+                _log.warning(
+                    '%s: bad frame 0x%X %s (%d so far): %s',
+                    self.name,
+                    msg.arbitration_id,
+                    bytes(msg.data).hex(' '),
+                    self.decode_errors,
+                    err,
+                )
+            return True
+        d = self.direction
+        g = self.gear_ratio
+        position = d * (angle / g - self.zero_offset)
+        if self._feedback is None and self.start_near_zero:
+            self._turn_shift = -_TAU * round(position / _TAU)
+        self._feedback = Feedback(
+            now_ns,
+            position + self._turn_shift,
+            d * velocity / g,
+            d * torque * g,
+            temperature,
+            error_code,
+            velocity,
+        )
+        self.frames_decoded += 1
+        return True
+
+    # --- commands (any thread) ---
+    def set_command(
+        self,
+        mode: int,
+        now_ns: int,
+        *,
+        position: float = 0.0,
+        velocity: float = 0.0,
+        effort: float = 0.0,
+        kp: float = 0.0,
+        kd: float = 0.0,
+    ) -> None:
+        """Accept a joint target (output shaft, SI), or reject it.
+
+        Args:
+            mode: :class:`Mode` value (rm_msgs/ActuatorCmd.MODE_*).
+            now_ns: clock time [ns], for the command timeout.
+            position: [rad] (POSITION, MIT).
+            velocity: [rad/s] (VELOCITY; feed-forward in POSITION; MIT).
+            effort: [N·m] (EFFORT; feed-forward in MIT).
+            kp: [N·m/rad] >= 0, MIT only.
+            kd: [N·m·s/rad] >= 0, MIT only.
+
+        Raises:
+            CommandRejectedError: unknown mode, a NaN/inf field or negative gains. The
+                previous target stays in force (and times out as usual); the rejection is
+                counted and logged.
+        """
+        try:
+            m = Mode(mode)
+        except ValueError:
+            raise self._rejection(f'unknown mode {mode!r}') from None
+        values = (position, velocity, effort, kp, kd)
+        for field, value in zip(
+            ('position', 'velocity', 'effort', 'kp', 'kd'), values, strict=True
+        ):
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise self._rejection(f'{field} must be a number, got {value!r}')
+            if not math.isfinite(value):
+                raise self._rejection(f'{field} is {value!r}')
+        if kp < 0.0 or kd < 0.0:
+            raise self._rejection(f'MIT gains must be >= 0, got kp={kp}, kd={kd}')
+        self._command = JointCommand(
+            m, float(position), float(velocity), float(effort), float(kp), float(kd), now_ns
+        )
+        self.commands_accepted += 1
+
+    def _rejection(self, reason: str) -> CommandRejectedError:
+        """Count and log a rejected command; return the error to raise."""
+        self.commands_rejected += 1
+        self.last_rejection = reason
+        if self.commands_rejected == 1 or self.commands_rejected % 100 == 0:
+            _log.warning(
+                '%s: command rejected (%d so far): %s', self.name, self.commands_rejected, reason
+            )
+        return CommandRejectedError(f'{self.name}: command rejected: {reason}')
+
+    def notify_bus_down(self, now_ns: int) -> None:
+        """The bus failed at ``now_ns``: hold zero output until it is back and re-commanded."""
+        self._bus_down = True
+
+    def notify_bus_recovered(self, now_ns: int) -> None:
+        """The bus is back: output zero at least one tick, then until a newer command."""
+        self._zero_since_recovery = False
+        self._recovered_ns = now_ns  # set before clearing _bus_down: never both unset
+        self._bus_down = False
+
+    def shutdown(self) -> None:
+        """Hold zero output from now on (the final frames are still packed and sent)."""
+        self._shutdown = True
+
+    # --- control (scheduler thread) ---
+    def update(self, now_ns: int, dt: float) -> None:
+        """Run safety checks and the control law for one tick; never raises.
+
+        Args:
+            now_ns: tick time [ns].
+            dt: time since the previous tick [s], > 0.
+        """
+        try:
+            self._update(now_ns, dt)
+            self._after_update(now_ns)
+        except Exception:
+            self.update_errors += 1
+            if self.update_errors == 1 or self.update_errors % 1000 == 0:
+                _log.exception(
+                    '%s: update failed (%d so far); output zero', self.name, self.update_errors
+                )
+            self._hold_zero(HoldReason.ERROR)
+
+    def _hold_reason(
+        self, now_ns: int, fb: Feedback | None, cmd: JointCommand | None
+    ) -> HoldReason:
+        if self._shutdown:
+            return HoldReason.SHUTDOWN
+        online = fb is not None and now_ns - fb.stamp_ns <= self._feedback_timeout_ns
+        if online != self._online:
+            self._online = online
+            if online:
+                _log.info('%s: online', self.name)
+            else:
+                _log.warning(
+                    '%s: offline (no feedback for %.0f ms)',
+                    self.name,
+                    self._feedback_timeout_ns / 1e6,
+                )
+        if not online:
+            return HoldReason.OFFLINE
+        if self._is_fault(fb.error_code):
+            return HoldReason.DEVICE_FAULT
+        temperature = fb.temperature
+        if temperature is not None:
+            if temperature >= self.temperature_limit:
+                self._overheated = True
+            elif temperature < self._temperature_resume:
+                self._overheated = False
+        if self._overheated:
+            return HoldReason.OVER_TEMPERATURE
+        if self._bus_down:
+            return HoldReason.BUS_RECOVERY
+        recovered = self._recovered_ns
+        if recovered is not None:
+            if not self._zero_since_recovery or cmd is None or cmd.stamp_ns <= recovered:
+                self._zero_since_recovery = True
+                return HoldReason.BUS_RECOVERY
+            self._recovered_ns = None
+        if cmd is None:
+            return HoldReason.NO_COMMAND
+        if now_ns - cmd.stamp_ns > self._command_timeout_ns:
+            return HoldReason.COMMAND_TIMEOUT
+        if cmd.mode is Mode.OFF:
+            return HoldReason.OFF
+        return HoldReason.NONE
+
+    def _update(self, now_ns: int, dt: float) -> None:
+        fb = self._feedback
+        cmd = self._command
+        hold = self._hold_reason(now_ns, fb, cmd)
+        if hold is not HoldReason.NONE:
+            self._hold_zero(hold)
+            return
+        mode = cmd.mode
+        if mode is not self._last_mode:
+            self._velocity_pid.reset()
+            self._position_pid.reset()
+            self._last_mode = mode
+        if self._hold is not HoldReason.NONE:
+            _log.info(
+                '%s: output resumed in %s (was held: %s)', self.name, mode.name, self._hold.value
+            )
+            self._hold = HoldReason.NONE
+        if mode is Mode.EFFORT:
+            effort = cmd.effort
+        elif mode is Mode.VELOCITY:
+            target = _clamp(cmd.velocity, self.max_velocity)
+            effort = self._velocity_pid.update(target, fb.velocity, dt)
+        elif mode is Mode.POSITION:
+            target = self._position_pid.update(cmd.position, fb.position, dt) + cmd.velocity
+            target = _clamp(target, self.max_velocity)
+            effort = self._velocity_pid.update(target, fb.velocity, dt)
+        else:  # MIT
+            effort = (
+                cmd.kp * (cmd.position - fb.position)
+                + cmd.kd * (cmd.velocity - fb.velocity)
+                + cmd.effort
+            )
+        effort = _clamp(effort, self.max_effort)
+        self._effort_out = self._set_output(effort, cmd, fb)
+        self._applied_mode = mode
+
+    def _hold_zero(self, reason: HoldReason) -> None:
+        if reason is not self._hold:
+            level = logging.INFO if reason in _QUIET_HOLDS else logging.WARNING
+            _log.log(level, '%s: output held at zero (%s)', self.name, reason.value)
+            self._hold = reason
+            self._velocity_pid.reset()
+            self._position_pid.reset()
+            self._last_mode = Mode.OFF
+        self._set_zero_output()
+        self._effort_out = 0.0
+        self._applied_mode = Mode.OFF
+
+    def pack_command(self) -> can.Message | None:
+        """This actuator's frame for this tick, or None if a command group packs it."""
+        return self._pack()
+
+    def final_frames(self) -> list[can.Message]:
+        """Frames to send at shutdown after the final zero command (e.g. DISABLE)."""
+        return []
+
+    # --- state ---
+    @property
+    def hold_reason(self) -> HoldReason:
+        """Why the output is held at zero after the last update (NONE if it is not)."""
+        return self._hold
+
+    @property
+    def feedback(self) -> Feedback | None:
+        """Latest feedback snapshot, or None before the first frame."""
+        return self._feedback
+
+    @property
+    def command(self) -> JointCommand | None:
+        """Latest accepted command, or None."""
+        return self._command
+
+    def state(self) -> JointState:
+        """The joint state as of the last update (ActuatorState fields)."""
+        fb = self._feedback
+        if fb is None:
+            return JointState(
+                self.name,
+                0.0,
+                0.0,
+                0.0,
+                math.nan,
+                False,
+                0,
+                int(self._applied_mode),
+                self._effort_out,
+            )
+        return JointState(
+            self.name,
+            fb.position,
+            fb.velocity,
+            fb.effort,
+            math.nan if fb.temperature is None else float(fb.temperature),
+            self._online,
+            fb.error_code,
+            int(self._applied_mode),
+            self._effort_out,
+        )
+
+    def diagnostics(self) -> dict[str, Any]:
+        """Counters and status for /diagnostics."""
+        return {
+            'type': self.type_name,
+            'bus': self.bus_name,
+            'hold_reason': self._hold.value,
+            'frames_decoded': self.frames_decoded,
+            'decode_errors': self.decode_errors,
+            'commands_accepted': self.commands_accepted,
+            'commands_rejected': self.commands_rejected,
+            'last_rejection': self.last_rejection,
+            'update_errors': self.update_errors,
+        }

@@ -1,0 +1,163 @@
+"""DJI motors: M3508 (C620), M2006 (C610), GM6020 in voltage and in current mode.
+
+The motors only hold their raw command; a :class:`rm_base.hardware.groups.DjiCommandGroup`
+packs the shared frame (0x200, 0x1FF, 0x2FF, 0x1FE, 0x2FE). The rotor encoder is single
+turn, so the joint position starts within half an output turn of zero and is unwrapped
+from there.
+
+Family options (``joints.<name>.<key>``):
+
+* ``raw_limit``: command clamp in raw units (GM6020 voltage: 25000 default, 30000 max);
+* ``si_per_raw``: A (V for GM6020 voltage) per raw unit — e.g. ``1.62/16384`` for the
+  other GM6020 current-mode scale (UNVERIFIED which is right; 3 A/16384 is the default);
+* ``feedback_amps_per_raw``: A per raw unit of the feedback current;
+* GM6020 voltage mode only: ``resistance`` [Ω] (1.8) and ``back_emf_constant`` [V·s/rad]
+  (60/(2π·13.33 rpm/V) = 0.716), the model that turns an effort into a voltage:
+  ``V = R·I + Ke·ω``. Both are datasheet-level values (not in PROTOCOLS.md).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import ClassVar
+
+import can
+
+from rm_base.geometry.encoder import EncoderUnwrapper
+from rm_base.hardware.actuators.base import Actuator, Defaults, Feedback, JointCommand
+from rm_base.hardware.config import JointConfig, SafetyConfig
+from rm_base.hardware.errors import HardwareConfigError, ValueRangeError
+from rm_base.hardware.protocols import dji
+
+_RPM_TO_RAD_S = dji.RAD_PER_S_PER_RPM
+_TAU = 2.0 * math.pi
+
+#: GM6020 speed constant 13.33 rpm/V -> back-EMF constant [V·s/rad].
+GM6020_BACK_EMF_V_S_PER_RAD = 60.0 / (_TAU * 13.33)
+GM6020_RESISTANCE_OHM = 1.8
+
+
+class DjiActuator(Actuator):
+    """A DJI ESC-driven motor; the group packs its raw command."""
+
+    kind: ClassVar[dji.DjiKind]
+    option_keys = frozenset({'raw_limit', 'si_per_raw', 'feedback_amps_per_raw'})
+    start_near_zero = True
+
+    def __init__(self, config: JointConfig, safety: SafetyConfig | None = None) -> None:
+        """Build the actuator; see the module docstring for the options.
+
+        Raises:
+            HardwareConfigError: invalid id or option.
+        """
+        super().__init__(config, safety)
+        opts = config.options
+        self.spec = dji.make_dji_spec(
+            self.kind,
+            raw_limit=opts.get('raw_limit'),
+            si_per_raw=opts.get('si_per_raw'),
+            feedback_amps_per_raw=opts.get('feedback_amps_per_raw'),
+        )
+        try:
+            self.command_frame_id, self.slot = self.spec.command_slot(config.id)
+        except ValueRangeError as err:
+            raise HardwareConfigError(f'joints.{config.name}.id: {err}') from err
+        self.feedback_id = self.spec.feedback_id(config.id)
+        # rotor torque per ampere: the joint constant spread over the gear ratio
+        self._kt_rotor = self.torque_constant / self.gear_ratio
+        self._unwrapper = EncoderUnwrapper(dji.ENCODER_TICKS_PER_REV)
+        self._has_temperature = self.spec.has_temperature
+        #: Raw command for the group, computed by update().
+        self.command_raw = 0
+
+    def _feedback_ids(self) -> tuple[int, ...]:
+        return (self.feedback_id,)
+
+    def _decode(self, msg: can.Message) -> tuple[float, float, float, float | None, int]:
+        fb = dji.decode_feedback(msg.data, self._has_temperature)
+        angle = self._unwrapper.update(fb.angle_ticks)  # rotor, multi-turn, exact ticks
+        torque = fb.current_raw * self.spec.feedback_amps_per_raw * self._kt_rotor
+        return angle, fb.rotor_rpm * _RPM_TO_RAD_S, torque, fb.temperature_c, 0
+
+    def _set_output(self, effort: float, command: JointCommand, feedback: Feedback) -> float:
+        amps = self.direction * effort / self.torque_constant
+        raw = self.spec.raw_from_si(amps)
+        self.command_raw = raw
+        return self.direction * raw * self.spec.si_per_raw * self.torque_constant
+
+    def _set_zero_output(self) -> None:
+        self.command_raw = 0
+
+
+class M3508(DjiActuator):
+    """M3508 with a C620 ESC (±20 A, gear 3591/187, 0.3 N·m/A at the output)."""
+
+    type_name = 'm3508'
+    kind = dji.DjiKind.C620
+    # 20 A * 0.3 N·m/A = 6 N·m; no-load about 482 rpm at the output = 50 rad/s
+    defaults = Defaults(3591.0 / 187.0, 0.3, 6.0, 50.0, 80.0)
+
+
+class M2006(DjiActuator):
+    """M2006 with a C610 ESC (±10 A, gear 36, 0.18 N·m/A; no temperature feedback)."""
+
+    type_name = 'm2006'
+    kind = dji.DjiKind.C610
+    # 10 A * 0.18 N·m/A = 1.8 N·m; no-load about 500 rpm at the output = 52 rad/s
+    defaults = Defaults(36.0, 0.18, 1.8, 52.0, 80.0)
+
+
+class Gm6020Current(DjiActuator):
+    """GM6020 in current mode (0x1FE/0x2FE; enable the current loop in the DJI assistant)."""
+
+    type_name = 'gm6020_current'
+    kind = dji.DjiKind.GM6020_CURRENT
+    # direct drive, 0.741 N·m/A; 1.2 N·m rated; no-load 320 rpm = 33.5 rad/s
+    defaults = Defaults(1.0, 0.741, 1.2, 33.5, 80.0)
+
+
+class Gm6020Voltage(DjiActuator):
+    """GM6020 in voltage mode (0x1FF/0x2FF): effort -> current -> ``V = R·I + Ke·ω``."""
+
+    type_name = 'gm6020'
+    kind = dji.DjiKind.GM6020_VOLTAGE
+    defaults = Defaults(1.0, 0.741, 1.2, 33.5, 80.0)
+    option_keys = DjiActuator.option_keys | {'resistance', 'back_emf_constant'}
+
+    def __init__(self, config: JointConfig, safety: SafetyConfig | None = None) -> None:
+        """Build the actuator; see the module docstring for the options.
+
+        Raises:
+            HardwareConfigError: invalid id or option.
+        """
+        super().__init__(config, safety)
+        opts = config.options
+        self.resistance = _positive(
+            config.name, 'resistance', opts.get('resistance', GM6020_RESISTANCE_OHM)
+        )
+        self.back_emf_constant = _positive(
+            config.name,
+            'back_emf_constant',
+            opts.get('back_emf_constant', GM6020_BACK_EMF_V_S_PER_RAD),
+        )
+
+    def _set_output(self, effort: float, command: JointCommand, feedback: Feedback) -> float:
+        rotor_velocity = feedback.device_velocity
+        amps = self.direction * effort / self.torque_constant
+        volts = self.resistance * amps + self.back_emf_constant * rotor_velocity
+        raw = self.spec.raw_from_si(volts)
+        self.command_raw = raw
+        applied_amps = (raw * self.spec.si_per_raw - self.back_emf_constant * rotor_velocity) / (
+            self.resistance
+        )
+        return self.direction * applied_amps * self.torque_constant
+
+
+def _positive(name: str, key: str, value: object) -> float:
+    if (
+        isinstance(value, bool)
+        or not isinstance(value, int | float)
+        or not (math.isfinite(value) and value > 0)
+    ):
+        raise HardwareConfigError(f'joints.{name}.{key} must be > 0, got {value!r}')
+    return float(value)

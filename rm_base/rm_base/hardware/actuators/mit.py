@@ -1,0 +1,308 @@
+"""MIT-mode motors: Damiao (DM4310, DM8009, ...) and the MIT Cheetah firmware.
+
+Each motor has its own command frame (id = motor id). ``MODE_MIT`` is passed through
+natively (the motor closes ``kp``/``kd`` itself at its own rate); the other modes send a
+pure-torque MIT frame (kp = kd = 0) carrying the effort computed on the host. A held
+joint gets an all-zero-gain, zero-torque frame: limp.
+
+Because the motor evaluates ``kp·(p − q) + kd·(v − dq) + τ`` itself, the effort limit is
+enforced by moving the targets: when the host's estimate of that law (from the latest
+feedback) exceeds ``max_effort``, the position target (or, with kp = 0, the velocity
+target) is shifted so the estimate equals the limit.
+
+Family options (``joints.<name>.<key>``):
+
+* ``model`` (Damiao): a key of :data:`rm_base.hardware.protocols.damiao.DM_MODEL_LIMITS`;
+* ``limits``: overrides of the MIT ranges (``p_max``, ``v_max``, ``t_max``, ``kp_max``,
+  ``kd_max``...) — they must equal the motor's registers (Damiao RID 21–23);
+* ``master_id``: CAN id the motor replies on (Damiao MST_ID register: default id + 0x10,
+  a common convention — set it to the motor's value; Cheetah CAN_MASTER: default 0).
+  Replies are matched by the id in byte 0, so motors may share a master id;
+* ``auto_enable`` (default True): send ENABLE at start, when a Damiao reports itself
+  disabled (at most every 100 ms), and when a motor comes back online;
+* ``disable_on_shutdown`` (default True): send DISABLE after the final zero frame.
+
+The Damiao position is assumed to wrap over ±PMAX (UNVERIFIED; a wrap can't be confused
+with motion at 1 kHz) and is unwrapped into a continuous position.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, ClassVar
+
+import can
+
+from rm_base.hardware.actuators.base import (
+    Actuator,
+    Defaults,
+    Feedback,
+    JointCommand,
+    Mode,
+    Unwrapper,
+)
+from rm_base.hardware.config import JointConfig, SafetyConfig
+from rm_base.hardware.errors import HardwareConfigError
+from rm_base.hardware.protocols import cheetah, damiao, mit
+from rm_base.hardware.protocols.mit import MitCommand, MitLimits, SystemCommand
+
+#: Minimum time between automatic ENABLE frames [ns].
+ENABLE_RETRY_NS = 100_000_000
+_ZERO = MitCommand(0.0, 0.0, 0.0, 0.0, 0.0)
+
+
+def limits_from_config(name: str, base: MitLimits, overrides: Any) -> MitLimits:
+    """Apply a joint's ``limits`` overrides to ``base``.
+
+    Raises:
+        HardwareConfigError: not a mapping, or an unknown/invalid field.
+    """
+    if overrides is None:
+        return base
+    if not isinstance(overrides, dict):
+        raise HardwareConfigError(f'joints.{name}.limits must be a mapping, got {overrides!r}')
+    try:
+        return base.with_overrides(overrides)
+    except (HardwareConfigError, TypeError, ValueError) as err:
+        raise HardwareConfigError(f'joints.{name}.limits: {err}') from err
+
+
+class MitActuator(Actuator):
+    """Shared MIT frame handling for Damiao and Cheetah; subclasses decode replies."""
+
+    option_keys = frozenset({'limits', 'master_id', 'auto_enable', 'disable_on_shutdown'})
+    max_motor_id: ClassVar[int] = 0x7FF
+
+    def __init__(
+        self, config: JointConfig, limits: MitLimits, safety: SafetyConfig | None = None
+    ) -> None:
+        """Build the actuator (``limits`` already resolved by the subclass).
+
+        Raises:
+            HardwareConfigError: invalid id or option.
+        """
+        super().__init__(config, safety)
+        if not 0 <= config.id <= self.max_motor_id:
+            raise HardwareConfigError(
+                f'joints.{config.name}.id {config.id} outside 0..{self.max_motor_id}'
+            )
+        opts = config.options
+        master = opts.get('master_id', self._default_master_id(config.id))
+        if isinstance(master, bool) or not isinstance(master, int) or not 0 <= master <= 0x7FF:
+            raise HardwareConfigError(f'joints.{config.name}.master_id must be 0..0x7FF')
+        self.limits = limits
+        self.motor_id = config.id
+        #: Command frame id (the motor id; MIT mode has no offset).
+        self.command_id = config.id
+        self.master_id = master
+        self.auto_enable = bool(opts.get('auto_enable', True))
+        self.disable_on_shutdown = bool(opts.get('disable_on_shutdown', True))
+        self._position_unwrapper = Unwrapper(2.0 * limits.p_max)
+        self._fields = _ZERO
+        self._system_pending: SystemCommand | None = (
+            SystemCommand.ENABLE if self.auto_enable else None
+        )
+        self._last_enable_ns: int | None = None
+        self._was_online = False
+        self.system_frames_sent = 0
+
+    @staticmethod
+    def _default_master_id(motor_id: int) -> int:
+        return 0
+
+    # --- hooks shared by the MIT families ---
+    def _feedback_ids(self) -> tuple[int, ...]:
+        return (self.master_id,)
+
+    def _set_output(self, effort: float, command: JointCommand, feedback: Feedback) -> float:
+        d, g = self.direction, self.gear_ratio
+        if command.mode is not Mode.MIT:
+            self._fields = MitCommand(0.0, 0.0, 0.0, 0.0, d * effort / g)
+            return effort
+        kp, kd = command.kp, command.kd
+        p, v, ff = command.position, command.velocity, command.effort
+        estimate = kp * (p - feedback.position) + kd * (v - feedback.velocity) + ff
+        excess = estimate - effort  # effort is the clamped estimate
+        if excess != 0.0:
+            if kp > 0.0:
+                p -= excess / kp
+            elif kd > 0.0:
+                v -= excess / kd
+            else:
+                ff = effort
+        # joint -> motor shaft, then back into the motor's wrapped position range
+        span_turns = self._position_unwrapper.turns * 2.0 * self.limits.p_max
+        p_dev = g * (d * (p - self._turn_shift) + self.zero_offset) - span_turns
+        self._fields = MitCommand(p_dev, d * v * g, kp / (g * g), kd / (g * g), d * ff / g)
+        return effort
+
+    def _set_zero_output(self) -> None:
+        self._fields = _ZERO
+
+    def _after_update(self, now_ns: int) -> None:
+        online = self._online
+        if not self.auto_enable or self._shutdown:
+            self._was_online = online
+            return
+        came_back = online and not self._was_online and self._last_enable_ns is not None
+        self._was_online = online
+        if came_back or (online and self._reports_disabled()):
+            last = self._last_enable_ns
+            if last is None or now_ns - last >= ENABLE_RETRY_NS:
+                self._system_pending = SystemCommand.ENABLE
+        if self._system_pending is SystemCommand.ENABLE:
+            self._last_enable_ns = now_ns
+
+    def _reports_disabled(self) -> bool:
+        return False
+
+    def _system_data(self, command: SystemCommand) -> bytes:
+        return mit.system_frame(command)
+
+    def _pack(self) -> can.Message:
+        pending = self._system_pending
+        if pending is not None and not self._shutdown:
+            self._system_pending = None
+            self.system_frames_sent += 1
+            data = self._system_data(pending)
+        else:
+            data = mit.pack_mit_command(self._fields, self.limits)
+        return can.Message(arbitration_id=self.motor_id, data=data, is_extended_id=False)
+
+    # --- public extras ---
+    def request_system_command(self, command: SystemCommand | int) -> None:
+        """Send a system frame (enable, disable, set zero, clear error) at the next tick.
+
+        It replaces that tick's command frame.
+
+        Raises:
+            ValueRangeError: the family does not know the command.
+        """
+        command = SystemCommand(command)
+        self._system_data(command)  # validates for this family
+        self._system_pending = command
+
+    def final_frames(self) -> list[can.Message]:
+        """Frames to send after the final zero command at shutdown (DISABLE)."""
+        if not self.disable_on_shutdown:
+            return []
+        return [
+            can.Message(
+                arbitration_id=self.motor_id,
+                data=self._system_data(SystemCommand.DISABLE),
+                is_extended_id=False,
+            )
+        ]
+
+    @property
+    def mit_fields(self) -> MitCommand:
+        """The MIT command (motor side) packed at the next tick."""
+        return self._fields
+
+
+class Damiao(MitActuator):
+    """A Damiao motor in MIT mode (register CTRL_MODE = 1)."""
+
+    type_name = 'damiao'
+    default_model: ClassVar[str | None] = None
+    option_keys = MitActuator.option_keys | {'model'}
+
+    def __init__(self, config: JointConfig, safety: SafetyConfig | None = None) -> None:
+        """Build the actuator; see the module docstring for the options.
+
+        Raises:
+            HardwareConfigError: unknown model, invalid id or option.
+        """
+        model = config.options.get('model', self.default_model)
+        if not isinstance(model, str):
+            raise HardwareConfigError(
+                f'joints.{config.name}.model is required for type {self.type_name!r} '
+                f'(one of {", ".join(damiao.DM_MODEL_LIMITS)})'
+            )
+        try:
+            base = damiao.dm_limits(model)
+        except HardwareConfigError as err:
+            raise HardwareConfigError(f'joints.{config.name}.model: {err}') from err
+        limits = limits_from_config(config.name, base, config.options.get('limits'))
+        # the motor reports its own output shaft; torque is reported, so no Kt is needed
+        self.defaults = Defaults(1.0, None, limits.t_max, limits.v_max, 80.0)
+        self.model = model.upper()
+        self._device_state = damiao.DmState.DISABLED
+        super().__init__(config, limits, safety)
+
+    @staticmethod
+    def _default_master_id(motor_id: int) -> int:
+        return min(motor_id + 0x10, 0x7FF)
+
+    def _match(self, msg: can.Message) -> bool:
+        data = msg.data
+        return len(data) > 0 and (data[0] & 0x0F) == (self.motor_id & 0x0F)
+
+    def _decode(self, msg: can.Message) -> tuple[float, float, float, float | None, int]:
+        fb = damiao.decode_feedback(msg.data, self.limits)
+        self._device_state = fb.state
+        position = self._position_unwrapper.update(fb.position)
+        error = fb.state if fb.state in damiao.FAULT_STATES else 0
+        return position, fb.velocity, fb.torque, float(max(fb.t_mos, fb.t_rotor)), error
+
+    def _reports_disabled(self) -> bool:
+        return self._device_state == damiao.DmState.DISABLED
+
+
+class Dm4310(Damiao):
+    """DM4310 (24 V): P ±12.5 rad, V ±30 rad/s, T ±10 N·m."""
+
+    type_name = 'dm4310'
+    default_model = 'DM4310'
+
+
+class Dm4340(Damiao):
+    """DM4340: ranges conflict between DM's SDKs — set ``limits`` from the motor."""
+
+    type_name = 'dm4340'
+    default_model = 'DM4340'
+
+
+class Dm8009(Damiao):
+    """DM8009: P ±12.5 rad, V ±45 rad/s, T ±54 N·m."""
+
+    type_name = 'dm8009'
+    default_model = 'DM8009'
+
+
+class Dm10010L(Damiao):
+    """DM10010L: P ±12.5 rad, V ±25 rad/s, T ±200 N·m."""
+
+    type_name = 'dm10010l'
+    default_model = 'DM10010L'
+
+
+class Cheetah(MitActuator):
+    """A motor running Ben Katz's MIT Cheetah firmware (no temperatures, no clear-error)."""
+
+    type_name = 'cheetah'
+    max_motor_id = 0xFF  # the reply carries the id in one byte
+
+    def __init__(self, config: JointConfig, safety: SafetyConfig | None = None) -> None:
+        """Build the actuator; see the module docstring for the options.
+
+        Raises:
+            HardwareConfigError: invalid id or option.
+        """
+        limits = limits_from_config(
+            config.name, cheetah.CHEETAH_DEFAULT_LIMITS, config.options.get('limits')
+        )
+        self.defaults = Defaults(1.0, None, limits.t_max, limits.v_max, math.inf)
+        super().__init__(config, limits, safety)
+
+    def _match(self, msg: can.Message) -> bool:
+        data = msg.data
+        return len(data) > 0 and data[0] == self.motor_id
+
+    def _decode(self, msg: can.Message) -> tuple[float, float, float, float | None, int]:
+        reply = cheetah.decode_reply(msg.data, self.limits)
+        position = self._position_unwrapper.update(reply.position)
+        return position, reply.velocity, reply.torque, None, 0
+
+    def _system_data(self, command: SystemCommand) -> bytes:
+        return cheetah.cheetah_system_frame(command)
