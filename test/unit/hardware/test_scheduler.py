@@ -1,0 +1,183 @@
+"""Scheduler: update all, then pack all, then send; timing statistics; on_error; thread."""
+
+import threading
+
+import can
+import pytest
+from rm_base.hardware.errors import HardwareConfigError
+from rm_base.hardware.scheduler import HISTOGRAM_EDGES_US, Scheduler
+from support.ros import wait_until
+
+from .helpers import MS, T0
+
+
+class Recorder:
+    def __init__(self, events, name, frame=True):
+        self.events = events
+        self.name = name
+        self.frame = frame
+        self.dts = []
+
+    def update(self, now_ns, dt):
+        self.events.append(('update', self.name, now_ns))
+        self.dts.append(dt)
+
+    def pack_command(self):
+        self.events.append(('pack', self.name))
+        if not self.frame:
+            return None
+        return can.Message(arbitration_id=len(self.name), data=self.name.encode())
+
+
+def make(events, **kwargs):
+    a, b = Recorder(events, 'a'), Recorder(events, 'bb')
+    g = Recorder(events, 'ggg')
+    silent = Recorder(events, 'none', frame=False)
+
+    def sender(bus):
+        return lambda msg: events.append(('send', bus, bytes(msg.data).decode()))
+
+    packers = [
+        (g, sender('can0')),
+        (a, sender('can0')),
+        (silent, sender('can0')),
+        (b, sender('can1')),
+    ]
+    return Scheduler([a, b], packers, **kwargs), a
+
+
+def test_tick_updates_all_then_packs_all_then_sends_all():
+    events = []
+    scheduler, _ = make(events)
+    assert scheduler.tick(T0) == 3
+    assert events == [
+        ('update', 'a', T0),
+        ('update', 'bb', T0),
+        ('pack', 'ggg'),
+        ('pack', 'a'),
+        ('pack', 'none'),
+        ('pack', 'bb'),
+        ('send', 'can0', 'ggg'),
+        ('send', 'can0', 'a'),
+        ('send', 'can1', 'bb'),
+    ]
+
+
+def test_dt_is_the_time_since_the_previous_tick():
+    events = []
+    scheduler, a = make(events)
+    scheduler.tick(T0)
+    scheduler.tick(T0 + 2 * MS)
+    scheduler.tick(T0 + 2 * MS)  # same time again: falls back to the nominal period
+    assert a.dts == pytest.approx([0.001, 0.002, 0.001])
+    assert scheduler.stats().ticks == 3
+
+
+def test_rate_must_be_positive():
+    with pytest.raises(HardwareConfigError, match='rate must be > 0'):
+        Scheduler([], [], rate_hz=0.0)
+
+
+class SteppedClock:
+    """A clock the scheduler thread advances through its sleep function."""
+
+    def __init__(self, tick_cost_ns=0):
+        self.now = T0
+        self.tick_cost_ns = tick_cost_ns
+
+    def __call__(self):
+        return self.now
+
+    def sleep(self, seconds):
+        self.now += int(seconds * 1e9)
+
+
+def test_thread_sleeps_to_absolute_deadlines_and_counts_overruns():
+    clock = SteppedClock()
+    starts = []
+
+    class Slow:
+        def update(self, now_ns, dt):
+            starts.append((now_ns - T0) / MS)
+            if len(starts) in (4, 5):
+                clock.now += 2_500_000  # 2.5 ms of work at 1 kHz
+
+        def pack_command(self):
+            return None
+
+    scheduler = Scheduler([Slow()], [], rate_hz=1000.0, clock_ns=clock, sleep=clock.sleep)
+    tick = scheduler.tick
+
+    def counted_tick(now_ns):
+        n = tick(now_ns)
+        if len(starts) >= 10:
+            scheduler._stop.set()
+        return n
+
+    scheduler.tick = counted_tick
+    scheduler.start()
+    assert wait_until(lambda: not scheduler.running, timeout=10.0)
+    # 4th tick at 3 ms ends at 5.5 ms: deadlines 4 and 5 ms are skipped, next at 6 ms;
+    # 5th tick at 6 ms ends at 8.5 ms: 7 and 8 skipped, next at 9 ms. No catch-up burst.
+    assert starts == [0, 1, 2, 3, 6, 9, 10, 11, 12, 13]
+    stats = scheduler.stats()
+    assert stats.overruns == 2
+    assert stats.skipped_ticks == 4
+    assert stats.max_tick_us == pytest.approx(2500.0)
+    assert stats.max_error_us == 0.0  # every start exactly on its deadline
+    assert stats.histogram[0] == stats.ticks == 10
+    assert len(stats.histogram) == len(HISTOGRAM_EDGES_US) + 1
+
+
+def test_on_error_decides_whether_to_go_on():
+    clock = SteppedClock()
+    failures = []
+
+    class Failing:
+        def update(self, now_ns, dt):
+            raise RuntimeError('boom')
+
+        def pack_command(self):
+            return None
+
+    def on_error(exc):
+        failures.append(exc)
+        return len(failures) < 3
+
+    final = threading.Event()
+    scheduler = Scheduler([Failing()], [], on_error=on_error, clock_ns=clock, sleep=clock.sleep)
+    scheduler.start(final=final.set)
+    assert wait_until(final.is_set, timeout=10.0)
+    assert len(failures) == 3
+    assert scheduler.stats().errors == 3
+    assert not scheduler.running
+
+
+def test_without_on_error_the_loop_stops_at_the_first_exception():
+    clock = SteppedClock()
+
+    class Failing:
+        def update(self, now_ns, dt):
+            raise RuntimeError('boom')
+
+        def pack_command(self):
+            return None
+
+    final = threading.Event()
+    scheduler = Scheduler([Failing()], [], clock_ns=clock, sleep=clock.sleep)
+    scheduler.start(final=final.set)
+    assert wait_until(final.is_set, timeout=10.0)
+    assert scheduler.stats().errors == 1
+
+
+def test_real_thread_runs_and_stops_idempotently():
+    events = []
+    scheduler, _ = make(events, rate_hz=1000.0)
+    scheduler.start()
+    scheduler.start()  # idempotent while running
+    assert wait_until(lambda: scheduler.stats().ticks >= 20, timeout=10.0)
+    scheduler.stop()
+    scheduler.stop()
+    assert not scheduler.running
+    ticks = scheduler.stats().ticks
+    assert scheduler.stats().ticks == ticks  # stopped means stopped
