@@ -1,11 +1,27 @@
 """The CAN hardware layer: device protocols, buses, actuators, command groups, scheduler.
 
-No rclpy here. ``rm_base.hardware.protocols`` is the pure bytes <-> values layer.
+No rclpy here. ``rm_base.hardware.protocols`` is the pure bytes <-> values layer; the rest
+turns a config dict into running buses and motors behind :class:`CanHardware`.
 """
 
+from rm_base.hardware.actuators import (
+    ACTUATOR_TYPES,
+    MODE_EFFORT,
+    MODE_MIT,
+    MODE_OFF,
+    MODE_POSITION,
+    MODE_VELOCITY,
+    Actuator,
+    HoldReason,
+    JointCommand,
+    JointState,
+    Mode,
+)
+from rm_base.hardware.bus import BusState, BusStats, ManagedBus
+from rm_base.hardware.can_hardware import CanHardware
+from rm_base.hardware.config import BusConfig, HardwareConfig, JointConfig, SafetyConfig
 from rm_base.hardware.errors import (
     BusError,
-    BusUnavailableError,
     ChecksumError,
     CommandRejectedError,
     FrameLengthError,
@@ -14,15 +30,38 @@ from rm_base.hardware.errors import (
     ProtocolError,
     ValueRangeError,
 )
+from rm_base.hardware.groups import DjiCommandGroup
+from rm_base.hardware.scheduler import PeriodStats, Scheduler
 
 __all__ = [
+    'ACTUATOR_TYPES',
+    'MODE_EFFORT',
+    'MODE_MIT',
+    'MODE_OFF',
+    'MODE_POSITION',
+    'MODE_VELOCITY',
+    'Actuator',
+    'BusConfig',
     'BusError',
-    'BusUnavailableError',
+    'BusState',
+    'BusStats',
+    'CanHardware',
     'ChecksumError',
     'CommandRejectedError',
+    'DjiCommandGroup',
     'FrameLengthError',
+    'HardwareConfig',
     'HardwareConfigError',
     'HardwareError',
+    'HoldReason',
+    'JointCommand',
+    'JointConfig',
+    'JointState',
+    'ManagedBus',
+    'Mode',
+    'PeriodStats',
     'ProtocolError',
+    'SafetyConfig',
+    'Scheduler',
     'ValueRangeError',
 ]

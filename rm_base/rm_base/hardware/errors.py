@@ -10,7 +10,6 @@ The tree, rooted at :class:`rm_base.errors.RmError`::
     │   └── ValueRangeError                        value outside what the frame can carry
     ├── CommandRejectedError (also InputRejectedError)   NaN target, unknown joint or mode
     └── BusError                                   a CAN bus could not be used
-        └── BusUnavailableError                    the bus is down (reopening in the background)
 
 Errors raised by python-can are re-raised as :class:`BusError` ``from`` the original.
 """
@@ -70,11 +69,4 @@ class BusError(HardwareError):
     """A CAN bus could not be opened or used.
 
     Example: ``can0`` does not exist, or the USB adapter was unplugged.
-    """
-
-
-class BusUnavailableError(BusError):
-    """The bus is down and being reopened; the frame was not sent.
-
-    Example: a send while the managed bus waits out its reconnect back-off.
     """

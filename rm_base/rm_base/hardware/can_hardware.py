@@ -1,0 +1,265 @@
+"""CanHardware: buses + actuators + command groups + scheduler, built from one config dict.
+
+This is the whole CAN layer behind one object; the ROS bridge node is a thin wrapper::
+
+    hw = CanHardware(config)               # schema: rm_base.hardware.config
+    hw.start()                             # buses up, receive threads, 1 kHz scheduler
+    hw.set_command('yaw', MODE_POSITION, position=0.3)
+    hw.states()                            # [JointState(...)], ActuatorState fields
+    hw.diagnostics()                       # bus load/errors, overruns, period stats
+    hw.shutdown()                          # zero frames, then close (idempotent)
+
+Tests drive it without the scheduler thread: ``hw.open()`` then ``hw.tick(now_ns)``.
+The simulator plugs in as ``interface: rm_sim`` in a bus config (``virtual`` works too).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from collections.abc import Callable, Mapping
+from typing import Any
+
+import can
+
+from rm_base.hardware.actuators import (
+    ACTUATOR_TYPES,
+    Actuator,
+    DjiActuator,
+    JointState,
+    MitActuator,
+)
+from rm_base.hardware.actuators.mit import Damiao
+from rm_base.hardware.bus import BusFactory, ManagedBus
+from rm_base.hardware.config import HardwareConfig
+from rm_base.hardware.errors import CommandRejectedError, HardwareConfigError
+from rm_base.hardware.groups import build_dji_groups
+from rm_base.hardware.protocols.mit import SystemCommand
+from rm_base.hardware.scheduler import Scheduler
+
+_log = logging.getLogger(__name__)
+
+
+class CanHardware:
+    """The CAN hardware layer of one robot (see the module docstring)."""
+
+    def __init__(
+        self,
+        config: Mapping[str, Any] | HardwareConfig,
+        *,
+        clock_ns: Callable[[], int] = time.perf_counter_ns,
+        bus_factory: BusFactory = can.Bus,
+        on_error: Callable[[Exception], bool] | None = None,
+    ) -> None:
+        """Build everything; nothing is opened until :meth:`open` or :meth:`start`.
+
+        Args:
+            config: a config dict (schema in :mod:`rm_base.hardware.config`) or a parsed
+                :class:`HardwareConfig`.
+            clock_ns: monotonic clock [ns] shared by feedback stamps, commands and ticks.
+            bus_factory: builds python-can buses (``can.Bus``).
+            on_error: scheduler error hook (return True to go on); the default logs, counts
+                and goes on.
+
+        Raises:
+            HardwareConfigError: anything wrong in the config, naming where.
+        """
+        if not isinstance(config, HardwareConfig):
+            config = HardwareConfig.from_dict(config)
+        self.config = config
+        self._clock_ns = clock_ns
+        self._closed = False
+        self._unknown_joint_commands = 0
+        self.buses: dict[str, ManagedBus] = {
+            b.name: ManagedBus(b, clock_ns=clock_ns, bus_factory=bus_factory) for b in config.buses
+        }
+        self.actuators: dict[str, Actuator] = {}
+        for joint in config.joints:
+            cls = ACTUATOR_TYPES.get(joint.type)
+            if cls is None:
+                raise HardwareConfigError(
+                    f'joints.{joint.name}.type {joint.type!r} is unknown; known: '
+                    f'{", ".join(sorted(ACTUATOR_TYPES))}'
+                )
+            self.actuators[joint.name] = cls(joint, config.safety)
+        actuators = list(self.actuators.values())
+        self.groups = build_dji_groups(a for a in actuators if isinstance(a, DjiActuator))
+        own_frames = [a for a in actuators if not isinstance(a, DjiActuator)]
+        self._check_ids(own_frames)
+        for a in actuators:
+            bus = self.buses[a.bus_name]
+            for fid in a.feedback_ids():
+                bus.add_handler(fid, a.handle_frame)
+        for name, bus in self.buses.items():
+            members = [a for a in actuators if a.bus_name == name]
+            bus.add_failure_listener(lambda now_ns, m=members: self._bus_down(m, now_ns))
+            bus.add_reopen_listener(lambda now_ns, m=members: self._bus_recovered(m, now_ns))
+        packers = [(g, self.buses[g.bus_name].send) for g in self.groups]
+        packers += [(a, self.buses[a.bus_name].send) for a in own_frames]
+        self.scheduler = Scheduler(
+            actuators,
+            packers,
+            rate_hz=config.rate_hz,
+            on_error=on_error if on_error is not None else self._log_and_go_on,
+            clock_ns=clock_ns,
+        )
+
+    def _check_ids(self, own_frames: list[Actuator]) -> None:
+        sent: dict[tuple[str, int], str] = {
+            (g.bus_name, g.arbitration_id): g.name for g in self.groups
+        }
+        damiao_replies: dict[tuple[str, int, int], str] = {}
+        for a in own_frames:
+            key = (a.bus_name, a.command_id)
+            if key in sent:
+                raise HardwareConfigError(
+                    f'{a.name} and {sent[key]} both send frame 0x{a.command_id:03X} on {a.bus_name}'
+                )
+            sent[key] = a.name
+            if isinstance(a, Damiao):
+                reply = (a.bus_name, a.master_id, a.motor_id & 0x0F)
+                if reply in damiao_replies:
+                    raise HardwareConfigError(
+                        f'{a.name} and {damiao_replies[reply]} reply on 0x{a.master_id:03X} '
+                        f'with the same id nibble on {a.bus_name}'
+                    )
+                damiao_replies[reply] = a.name
+
+    @staticmethod
+    def _bus_down(members: list[Actuator], now_ns: int) -> None:
+        for a in members:
+            a.notify_bus_down(now_ns)
+
+    @staticmethod
+    def _bus_recovered(members: list[Actuator], now_ns: int) -> None:
+        for a in members:
+            a.notify_bus_recovered(now_ns)
+
+    @staticmethod
+    def _log_and_go_on(exc: Exception) -> bool:
+        # the scheduler has logged the exception already; the joints hold safe outputs
+        return True
+
+    # --- life cycle ---
+    def open(self) -> None:
+        """Open every bus and start its receive thread (no scheduler thread).
+
+        A bus that cannot be opened is retried in the background; see diagnostics().
+        """
+        for bus in self.buses.values():
+            bus.start()
+
+    def start(self) -> None:
+        """Open the buses and start the scheduler thread. Idempotent."""
+        self.open()
+        self.scheduler.start(final=self._send_final_frames)
+
+    def tick(self, now_ns: int | None = None) -> int:
+        """Run one scheduler cycle now (tests and manual stepping; not with start()).
+
+        Returns:
+            Number of frames handed to the buses.
+        """
+        return self.scheduler.tick(self._clock_ns() if now_ns is None else now_ns)
+
+    def shutdown(self) -> None:
+        """Send zero commands (and DISABLE to MIT motors), then close every bus. Idempotent."""
+        if self._closed:
+            return
+        self._closed = True
+        if self.scheduler.running:
+            self.scheduler.stop()  # its final callback sends the zero frames
+        else:
+            self._send_final_frames()
+        for bus in self.buses.values():
+            bus.shutdown()
+
+    def _send_final_frames(self) -> None:
+        for a in self.actuators.values():
+            a.shutdown()
+        self.scheduler.tick(self._clock_ns())
+        for a in self.actuators.values():
+            send = self.buses[a.bus_name].send
+            for msg in a.final_frames():
+                send(msg)
+        _log.info('CAN hardware: zero commands sent')
+
+    def __enter__(self) -> CanHardware:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.shutdown()
+
+    # --- commands ---
+    @property
+    def joint_names(self) -> list[str]:
+        """Joint names in config order."""
+        return list(self.actuators)
+
+    def set_command(
+        self,
+        name: str,
+        mode: int,
+        *,
+        position: float = 0.0,
+        velocity: float = 0.0,
+        effort: float = 0.0,
+        kp: float = 0.0,
+        kd: float = 0.0,
+        now_ns: int | None = None,
+    ) -> None:
+        """Set one joint's target (ActuatorCmd semantics, output shaft, SI).
+
+        Args:
+            name: joint name.
+            mode: MODE_OFF/EFFORT/VELOCITY/POSITION/MIT (0..4).
+            position: [rad].
+            velocity: [rad/s].
+            effort: [N·m].
+            kp: [N·m/rad].
+            kd: [N·m·s/rad].
+            now_ns: command time [ns]; default: the clock now.
+
+        Raises:
+            CommandRejectedError: unknown joint, mode, NaN/inf field or negative gains;
+                nothing reaches a motor and the previous target stays in force.
+        """
+        actuator = self.actuators.get(name)
+        if actuator is None:
+            self._unknown_joint_commands += 1
+            raise CommandRejectedError(f'unknown joint {name!r}; joints: {self.joint_names}')
+        actuator.set_command(
+            mode,
+            self._clock_ns() if now_ns is None else now_ns,
+            position=position,
+            velocity=velocity,
+            effort=effort,
+            kp=kp,
+            kd=kd,
+        )
+
+    def request_system_command(self, name: str, command: SystemCommand | int) -> None:
+        """Send enable / disable / set-zero / clear-error to an MIT-mode motor next tick.
+
+        Raises:
+            CommandRejectedError: unknown joint or not an MIT-mode motor.
+            ValueRangeError: the motor family has no such command (Cheetah: clear error).
+        """
+        actuator = self.actuators.get(name)
+        if not isinstance(actuator, MitActuator):
+            raise CommandRejectedError(f'{name!r} is not an MIT-mode motor joint')
+        actuator.request_system_command(command)
+
+    # --- state ---
+    def states(self) -> list[JointState]:
+        """State of every joint (config order), ActuatorState fields."""
+        return [a.state() for a in self.actuators.values()]
+
+    def diagnostics(self) -> dict[str, Any]:
+        """Bus counters and load, scheduler timing, and per-joint counters."""
+        return {
+            'buses': {name: bus.stats() for name, bus in self.buses.items()},
+            'scheduler': self.scheduler.stats(),
+            'joints': {name: a.diagnostics() for name, a in self.actuators.items()},
+            'unknown_joint_commands': self._unknown_joint_commands,
+        }
