@@ -128,7 +128,18 @@ class JointState(NamedTuple):
 
 
 class Feedback(NamedTuple):
-    """Latest decoded feedback at the joint (written whole by the receive thread)."""
+    """Latest decoded feedback at the joint (written whole by the receive thread).
+
+    Attributes:
+        stamp_ns: receive time [ns].
+        position: [rad], continuous.
+        velocity: [rad/s].
+        effort: [N·m].
+        temperature: [°C], or None if the device reports none.
+        error_code: device fault code, 0 = none.
+        device_velocity: velocity of the measuring shaft (DJI: rotor) [rad/s], for models
+            that need it (GM6020 back-EMF).
+    """
 
     stamp_ns: int
     position: float
