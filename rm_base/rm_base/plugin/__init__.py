@@ -1,0 +1,59 @@
+"""The rm_ros2 plugin framework: PluginBase, its state machine, parameters, I/O and loader.
+
+A plugin author needs ``PluginBase`` and the helpers it hands out (``PluginParams``,
+``CommandInput``, ``JointTarget``, the joint-state view); the host needs ``PluginLoader``.
+"""
+
+from rm_base.plugin.base import STATE_QOS, PluginBase
+from rm_base.plugin.commands import CommandInput, CommandStatus
+from rm_base.plugin.errors import (
+    JointClaimError,
+    ParameterError,
+    PluginConfigError,
+    PluginDescriptionError,
+    PluginInitError,
+    PluginNotFoundError,
+    TargetRejectedError,
+    TransitionError,
+)
+from rm_base.plugin.joints import (
+    ActuatorMode,
+    JointState,
+    JointStateView,
+    JointTarget,
+    build_actuator_cmd,
+)
+from rm_base.plugin.loader import BASE_CLASS_TYPE, PluginDescription, PluginLoader
+from rm_base.plugin.node_io import ACTUATOR_CMD_TOPIC, ACTUATOR_STATES_TOPIC
+from rm_base.plugin.params import REQUIRED, PluginParams
+from rm_base.plugin.state_machine import DefaultState, StateMachine, Transition
+
+__all__ = [
+    'ACTUATOR_CMD_TOPIC',
+    'ACTUATOR_STATES_TOPIC',
+    'BASE_CLASS_TYPE',
+    'REQUIRED',
+    'STATE_QOS',
+    'ActuatorMode',
+    'CommandInput',
+    'CommandStatus',
+    'DefaultState',
+    'JointClaimError',
+    'JointState',
+    'JointStateView',
+    'JointTarget',
+    'ParameterError',
+    'PluginBase',
+    'PluginConfigError',
+    'PluginDescription',
+    'PluginDescriptionError',
+    'PluginInitError',
+    'PluginLoader',
+    'PluginNotFoundError',
+    'PluginParams',
+    'StateMachine',
+    'TargetRejectedError',
+    'Transition',
+    'TransitionError',
+    'build_actuator_cmd',
+]

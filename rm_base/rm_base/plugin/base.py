@@ -1,0 +1,497 @@
+"""PluginBase: the API every rm_ros2 mechanism plugin implements.
+
+The base class owns the public methods (``init``, ``run``, ``enable``, ``disable``,
+``reset``): checks, logging, the state machine, the command watchdog and zero output. A
+plugin overrides hooks, all of which succeed by default:
+
+- ``on_init()``: declare parameters (``self.params``), claim joints, subscribe commands,
+  create its own publishers.
+- ``update(now, dt)``: one tick: read commands and joint states, decide the state with
+  ``transition()`` (a no-op when unchanged, so call it every tick), send joint targets.
+- ``on_reset()``: clear integrators, ramps, filters (called on enable, disable, and when a
+  watched command is lost).
+- ``on_enable()`` / ``on_disable()``: anything else to do at those moments.
+- ``on_command_lost(now, dt)``: called instead of ``update`` while a watched command is
+  missing; the default commands zero output (the safe/PASSIVE behaviour).
+
+States are an Enum of ints (``State``), with a safe state (``SAFE_STATE``, by default the
+member named PASSIVE). Every transition is logged and published as rm_msgs/PluginState on
+``~/<plugin>/state``.
+
+Example:
+    >>> class Spinner(PluginBase):
+    ...     def on_init(self):
+    ...         self.speed = self.params.double('speed', 1.0, description='speed', unit='rad/s')
+    ...         self.joints = self.claim_joints(['spin_joint'])
+    ...         self.cmd = self.subscribe_command('spin_cmd', Twist)
+    ...
+    ...     def update(self, now, dt):
+    ...         self.transition(DefaultState.ACTIVE, 'spinning')
+    ...         self.send_joint_targets({'spin_joint': JointTarget.with_velocity(self.speed)})
+"""
+
+from __future__ import annotations
+
+import time
+import traceback
+from collections.abc import Iterable, Mapping
+from enum import Enum
+from typing import Any, ClassVar
+
+from rclpy.qos import DurabilityPolicy, QoSProfile, qos_profile_sensor_data
+
+from rm_base.errors import ConfigError
+from rm_base.plugin.commands import CommandInput
+from rm_base.plugin.errors import PluginConfigError, PluginInitError, TargetRejectedError
+from rm_base.plugin.joints import JointStateView, JointTarget, build_actuator_cmd
+from rm_base.plugin.node_io import NodeIO, node_io
+from rm_base.plugin.params import PluginParams
+from rm_base.plugin.state_machine import DefaultState, StateMachine, Transition
+from rm_msgs.msg import PluginState
+
+_NS_PER_S = 1_000_000_000
+
+# Latched: a tool or test that subscribes late still gets the current state at once.
+STATE_QOS = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+# Methods the framework owns; a plugin overrides the on_* / update hooks instead.
+_FRAMEWORK_METHODS = ('init', 'run', 'enable', 'disable', 'reset', 'transition', 'zero_output')
+
+_ERROR_LOG_PERIOD_NS = _NS_PER_S
+
+
+class PluginBase:
+    """Base class of every plugin hosted by rm_robot.
+
+    Class attributes a plugin may set:
+        State: IntEnum of its states (values 0..255); default ``DefaultState``.
+        SAFE_STATE: member of State to fall back to; default ``State.PASSIVE``.
+        TRANSITIONS: optional table ``{state: states reachable from it}`` (see
+            ``StateMachine``); going to SAFE_STATE is always allowed.
+
+    Attributes available from ``on_init`` on:
+        node: the host node (for the plugin's own publishers).
+        name: instance name from the robot config, e.g. ``chassis``.
+        type_name: plugin type, e.g. ``rm_plugins/StandChassis``.
+        params: typed parameters under ``<name>.`` (see ``PluginParams``).
+        logger: a child logger named after the instance.
+        rate: configured run rate [Hz]; period = 1 / rate [s].
+        command_timeout: default timeout of command inputs [s].
+
+    The host calls ``run``, ``enable`` and ``disable`` one at a time (under a lock per
+    plugin); subscription callbacks only touch the thread-safe command inputs and the
+    joint-state view.
+    """
+
+    State: ClassVar[type[Enum]] = DefaultState
+    SAFE_STATE: ClassVar[Enum | None] = None
+    TRANSITIONS: ClassVar[Mapping[Any, Iterable[Any]] | None] = None
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        overridden = [m for m in _FRAMEWORK_METHODS if m in cls.__dict__]
+        if overridden:
+            raise TypeError(
+                f'{cls.__name__} overrides PluginBase.{overridden[0]}(), which the framework '
+                'owns; override the hooks on_init/update/on_reset/on_enable/on_disable/'
+                'on_command_lost instead'
+            )
+        _check_states(cls)
+
+    def __init__(self) -> None:
+        self.node: Any = None
+        self.name = ''
+        self.type_name = ''
+        self.params: PluginParams | None = None
+        self.logger: Any = None
+        self.rate = 0.0
+        self.command_timeout = 0.0
+        self.error_count = 0
+        self._io: NodeIO | None = None
+        self._machine: StateMachine | None = None
+        self._state_pub: Any = None
+        self._inputs: list[CommandInput] = []
+        self._joints: tuple[str, ...] = ()
+        self._enabled = False
+        self._lost_reason: str | None = None
+        self._last_run_ns: int | None = None
+        self._next_error_log_ns = 0
+        self._suppressed_errors = 0
+
+    # -- framework: lifecycle -----------------------------------------------------------
+
+    def init(self, node: Any, name: str, params: PluginParams | None = None) -> None:
+        """Set the plugin up on node as instance name; call ``on_init``.
+
+        Declares ``<name>.rate`` [Hz] (default 100) and ``<name>.command_timeout`` [s]
+        (default 0.1). The plugin starts disabled, in its safe state.
+
+        Args:
+            node: the host node.
+            name: instance name; also the parameter prefix and the state topic.
+            params: parameter access; default ``PluginParams(node, name, <class name>)``.
+
+        Raises:
+            PluginConfigError: a parameter is missing or invalid, a joint is taken, or the
+                plugin failed to initialise; the message names the plugin.
+        """
+        if self.node is not None:
+            raise RuntimeError(f"plugin '{self.name}' is already initialised")
+        params = params if params is not None else PluginParams(node, name, type(self).__name__)
+        self.node, self.name, self.params = node, name, params
+        self.type_name = params.plugin_type
+        self.logger = node.get_logger().get_child(name)
+        try:
+            self.rate = params.double(
+                'rate', 100.0, description='rate at which run() is called', unit='Hz',
+                gt=0.0, le=10000.0,
+            )
+            self.command_timeout = params.double(
+                'command_timeout', 0.1,
+                description='a command older than this is no command (watchdog)', unit='s',
+                gt=0.0,
+            )
+            self._io = node_io(node)
+            safe = self.safe_state
+            self._machine = StateMachine(
+                self.State, safe, safe=safe, allowed=self.TRANSITIONS,
+                listener=self._on_transition, initial_reason='loaded',
+            )
+            self._state_pub = node.create_publisher(PluginState, f'~/{name}/state', STATE_QOS)
+            self.on_init()
+        except PluginConfigError as err:
+            if not err.plugin:  # raised by the plugin's own code: say whose it is
+                err.plugin = name
+                err.args = (f'{self._where()}: {err}', *err.args[1:])
+            raise
+        except ConfigError as err:
+            raise PluginInitError(f'{self._where()}: {err}', plugin=name) from err
+        except Exception as err:
+            raise PluginInitError(
+                f'{self._where()}: init failed: {type(err).__name__}: {err}', plugin=name
+            ) from err
+        self.publish_state()
+
+    def enable(self) -> bool:
+        """Reset, then start acting on commands (safe state until update() decides).
+
+        Returns:
+            False if already enabled (nothing done).
+
+        Raises:
+            Exception: whatever on_enable raised; the plugin is left disabled then.
+        """
+        self._require_init()
+        if self._enabled:
+            return False
+        self.reset()
+        self._enabled = True
+        try:
+            self.on_enable()
+        except Exception:
+            self._enabled = False
+            self.zero_output()
+            raise
+        self.transition(self.safe_state, 'enabled')
+        self.publish_state()
+        return True
+
+    def disable(self, reason: str = 'disabled') -> None:
+        """Command zero output first, then stop, reset and go to the safe state.
+
+        Safe to call in any state and more than once (each call publishes zero output).
+
+        Args:
+            reason: published as PluginState.reason.
+        """
+        self._require_init()
+        self.zero_output()
+        self._enabled = False
+        self.reset()
+        try:
+            self.on_disable()
+        except Exception as err:  # the joints are already off; report and go on
+            self.logger.error(f'on_disable() failed: {type(err).__name__}: {err}')
+        self.transition(self.safe_state, reason)
+        self.publish_state()
+
+    def reset(self) -> None:
+        """Forget stale commands and timing, then call ``on_reset`` (integrators, ramps)."""
+        for command in self._inputs:
+            command.clear()
+        self._lost_reason = None
+        self._last_run_ns = None
+        self.on_reset()
+
+    def run(self, now: Any, dt: float | None = None) -> None:
+        """One tick: the command watchdog, then ``update`` (or ``on_command_lost``).
+
+        Never raises: an exception from a hook is logged (rate-limited), counted in
+        ``error_count``, and the plugin's joints are commanded to zero output.
+
+        Args:
+            now: current time on the node's clock (rclpy Time).
+            dt: time since the previous tick [s]; default from the previous ``now``, or the
+                nominal period on the first tick after enable/reset.
+        """
+        if not self._enabled:
+            return
+        now_ns = now.nanoseconds
+        if dt is None:
+            last = self._last_run_ns
+            dt = (now_ns - last) / _NS_PER_S if last is not None else 1.0 / self.rate
+        self._last_run_ns = now_ns
+        try:
+            reasons = [
+                reason
+                for command in self._inputs
+                if command.watchdog and (reason := command.check(now_ns)) is not None
+            ]
+            if reasons:
+                if self._lost_reason is None:
+                    # Falling back: nothing accumulated while commanded may carry over.
+                    self._lost_reason = '; '.join(reasons)
+                    self.on_reset()
+                    self.transition(self.safe_state, self._lost_reason)
+                self.on_command_lost(now, dt)
+            else:
+                self._lost_reason = None
+                self.update(now, dt)
+        except Exception as err:
+            self._on_run_error(err, now_ns)
+
+    # -- framework: state ---------------------------------------------------------------
+
+    @property
+    def enabled(self) -> bool:
+        """Whether run() acts (set by enable/disable)."""
+        return self._enabled
+
+    @property
+    def safe_state(self) -> Enum:
+        """The state the plugin falls back to (SAFE_STATE or State.PASSIVE)."""
+        return _safe_state_of(type(self))
+
+    @property
+    def state(self) -> Enum:
+        """The current state."""
+        self._require_init()
+        return self._machine.state
+
+    @property
+    def reason(self) -> str:
+        """Why the last transition happened."""
+        self._require_init()
+        return self._machine.reason
+
+    @property
+    def joints(self) -> tuple[str, ...]:
+        """Joints claimed by this plugin."""
+        return self._joints
+
+    @property
+    def joint_states(self) -> JointStateView:
+        """Latest state of every joint on /actuator_states (all joints, not only ours)."""
+        self._require_init()
+        return self._io.joint_states
+
+    def transition(self, new_state: Enum, reason: str) -> bool:
+        """Go to new_state (a member of State) for reason; log and publish on change.
+
+        Returns:
+            True if the state or reason changed.
+
+        Raises:
+            TransitionError: TRANSITIONS does not allow it.
+        """
+        self._require_init()
+        return self._machine.transition(new_state, reason)
+
+    def state_message(self) -> PluginState:
+        """Return the current state as rm_msgs/PluginState."""
+        self._require_init()
+        state, reason = self._machine.snapshot()
+        msg = PluginState()
+        msg.header.stamp = self.node.get_clock().now().to_msg()
+        msg.plugin = self.name
+        msg.type = self.type_name
+        msg.enabled = self._enabled
+        msg.state = int(state.value)
+        msg.state_name = state.name
+        msg.reason = reason
+        return msg
+
+    def publish_state(self) -> None:
+        """Publish the current state on ~/<name>/state."""
+        self._state_pub.publish(self.state_message())
+
+    # -- helpers for on_init / update ---------------------------------------------------
+
+    def subscribe_command(
+        self,
+        topic: str,
+        msg_type: type,
+        *,
+        timeout: float | None = None,
+        watchdog: bool = True,
+        qos: Any = None,
+    ) -> CommandInput:
+        """Subscribe to a command topic; return its input (``latest(now_ns)`` in update).
+
+        The command's ``header.stamp`` starts its timeout (the receive time if the message
+        has no header or a zero stamp). A stamp already older than the timeout is rejected
+        as stale and logged.
+
+        Args:
+            topic: topic name (relative names follow the node's namespace).
+            msg_type: message class, e.g. ``rm_msgs.msg.ChassisCmd``.
+            timeout: validity of a command [s]; default ``<name>.command_timeout``.
+            watchdog: while this input has no command, call ``on_command_lost`` (default:
+                zero output) instead of ``update`` and go to the safe state with the reason.
+            qos: subscription QoS; default best effort, depth 5 (matches any publisher).
+        """
+        self._require_init()
+        command = CommandInput(
+            self.node.resolve_topic_name(topic),
+            self.command_timeout if timeout is None else timeout,
+            self.logger,
+            watchdog=watchdog,
+        )
+        clock = self.node.get_clock()
+
+        def on_command(msg: Any) -> None:
+            command.handle(msg, clock.now().nanoseconds)
+
+        self.node.create_subscription(
+            msg_type, topic, on_command, qos if qos is not None else qos_profile_sensor_data
+        )
+        self._inputs.append(command)
+        return command
+
+    def claim_joints(self, joints: Iterable[str]) -> tuple[str, ...]:
+        """Declare the joints this plugin drives (zero output turns them off).
+
+        May be called more than once; joints add up.
+
+        Raises:
+            JointClaimError: a joint is already driven by another plugin.
+        """
+        self._require_init()
+        claimed = self._io.claim(self.name, joints)
+        self._joints = tuple(dict.fromkeys(self._joints + claimed))
+        return claimed
+
+    def send_joint_targets(self, targets: Mapping[str, JointTarget]) -> None:
+        """Publish one rm_msgs/ActuatorCmd with targets for some or all of our joints.
+
+        Raises:
+            TargetRejectedError: a joint is not ours, or a target has a NaN/inf field;
+                nothing is published then (``run`` turns the joints off for this tick).
+        """
+        self._require_init()
+        foreign = [joint for joint in targets if joint not in self._joints]
+        if foreign:
+            raise TargetRejectedError(
+                f"plugin '{self.name}' does not drive joint(s) {', '.join(foreign)} "
+                f"(claimed: {', '.join(self._joints) or 'none'})"
+            )
+        msg = build_actuator_cmd(targets)
+        self._publish_actuator_cmd(msg)
+
+    def zero_output(self) -> None:
+        """Command MODE_OFF (zero output, limp) on every joint this plugin drives."""
+        self._require_init()
+        if self._joints:
+            off = JointTarget.off()
+            self._publish_actuator_cmd(build_actuator_cmd(dict.fromkeys(self._joints, off)))
+
+    # -- hooks ----------------------------------------------------------------------------
+
+    def on_init(self) -> None:
+        """Declare parameters, claim joints, subscribe commands. Default: nothing."""
+
+    def update(self, now: Any, dt: float) -> None:
+        """One tick while enabled and commanded. Default: nothing.
+
+        Args:
+            now: current time on the node's clock (rclpy Time; ``now.nanoseconds``).
+            dt: time since the previous tick [s].
+        """
+
+    def on_reset(self) -> None:
+        """Clear integrators, ramps, filters, remembered targets. Default: nothing."""
+
+    def on_enable(self) -> None:
+        """Called by enable() after reset. Default: nothing."""
+
+    def on_disable(self) -> None:
+        """Called by disable() after zero output and reset. Default: nothing."""
+
+    def on_command_lost(self, now: Any, dt: float) -> None:
+        """Each tick while a watched command is missing. Default: zero output."""
+        self.zero_output()
+
+    # -- internals ------------------------------------------------------------------------
+
+    def _publish_actuator_cmd(self, msg: Any) -> None:
+        msg.header.stamp = self.node.get_clock().now().to_msg()
+        self._io.actuator_cmd.publish(msg)
+
+    def _on_transition(self, change: Transition) -> None:
+        if change.previous == change.current:
+            self.logger.info(f'{change.current.name}: {change.reason}')
+        else:
+            self.logger.info(f'{change.previous.name} -> {change.current.name}: {change.reason}')
+        if self._state_pub is not None:
+            self._state_pub.publish(self.state_message())
+
+    def _on_run_error(self, err: Exception, now_ns: int) -> None:
+        self.error_count += 1
+        try:
+            self.zero_output()
+            self._lost_reason = None
+            self.on_reset()
+            self.transition(self.safe_state, f'run failed: {type(err).__name__}: {err}')
+        except Exception as inner:  # the joints must go off even if this fails too
+            err = inner
+        # First error with its traceback, later ones at most once a second.
+        if self.error_count == 1:
+            self.logger.error(
+                f'run failed, joints off: {type(err).__name__}: {err}\n{traceback.format_exc()}'
+            )
+        elif time.monotonic_ns() >= self._next_error_log_ns:
+            more = f' ({self._suppressed_errors} more)' if self._suppressed_errors else ''
+            self.logger.error(f'run failed again, joints off: {type(err).__name__}: {err}{more}')
+            self._suppressed_errors = 0
+            self._next_error_log_ns = time.monotonic_ns() + _ERROR_LOG_PERIOD_NS
+        else:
+            self._suppressed_errors += 1
+
+    def _require_init(self) -> None:
+        if self._machine is None:
+            raise RuntimeError(f'{type(self).__name__}: call init() first')
+
+    def _where(self) -> str:
+        return f"plugin '{self.name}'" + (f' ({self.type_name})' if self.type_name else '')
+
+
+def _safe_state_of(cls: type[PluginBase]) -> Enum:
+    if cls.SAFE_STATE is not None:
+        return cls.SAFE_STATE
+    return cls.State['PASSIVE']
+
+
+def _check_states(cls: type[PluginBase]) -> None:
+    states = cls.State
+    if not (isinstance(states, type) and issubclass(states, Enum)) or not list(states):
+        raise TypeError(f'{cls.__name__}.State must be a non-empty Enum')
+    for member in states:
+        if not isinstance(member.value, int) or not 0 <= member.value <= 255:
+            raise TypeError(
+                f'{cls.__name__}.State.{member.name} must have an int value in 0..255 '
+                f'(PluginState.state is uint8), got {member.value!r}'
+            )
+    if cls.SAFE_STATE is None and 'PASSIVE' not in states.__members__:
+        raise TypeError(f'{cls.__name__} needs SAFE_STATE or a State member named PASSIVE')
+    if cls.SAFE_STATE is not None and not isinstance(cls.SAFE_STATE, states):
+        raise TypeError(f'{cls.__name__}.SAFE_STATE must be a member of {states.__name__}')

@@ -1,0 +1,212 @@
+"""Command inputs: the latest message on a command topic, with a stamp and a timeout.
+
+A command is valid for ``timeout`` seconds from its stamp (``header.stamp``), or from the
+time it was received when it has no header or a zero stamp. A message whose stamp is
+already older than the timeout when it arrives is rejected as stale (and logged). Once the
+newest command is older than the timeout the input reads "no command", and the reason is
+logged once; its return is logged once too.
+
+The subscription callback (ROS executor thread) and the plugin's run thread share one
+latest-value slot guarded by a lock, so a reader always gets a message and its stamp from
+the same callback. No rclpy here: the caller passes times in nanoseconds.
+"""
+
+from __future__ import annotations
+
+import threading
+from enum import Enum
+from typing import Any, Generic, Protocol, TypeVar
+
+M = TypeVar('M')
+
+_NS_PER_S = 1_000_000_000
+
+
+class Logger(Protocol):
+    """The part of rclpy's logger a command input uses."""
+
+    def info(self, message: str) -> Any:
+        """Log at INFO."""
+
+    def warning(self, message: str) -> Any:
+        """Log at WARN."""
+
+
+class CommandStatus(Enum):
+    """Whether an input holds a command that may be used now."""
+
+    FRESH = 'fresh'  # a command within its timeout
+    NEVER_RECEIVED = 'never received'  # nothing since start or since the last clear()
+    TIMED_OUT = 'timed out'  # the newest command is older than the timeout
+
+
+def stamp_ns_of(msg: object) -> int | None:
+    """Return msg.header.stamp in nanoseconds, or None without a header or with a zero stamp."""
+    header = getattr(msg, 'header', None)
+    stamp = getattr(header, 'stamp', None)
+    if stamp is None:
+        return None
+    stamp_ns = int(stamp.sec) * _NS_PER_S + int(stamp.nanosec)
+    return stamp_ns or None
+
+
+class _Throttle:
+    """Lets one message through per period; counts the ones held back."""
+
+    def __init__(self, period_ns: int) -> None:
+        self._period_ns = period_ns
+        self._next_ns: int | None = None
+        self.suppressed = 0
+
+    def due(self, now_ns: int) -> bool:
+        if self._next_ns is not None and now_ns < self._next_ns:
+            self.suppressed += 1
+            return False
+        self._next_ns = now_ns + self._period_ns
+        return True
+
+    def take_suppressed(self) -> str:
+        count, self.suppressed = self.suppressed, 0
+        return f' ({count} more since the last report)' if count else ''
+
+
+class CommandInput(Generic[M]):
+    """The latest command on one topic, valid for a timeout from its stamp.
+
+    Args:
+        topic: topic name, for messages.
+        timeout: how long a command stays valid after its stamp [s]; > 0.
+        logger: receives the stale / no-command / resumed lines.
+        watchdog: whether the plugin falls back to its safe state while this input has
+            no command (see ``PluginBase.subscribe_command``).
+        log_period: shortest interval between two "rejected stale" lines [s].
+    """
+
+    def __init__(
+        self,
+        topic: str,
+        timeout: float,
+        logger: Logger,
+        *,
+        watchdog: bool = True,
+        log_period: float = 1.0,
+    ) -> None:
+        if not timeout > 0.0:
+            raise ValueError(f'timeout of {topic} must be > 0 s, got {timeout}')
+        self.topic = topic
+        self.timeout = float(timeout)
+        self.watchdog = watchdog
+        self._timeout_ns = round(timeout * _NS_PER_S)
+        self._logger = logger
+        self._lock = threading.Lock()
+        self._msg: M | None = None
+        self._stamp_ns = 0
+        self._rejected = 0
+        self._stale_log = _Throttle(round(log_period * _NS_PER_S))
+        # Run-thread side: whether the current "no command" episode has been reported.
+        self._reported_missing = False
+
+    @property
+    def rejected(self) -> int:
+        """Number of messages rejected as stale or from the future since start."""
+        with self._lock:
+            return self._rejected
+
+    def handle(self, msg: M, receive_ns: int) -> bool:
+        """Take a message from the subscription.
+
+        Args:
+            msg: the message; its ``header.stamp`` is used when present and non-zero.
+            receive_ns: receive time on the node's clock [ns].
+
+        Returns:
+            True if stored, False if rejected as stale or stamped in the future.
+        """
+        stamp_ns = stamp_ns_of(msg)
+        if stamp_ns is None:
+            stamp_ns = receive_ns
+        age_ns = receive_ns - stamp_ns
+        # A stamp more than a timeout in the future means the sender's clock is off; using
+        # it would keep the command alive past its timeout.
+        if age_ns > self._timeout_ns or -age_ns > self._timeout_ns:
+            with self._lock:
+                self._rejected += 1
+                due = self._stale_log.due(receive_ns)
+                more = self._stale_log.take_suppressed() if due else ''
+            if due:
+                when = (
+                    f'{age_ns / _NS_PER_S:.3f} s old'
+                    if age_ns > 0
+                    else f'{-age_ns / _NS_PER_S:.3f} s in the future (clocks out of sync?)'
+                )
+                self._logger.warning(
+                    f'rejected stale command on {self.topic}: stamp is {when}, '
+                    f'timeout {self.timeout:.3f} s{more}'
+                )
+            return False
+        with self._lock:
+            self._msg = msg
+            self._stamp_ns = stamp_ns
+        return True
+
+    def status(self, now_ns: int) -> tuple[CommandStatus, str]:
+        """Return the status at now_ns and, unless FRESH, why there is no command."""
+        with self._lock:
+            msg, stamp_ns = self._msg, self._stamp_ns
+        return self._evaluate(msg, stamp_ns, now_ns)
+
+    def check(self, now_ns: int) -> str | None:
+        """Return None while a command is fresh, else the reason; log each change once.
+
+        Call from the run thread only (``latest`` does the same and returns the command).
+        """
+        with self._lock:
+            msg, stamp_ns = self._msg, self._stamp_ns
+        return self._report(*self._evaluate(msg, stamp_ns, now_ns))
+
+    def latest(self, now_ns: int) -> M | None:
+        """Return the newest command if still within its timeout at now_ns, else None.
+
+        Call from the run thread only; a change between "command" and "no command" is
+        logged once, as in ``check``.
+        """
+        with self._lock:
+            msg, stamp_ns = self._msg, self._stamp_ns
+        if self._report(*self._evaluate(msg, stamp_ns, now_ns)) is not None:
+            return None
+        return msg
+
+    def _evaluate(self, msg: M | None, stamp_ns: int, now_ns: int) -> tuple[CommandStatus, str]:
+        if msg is None:
+            return CommandStatus.NEVER_RECEIVED, f'no command on {self.topic} yet'
+        age_ns = now_ns - stamp_ns
+        if age_ns > self._timeout_ns:
+            return (
+                CommandStatus.TIMED_OUT,
+                f'no command on {self.topic} for {age_ns / _NS_PER_S:.3f} s '
+                f'(timeout {self.timeout:.3f} s)',
+            )
+        return CommandStatus.FRESH, ''
+
+    def _report(self, status: CommandStatus, reason: str) -> str | None:
+        if status is CommandStatus.FRESH:
+            if self._reported_missing:
+                self._reported_missing = False
+                self._logger.info(f'command on {self.topic} resumed')
+            return None
+        if not self._reported_missing:
+            self._reported_missing = True
+            self._logger.warning(reason)
+        return reason
+
+    def stamp_ns(self) -> int | None:
+        """Return the stamp of the stored command [ns] (receive time if it had none)."""
+        with self._lock:
+            return self._stamp_ns if self._msg is not None else None
+
+    def clear(self) -> None:
+        """Forget the stored command (on enable/disable: never act on an old command)."""
+        with self._lock:
+            self._msg = None
+            self._stamp_ns = 0
+        self._reported_missing = False

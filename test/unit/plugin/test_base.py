@@ -1,0 +1,338 @@
+"""PluginBase through its public API: lifecycle, zero output, watchdog, state, errors."""
+
+import enum
+import math
+
+import pytest
+import rclpy
+from geometry_msgs.msg import TwistStamped
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.parameter import Parameter
+from rclpy.time import Time
+from rm_base.plugin import (
+    ActuatorMode,
+    DefaultState,
+    JointClaimError,
+    JointTarget,
+    ParameterError,
+    PluginBase,
+    PluginInitError,
+    PluginParams,
+    TargetRejectedError,
+)
+from rm_base.plugin.node_io import node_io
+from support.ros import wait_until
+
+from rm_msgs.msg import ActuatorCmd, PluginState
+
+pytestmark = pytest.mark.ros
+
+MS = 1_000_000  # [ns]
+T0 = 1_000_000 * MS  # [ns]
+
+
+def at(ns):
+    return Time(nanoseconds=ns)
+
+
+class Wheel(enum.IntEnum):
+    PASSIVE = 0
+    DRIVE = 1
+
+
+class WheelPlugin(PluginBase):
+    """Drives 'wheel' at the commanded linear.x [rad/s]; remembers what happened."""
+
+    State = Wheel
+
+    def on_init(self):
+        self.gain = self.params.double('gain', 1.0, description='gain', unit='1')
+        self.claim_joints(['wheel'])
+        self.cmd = self.subscribe_command('wheel_cmd', TwistStamped)
+        self.events = []
+        self.integral = 0.0
+
+    def update(self, now, dt):
+        self.events.append(('update', round(dt, 6)))
+        cmd = self.cmd.latest(now.nanoseconds)
+        self.integral += dt
+        self.transition(Wheel.DRIVE, 'commanded')
+        velocity = self.gain * cmd.twist.linear.x
+        self.send_joint_targets({'wheel': JointTarget.with_velocity(velocity)})
+
+    def on_reset(self):
+        self.events.append('reset')
+        self.integral = 0.0
+
+    def on_disable(self):
+        self.events.append('on_disable')
+
+
+@pytest.fixture
+def node(ros_context):
+    node = rclpy.create_node(
+        'plugin_test', context=ros_context,
+        parameter_overrides=[Parameter('wheel.gain', value=2.0)],
+    )
+    yield node
+    node.destroy_node()
+
+
+@pytest.fixture
+def sent(node, monkeypatch):
+    """ActuatorCmd messages published through the node's shared publisher, in order."""
+    publisher = node_io(node).actuator_cmd
+    messages = []
+    original = publisher.publish
+
+    def record(msg):
+        messages.append(msg)
+        original(msg)
+
+    monkeypatch.setattr(publisher, 'publish', record)
+    return messages
+
+
+@pytest.fixture
+def plugin(node):
+    plugin = WheelPlugin()
+    plugin.init(node, 'wheel', PluginParams(node, 'wheel', 'test/Wheel'))
+    return plugin
+
+
+def command(plugin, velocity, receive_ns):
+    msg = TwistStamped()
+    msg.twist.linear.x = velocity
+    plugin.cmd.handle(msg, receive_ns)
+
+
+def modes(msg):
+    return dict(zip(msg.name, msg.mode, strict=True))
+
+
+def test_after_init_the_plugin_is_disabled_in_its_safe_state(plugin):
+    assert not plugin.enabled
+    assert plugin.state is Wheel.PASSIVE
+    assert plugin.rate == 100.0  # default of <name>.rate [Hz]
+    assert plugin.command_timeout == 0.1  # default of <name>.command_timeout [s]
+    assert plugin.joints == ('wheel',)
+    assert plugin.gain == 2.0
+
+
+def test_run_while_disabled_does_nothing(plugin, sent):
+    command(plugin, 1.0, T0)
+    plugin.run(at(T0))
+    assert plugin.events == [] and sent == []
+
+
+def test_enable_resets_and_forgets_commands_received_before(plugin, sent):
+    command(plugin, 1.0, T0)
+    plugin.enable()
+    assert plugin.events == ['reset']
+    assert plugin.enabled
+    # The command that arrived while disabled must not be acted on.
+    plugin.run(at(T0 + 1 * MS))
+    assert plugin.state is Wheel.PASSIVE
+    assert plugin.reason == 'no command on /wheel_cmd yet'
+    assert [modes(m) for m in sent] == [{'wheel': ActuatorMode.OFF}]
+
+
+def test_with_a_fresh_command_update_runs_and_sends_targets(plugin, sent):
+    plugin.enable()
+    command(plugin, 1.5, T0)
+    plugin.run(at(T0 + 10 * MS), dt=0.01)
+    assert plugin.state is Wheel.DRIVE
+    assert plugin.events[-1] == ('update', 0.01)
+    assert list(sent[-1].name) == ['wheel']
+    assert list(sent[-1].mode) == [ActuatorCmd.MODE_VELOCITY]
+    assert list(sent[-1].velocity) == [3.0]  # gain 2.0 * 1.5 rad/s
+
+
+def test_dt_defaults_to_the_clock_difference_and_to_the_period_first(plugin):
+    plugin.enable()
+    command(plugin, 1.0, T0)
+    plugin.run(at(T0))
+    plugin.run(at(T0 + 4 * MS))
+    # First tick after enable: nominal period 1/100 Hz = 0.01 s; then 4 ms.
+    assert [e for e in plugin.events if e != 'reset'] == [('update', 0.01), ('update', 0.004)]
+
+
+def test_when_command_times_out_expect_safe_state_reason_reset_and_zero_output(plugin, sent):
+    plugin.enable()
+    command(plugin, 1.0, T0)
+    plugin.run(at(T0 + 50 * MS))
+    assert plugin.integral > 0.0
+    plugin.run(at(T0 + 150 * MS))  # 150 ms > 100 ms timeout
+    assert plugin.state is Wheel.PASSIVE
+    assert plugin.reason == 'no command on /wheel_cmd for 0.150 s (timeout 0.100 s)'
+    assert plugin.integral == 0.0  # on_reset ran when the command was lost
+    assert modes(sent[-1]) == {'wheel': ActuatorMode.OFF}
+    # Still lost on the next tick: zero output again, no further reset.
+    resets = plugin.events.count('reset')
+    plugin.run(at(T0 + 160 * MS))
+    assert modes(sent[-1]) == {'wheel': ActuatorMode.OFF}
+    assert plugin.events.count('reset') == resets
+
+
+def test_when_command_returns_expect_update_again(plugin, sent):
+    plugin.enable()
+    plugin.run(at(T0))
+    assert plugin.state is Wheel.PASSIVE
+    command(plugin, 1.0, T0 + 5 * MS)
+    plugin.run(at(T0 + 6 * MS))
+    assert plugin.state is Wheel.DRIVE
+    assert list(sent[-1].mode) == [ActuatorCmd.MODE_VELOCITY]
+
+
+def test_disable_commands_zero_output_before_anything_else(plugin, sent):
+    plugin.enable()
+    command(plugin, 1.0, T0)
+    plugin.run(at(T0))
+
+    published_before_hook = []
+    plugin.on_disable = lambda: published_before_hook.append(len(sent))
+    plugin.disable('operator')
+    assert modes(sent[-1]) == {'wheel': ActuatorMode.OFF}
+    assert published_before_hook == [len(sent)]
+    assert not plugin.enabled
+    assert plugin.state is Wheel.PASSIVE
+    assert plugin.reason == 'operator'
+    assert plugin.integral == 0.0
+
+
+def test_disable_when_already_disabled_still_zeroes_output(plugin, sent):
+    plugin.disable()
+    assert [modes(m) for m in sent] == [{'wheel': ActuatorMode.OFF}]
+
+
+def test_when_update_raises_expect_no_exception_zero_output_and_safe_state(plugin, sent):
+    plugin.enable()
+    command(plugin, 1.0, T0)
+    plugin.run(at(T0))
+
+    def broken(now, dt):
+        raise ZeroDivisionError('wheel radius is 0')
+
+    plugin.update = broken
+    plugin.run(at(T0 + 1 * MS))
+    assert plugin.error_count == 1
+    assert modes(sent[-1]) == {'wheel': ActuatorMode.OFF}
+    assert plugin.state is Wheel.PASSIVE
+    assert plugin.reason == 'run failed: ZeroDivisionError: wheel radius is 0'
+
+
+def test_when_a_target_is_nan_expect_nothing_published_but_zero_output(plugin, sent):
+    plugin.enable()
+    command(plugin, math.nan, T0)
+    plugin.run(at(T0))
+    assert sent
+    assert all(list(m.mode) == [ActuatorCmd.MODE_OFF] for m in sent)
+    assert plugin.error_count == 1
+    assert 'velocity of joint' in plugin.reason
+
+
+def test_send_rejects_joints_the_plugin_did_not_claim(plugin, sent):
+    with pytest.raises(
+        TargetRejectedError, match=r'does not drive joint\(s\) yaw \(claimed: wheel\)'
+    ):
+        plugin.send_joint_targets({'yaw': JointTarget.off()})
+    assert sent == []
+
+
+def test_two_plugins_cannot_drive_the_same_joint(node, plugin):
+    other = WheelPlugin()
+    with pytest.raises(
+        JointClaimError,
+        match=r"plugin 'other' cannot drive joint 'wheel' \(already driven by plugin 'wheel'\)",
+    ):
+        other.init(node, 'other')
+
+
+def test_state_is_published_on_transition(node, plugin):
+    received = []
+    node.create_subscription(PluginState, '~/wheel/state', received.append, 10)
+    executor = SingleThreadedExecutor(context=node.context)
+    executor.add_node(node)
+    try:
+        wait_until(lambda: node.count_publishers('/plugin_test/wheel/state') > 0, 5.0)
+        plugin.enable()
+        command(plugin, 1.0, T0)
+        plugin.run(at(T0))
+
+        assert wait_until(
+            lambda: any(m.state_name == 'DRIVE' for m in received), 5.0,
+            spin=lambda t: executor.spin_once(timeout_sec=t),
+        )
+        drive = next(m for m in received if m.state_name == 'DRIVE')
+        assert (drive.plugin, drive.type, drive.enabled) == ('wheel', 'test/Wheel', True)
+        assert drive.state == Wheel.DRIVE.value
+        assert drive.reason == 'commanded'
+    finally:
+        executor.shutdown()
+
+
+def test_when_on_init_raises_expect_one_init_error_naming_the_plugin(node):
+    class Broken(PluginBase):
+        def on_init(self):
+            raise OSError('cannot open /dev/ttyUSB0')
+
+    with pytest.raises(
+        PluginInitError,
+        match=r"^plugin 'imu' \(rm_plugins/Hi220\): init failed: "
+        r'OSError: cannot open /dev/ttyUSB0$',
+    ) as info:
+        Broken().init(node, 'imu', PluginParams(node, 'imu', 'rm_plugins/Hi220'))
+    assert info.value.plugin == 'imu'
+
+
+def test_when_a_required_parameter_is_missing_expect_error_naming_plugin_and_key(node):
+    class NeedsRadius(PluginBase):
+        def on_init(self):
+            self.params.double('wheel_radius', description='wheel radius', unit='m', gt=0.0)
+
+    with pytest.raises(
+        ParameterError,
+        match=r"^plugin 'chassis' \(x/Y\): parameter 'chassis.wheel_radius' is required",
+    ):
+        NeedsRadius().init(node, 'chassis', PluginParams(node, 'chassis', 'x/Y'))
+
+
+def test_a_plugin_may_not_override_framework_methods():
+    with pytest.raises(TypeError, match=r'overrides PluginBase.run\(\).*override the hooks'):
+
+        class Sneaky(PluginBase):
+            def run(self, now, dt=None):
+                pass
+
+
+def test_states_need_a_safe_state():
+    class Modes(enum.IntEnum):
+        IDLE = 0
+        GO = 1
+
+    with pytest.raises(TypeError, match='needs SAFE_STATE or a State member named PASSIVE'):
+
+        class NoSafe(PluginBase):
+            State = Modes
+
+    class WithSafe(PluginBase):
+        State = Modes
+        SAFE_STATE = Modes.IDLE
+
+    assert WithSafe().safe_state is Modes.IDLE
+
+
+def test_state_values_must_fit_plugin_state_uint8():
+    class Big(enum.IntEnum):
+        PASSIVE = 0
+        HUGE = 300
+
+    with pytest.raises(TypeError, match=r'State.HUGE must have an int value in 0..255'):
+
+        class TooBig(PluginBase):
+            State = Big
+
+
+def test_default_states_are_passive_and_active():
+    assert PluginBase().safe_state is DefaultState.PASSIVE
+    assert [s.name for s in DefaultState] == ['PASSIVE', 'ACTIVE']
