@@ -23,7 +23,7 @@ from rm_base.plugin import (
 from rm_base.plugin.node_io import node_io
 from support.ros import wait_until
 
-from rm_msgs.msg import ActuatorCmd, PluginState
+from rm_msgs.msg import ActuatorCmd, ActuatorState, PluginState
 
 pytestmark = pytest.mark.ros
 
@@ -267,6 +267,25 @@ def test_state_is_published_on_transition(node, plugin):
         assert (drive.plugin, drive.type, drive.enabled) == ('wheel', 'test/Wheel', True)
         assert drive.state == Wheel.DRIVE.value
         assert drive.reason == 'commanded'
+    finally:
+        executor.shutdown()
+
+
+def test_joint_states_come_from_actuator_states(node, plugin):
+    executor = SingleThreadedExecutor(context=node.context)
+    executor.add_node(node)
+    publisher = node.create_publisher(ActuatorState, '/actuator_states', 10)
+    msg = ActuatorState(
+        name=['wheel'], position=[1.25], velocity=[3.0], effort=[0.4], temperature=[35.0],
+        online=[True], error_code=[0], mode=[ActuatorCmd.MODE_VELOCITY], command=[0.4],
+    )
+    try:
+        assert wait_until(
+            lambda: plugin.joint_states.get('wheel') is not None, 5.0,
+            spin=lambda t: (publisher.publish(msg), executor.spin_once(timeout_sec=t)),
+        )
+        state = plugin.joint_states.get('wheel')
+        assert (state.position, state.velocity, state.online) == (1.25, 3.0, True)
     finally:
         executor.shutdown()
 

@@ -1,0 +1,141 @@
+"""PluginRunner: one thread per plugin calling run() at the plugin's rate.
+
+Why a thread per plugin and not rclpy timers: a 1 kHz rclpy timer on the default executor
+costs ~46 % of a core for an empty callback (docs: ROS_WHEELS.md), and timers sharing one
+executor delay each other, so a slow plugin would stall the rest. Each runner sleeps to
+absolute deadlines on ``time.perf_counter_ns`` (no drift) and counts overruns; a tick that
+ends more than a period late skips the missed deadlines instead of bursting to catch up
+(a control loop wants a steady dt, not a volley of ticks with dt near zero).
+
+One ``threading.Condition`` per runner serialises ``run()`` with ``enable()`` and
+``disable()`` (which arrive on the ROS executor thread through services), and wakes a
+disabled runner when it is enabled again. No rclpy here.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable
+from typing import Any
+
+from rm_base.plugin.base import PluginBase
+
+_NS_PER_S = 1_000_000_000
+# Longest single sleep, so stop() is honoured within this time even at low rates [ns].
+_MAX_SLEEP_NS = 50_000_000
+
+
+class PluginRunner:
+    """Runs one plugin at its own rate in a dedicated thread.
+
+    Args:
+        plugin: an initialised plugin.
+        now: returns the current time for ``run(now)`` (the node clock's ``now``).
+        on_error: called from the runner thread if something outside ``plugin.run``
+            raises (``plugin.run`` itself never raises); returns True to keep running.
+
+    Attributes:
+        ticks: run() calls since start.
+        overruns: ticks that ended after the next deadline.
+        skipped: deadlines skipped because a tick ended more than a period late.
+    """
+
+    def __init__(
+        self,
+        plugin: PluginBase,
+        now: Callable[[], Any],
+        *,
+        on_error: Callable[[PluginRunner, Exception], bool] | None = None,
+    ) -> None:
+        self.plugin = plugin
+        self.period_ns = round(_NS_PER_S / plugin.rate)
+        self.ticks = 0
+        self.overruns = 0
+        self.skipped = 0
+        self._now = now
+        self._on_error = on_error
+        self._cond = threading.Condition()
+        self._stopping = False
+        self._thread = threading.Thread(
+            target=self._loop, name=f'plugin:{plugin.name}', daemon=True
+        )
+
+    @property
+    def name(self) -> str:
+        """The plugin's instance name."""
+        return self.plugin.name
+
+    @property
+    def alive(self) -> bool:
+        """Whether the runner thread is running."""
+        return self._thread.is_alive()
+
+    def start(self) -> None:
+        """Start the thread (it idles while the plugin is disabled)."""
+        self._thread.start()
+
+    def stop(self, timeout: float = 2.0) -> bool:
+        """Stop after the current tick; return False if the thread did not end in timeout [s]."""
+        with self._cond:
+            self._stopping = True
+            self._cond.notify_all()
+        if self._thread.is_alive():
+            self._thread.join(timeout)
+        return not self._thread.is_alive()
+
+    def enable(self) -> bool:
+        """Enable the plugin between two ticks; return False if it already was."""
+        with self._cond:
+            changed = self.plugin.enable()
+            self._cond.notify_all()
+            return changed
+
+    def disable(self, reason: str = 'disabled') -> None:
+        """Disable the plugin between two ticks (zero output first)."""
+        with self._cond:
+            self.plugin.disable(reason)
+
+    def _loop(self) -> None:
+        next_ns: int | None = None
+        last_ns: int | None = None
+        while True:
+            ran = False
+            try:
+                with self._cond:
+                    while not self._stopping and not self.plugin.enabled:
+                        next_ns = last_ns = None
+                        self._cond.wait()
+                    if self._stopping:
+                        return
+                    start_ns = time.perf_counter_ns()
+                    if next_ns is None:
+                        next_ns = start_ns
+                    dt = (start_ns - last_ns if last_ns is not None else self.period_ns) / _NS_PER_S
+                    last_ns = start_ns
+                    self.plugin.run(self._now(), dt)
+                    ran = True
+            except Exception as err:
+                if self._on_error is None or not self._on_error(self, err):
+                    return
+                if next_ns is None:
+                    continue
+            # A failed tick keeps the schedule (no busy loop) but is not counted.
+            self.ticks += ran
+            next_ns += self.period_ns
+            late_ns = time.perf_counter_ns() - next_ns
+            if late_ns > 0:
+                self.overruns += 1
+                if late_ns >= self.period_ns:
+                    missed = late_ns // self.period_ns
+                    self.skipped += missed
+                    next_ns += missed * self.period_ns
+            else:
+                self._sleep_until(next_ns)
+
+    def _sleep_until(self, deadline_ns: int) -> None:
+        while not self._stopping:
+            remaining_ns = deadline_ns - time.perf_counter_ns()
+            if remaining_ns <= 0:
+                return
+            time.sleep(min(remaining_ns, _MAX_SLEEP_NS) / _NS_PER_S)
