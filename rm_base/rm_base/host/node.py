@@ -56,6 +56,8 @@ class RobotHost(Node):
       every transition and every ``state_period`` seconds, and warns about overruns then.
     - ``shutdown()`` (also run by ``destroy_node``) stops the runners, then disables
       every plugin, so zero output is published before the node goes away.
+    - Lowers the interpreter's GIL switch interval to 1 ms (process-wide) so a CPU-bound
+      plugin delays the others' ticks by at most about that much.
 
     Args:
         loader: plugin loader; default searches AMENT_PREFIX_PATH.
@@ -76,6 +78,8 @@ class RobotHost(Node):
             self._configure(loader or PluginLoader(warn=self.get_logger().warning))
         except BaseException:
             self._shut_down = True
+            for runner in self._runners.values():
+                runner.stop()
             super().destroy_node()
             raise
 

@@ -192,8 +192,8 @@ class PluginBase:
             self._enabled = False
             self.zero_output()
             raise
-        self.transition(self.safe_state, 'enabled')
-        self.publish_state()
+        if not self.transition(self.safe_state, 'enabled'):
+            self.publish_state()  # same state and reason, but `enabled` changed
         return True
 
     def disable(self, reason: str = 'disabled') -> None:
@@ -212,8 +212,8 @@ class PluginBase:
             self.on_disable()
         except Exception as err:  # the joints are already off; report and go on
             self.logger.error(f'on_disable() failed: {type(err).__name__}: {err}')
-        self.transition(self.safe_state, reason)
-        self.publish_state()
+        if not self.transition(self.safe_state, reason):
+            self.publish_state()  # same state and reason, but `enabled` may have changed
 
     def reset(self) -> None:
         """Forget stale commands and timing, then call ``on_reset`` (integrators, ramps)."""
