@@ -231,7 +231,7 @@ def test_when_the_command_stops_expect_passive_with_the_reason_and_zero_output(h
     reason = states[-1].reason
     match = re.fullmatch(r'no command on /echo_cmd for (\S+) s \(timeout 0\.200 s\)', reason)
     assert match, reason
-    assert float(match.group(1)) > 0.2  # not before the timeout
+    assert float(match.group(1)) >= 0.2  # not before the timeout (age printed to 1 ms)
     assert states[-1].enabled
     # Zero output from then on (the watchdog repeats it every tick).
     assert wait_until(lambda: all_off(cmds[-1]), WAIT)
