@@ -8,7 +8,12 @@ setup(
     packages=find_packages(exclude=['test']),
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
-        ('share/' + package_name, ['package.xml']),
+        ('share/' + package_name, ['package.xml', 'plugins.xml']),
+        # pluginlib-style export: the marker's content is plugins.xml's path in the prefix.
+        (
+            'share/ament_index/resource_index/rm_base__pluginlib__plugin',
+            ['resource/rm_base__pluginlib__plugin/' + package_name],
+        ),
     ],
     install_requires=['setuptools'],
     zip_safe=True,
