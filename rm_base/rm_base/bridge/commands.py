@@ -1,0 +1,118 @@
+"""Validation of rm_msgs/ActuatorCmd: a message is applied whole, or not at all.
+
+Several plugins publish /actuator_cmd, each message carrying a subset of the joints. A
+message is *well-formed* when its seven arrays have one entry per name, no name repeats,
+every name is a joint of this bridge, every mode is an ``ActuatorCmd.MODE_*``, every value
+is finite (unused fields too) and the MIT gains are >= 0.
+
+Only a well-formed message is applied, all of its joints in the same callback; one bad
+entry rejects the whole message. A plugin's message is one coordinated set of targets
+(four mecanum wheels, a yaw/pitch pair): applying three of four wheels would turn a
+straight drive into a spin, while holding the previous complete set is safe because the
+hardware layer zeroes any joint whose command is older than ``safety.command_timeout_s``.
+Messages of different plugins never share joints, so one plugin's bad message leaves the
+other plugins' joints alone.
+
+No rclpy here: the message is read through its attributes.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Container, Sequence
+from typing import NamedTuple, Protocol
+
+from rm_base.bridge.errors import ActuatorCmdRejectedError, Rejection
+from rm_base.hardware import Mode
+
+_FIELDS = ('mode', 'position', 'velocity', 'effort', 'kp', 'kd')
+_VALUES = ('position', 'velocity', 'effort', 'kp', 'kd')
+
+
+class ActuatorCmdLike(Protocol):
+    """The fields of rm_msgs/ActuatorCmd that are read."""
+
+    name: Sequence[str]
+    mode: Sequence[int]
+    position: Sequence[float]
+    velocity: Sequence[float]
+    effort: Sequence[float]
+    kp: Sequence[float]
+    kd: Sequence[float]
+
+
+class JointTarget(NamedTuple):
+    """One validated joint target, output shaft, SI.
+
+    Attributes:
+        name: joint name.
+        mode: :class:`rm_base.hardware.Mode`.
+        position: [rad].
+        velocity: [rad/s].
+        effort: [N·m].
+        kp: [N·m/rad].
+        kd: [N·m·s/rad].
+    """
+
+    name: str
+    mode: Mode
+    position: float
+    velocity: float
+    effort: float
+    kp: float
+    kd: float
+
+
+def parse_actuator_cmd(msg: ActuatorCmdLike, joints: Container[str]) -> list[JointTarget]:
+    """Validate a whole ActuatorCmd and return its targets.
+
+    Args:
+        msg: the message.
+        joints: names of the joints this bridge drives.
+
+    Returns:
+        One target per entry, in message order (empty for an empty message).
+
+    Raises:
+        ActuatorCmdRejectedError: the message is not well-formed (see the module
+            docstring); ``reason`` says which rule it broke.
+    """
+    names = list(msg.name)
+    count = len(names)
+    columns = {field: list(getattr(msg, field)) for field in _FIELDS}
+    lengths = {field: len(values) for field, values in columns.items()}
+    if any(n != count for n in lengths.values()):
+        bad = ', '.join(f'{n} {f}' for f, n in lengths.items() if n != count)
+        raise ActuatorCmdRejectedError(
+            Rejection.LENGTH_MISMATCH, f'{count} names but {bad} (all arrays need one per name)'
+        )
+    if len(set(names)) != count:
+        twice = sorted({n for n in names if names.count(n) > 1})
+        raise ActuatorCmdRejectedError(Rejection.DUPLICATE_JOINT, f'joint(s) named twice: {twice}')
+    unknown = [n for n in names if n not in joints]
+    if unknown:
+        raise ActuatorCmdRejectedError(
+            Rejection.UNKNOWN_JOINT, f'unknown joint(s) {unknown} (not driven by this bridge)'
+        )
+    targets = []
+    for i, name in enumerate(names):
+        raw_mode = columns['mode'][i]
+        try:
+            mode = Mode(raw_mode)
+        except ValueError:
+            raise ActuatorCmdRejectedError(
+                Rejection.UNKNOWN_MODE, f'{name}: unknown mode {raw_mode!r} (MODE_OFF..MODE_MIT)'
+            ) from None
+        values = []
+        for field in _VALUES:
+            value = float(columns[field][i])
+            if not math.isfinite(value):
+                raise ActuatorCmdRejectedError(Rejection.NON_FINITE, f'{name}: {field} is {value}')
+            values.append(value)
+        position, velocity, effort, kp, kd = values
+        if kp < 0.0 or kd < 0.0:
+            raise ActuatorCmdRejectedError(
+                Rejection.NEGATIVE_GAIN, f'{name}: MIT gains must be >= 0, got kp={kp}, kd={kd}'
+            )
+        targets.append(JointTarget(name, mode, position, velocity, effort, kp, kd))
+    return targets

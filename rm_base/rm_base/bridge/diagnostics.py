@@ -1,0 +1,230 @@
+"""The bridge's /diagnostics: a status per joint and bus, the scheduler and the commands.
+
+Status names follow diagnostic_updater's ``"<node>: <task>"``: ``can_bridge: joint yaw``,
+``can_bridge: bus can0``, ``can_bridge: scheduler``, ``can_bridge: commands``. Every value
+is a ``KeyValue`` whose key carries its unit.
+
+Levels:
+
+* joint: OK while driven, commanded off or never commanded; WARN when held at zero by a
+  command timeout or a bus recovery; ERROR when offline, over temperature, in a device
+  fault or after an internal error. The message names the hold reason.
+* bus: OK when up (WARN above 80 % load); ERROR when down (being reopened).
+* scheduler: WARN when deadlines were missed since the previous report, ERROR when a
+  tick raised since then.
+* commands: WARN when /actuator_cmd messages were rejected since the previous report.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from builtin_interfaces.msg import Time
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+
+from rm_base.hardware import BusStats, HoldReason, JointState, Mode, PeriodStats
+from rm_base.hardware.scheduler import HISTOGRAM_EDGES_US
+
+OK = DiagnosticStatus.OK
+WARN = DiagnosticStatus.WARN
+ERROR = DiagnosticStatus.ERROR
+
+#: Level of a joint per hold reason.
+HOLD_LEVELS: Mapping[str, bytes] = {
+    HoldReason.NONE.value: OK,
+    HoldReason.OFF.value: OK,
+    HoldReason.NO_COMMAND.value: OK,
+    HoldReason.SHUTDOWN.value: OK,
+    HoldReason.COMMAND_TIMEOUT.value: WARN,
+    HoldReason.BUS_RECOVERY.value: WARN,
+    HoldReason.OFFLINE.value: ERROR,
+    HoldReason.OVER_TEMPERATURE.value: ERROR,
+    HoldReason.DEVICE_FAULT.value: ERROR,
+    HoldReason.ERROR.value: ERROR,
+}
+
+#: Bus load above which a bus is reported WARN [fraction of the bitrate].
+BUS_LOAD_WARN = 0.8
+
+
+@dataclasses.dataclass(frozen=True)
+class CommandStats:
+    """Counters of the /actuator_cmd input (monotonic).
+
+    Attributes:
+        accepted: messages applied.
+        rejected: messages rejected, by :class:`~rm_base.bridge.errors.Rejection` value.
+        last_rejection: text of the last rejection, or None.
+    """
+
+    accepted: int = 0
+    rejected: Mapping[str, int] = dataclasses.field(default_factory=dict)
+    last_rejection: str | None = None
+
+    @property
+    def rejected_total(self) -> int:
+        """All rejected messages."""
+        return sum(self.rejected.values())
+
+
+def _kv(key: str, value: Any) -> KeyValue:
+    if isinstance(value, float):
+        text = 'nan' if math.isnan(value) else f'{value:.6g}'
+    else:
+        text = str(value)
+    return KeyValue(key=key, value=text)
+
+
+def _status(name: str, level: bytes, message: str, hardware_id: str, values: dict) -> Any:
+    return DiagnosticStatus(
+        level=level,
+        name=name,
+        message=message,
+        hardware_id=hardware_id,
+        values=[_kv(k, v) for k, v in values.items()],
+    )
+
+
+class DiagnosticsReporter:
+    """Builds the DiagnosticArray; remembers counters to report what changed since last time.
+
+    Args:
+        node_name: prefix of every status name.
+        hardware_ids: per joint, its ``hardware_id`` (default ``<bus>/<type>``).
+    """
+
+    def __init__(self, node_name: str, hardware_ids: Mapping[str, str] | None = None) -> None:
+        self._prefix = f'{node_name}: '
+        self._hardware_ids = dict(hardware_ids or {})
+        self._last_overruns = 0
+        self._last_errors = 0
+        self._last_rejected = 0
+
+    def build(
+        self,
+        hardware: Mapping[str, Any],
+        states: Sequence[JointState],
+        commands: CommandStats,
+        stamp: Time,
+    ) -> DiagnosticArray:
+        """One DiagnosticArray.
+
+        Args:
+            hardware: ``CanHardware.diagnostics()``.
+            states: ``CanHardware.states()``.
+            commands: the /actuator_cmd counters.
+            stamp: header stamp.
+        """
+        msg = DiagnosticArray()
+        msg.header.stamp = stamp
+        joints = hardware['joints']
+        msg.status = [self._joint(s, joints[s.name]) for s in states]
+        msg.status += [self._bus(stats) for stats in hardware['buses'].values()]
+        msg.status.append(self._scheduler(hardware['scheduler']))
+        msg.status.append(self._commands(commands))
+        return msg
+
+    def _joint(self, state: JointState, diag: Mapping[str, Any]) -> DiagnosticStatus:
+        hold = diag['hold_reason']
+        level = HOLD_LEVELS.get(hold, ERROR)
+        if hold == HoldReason.NONE.value:
+            message = f'driven ({Mode(state.mode).name})'
+        elif hold == HoldReason.NO_COMMAND.value:
+            message = 'idle: no command yet'
+        elif hold == HoldReason.OFF.value:
+            message = 'off (commanded)'
+        else:
+            message = f'held at zero: {hold}'
+        values = {
+            'online': state.online,
+            'hold_reason': hold,
+            'temperature [degC]': state.temperature,
+            'error_code': state.error_code,
+            'mode': Mode(state.mode).name,
+            'command [N*m]': state.command,
+            'position [rad]': state.position,
+            'velocity [rad/s]': state.velocity,
+            'effort [N*m]': state.effort,
+            'frames_decoded': diag['frames_decoded'],
+            'decode_errors': diag['decode_errors'],
+            'commands_accepted': diag['commands_accepted'],
+            'commands_rejected': diag['commands_rejected'],
+            'last_rejection': diag['last_rejection'] or '',
+            'update_errors': diag['update_errors'],
+        }
+        return _status(
+            f'{self._prefix}joint {state.name}',
+            level,
+            message,
+            self._hardware_ids.get(state.name, f'{diag["bus"]}/{diag["type"]}'),
+            values,
+        )
+
+    def _bus(self, stats: BusStats) -> DiagnosticStatus:
+        load = stats.load_fraction
+        if stats.state == 'up':
+            level = WARN if load is not None and load > BUS_LOAD_WARN else OK
+            message = 'up' if level == OK else f'up, load {100 * load:.0f} %'
+        elif stats.state == 'down':
+            level, message = ERROR, f'down, reopening: {stats.last_error or "unknown error"}'
+        else:
+            level, message = WARN, stats.state
+        values = {
+            'state': stats.state,
+            'load [bit/s]': stats.load_bps,
+            'load [%]': 100.0 * load if load is not None else 'unknown (no bitrate)',
+            'frames_sent': stats.frames_sent,
+            'frames_received': stats.frames_received,
+            'frames_unmatched': stats.frames_unmatched,
+            'send_errors': stats.send_errors,
+            'receive_errors': stats.receive_errors,
+            'error_frames': stats.error_frames,
+            'handler_errors': stats.handler_errors,
+            'reopen_count': stats.reopen_count,
+            'open_failures': stats.open_failures,
+            'last_error': stats.last_error or '',
+        }
+        return _status(f'{self._prefix}bus {stats.name}', level, message, stats.name, values)
+
+    def _scheduler(self, stats: PeriodStats) -> DiagnosticStatus:
+        new_overruns = stats.overruns - self._last_overruns
+        new_errors = stats.errors - self._last_errors
+        self._last_overruns, self._last_errors = stats.overruns, stats.errors
+        if new_errors > 0:
+            level, message = ERROR, f'{new_errors} tick error(s) since the last report'
+        elif new_overruns > 0:
+            level, message = WARN, f'{new_overruns} overrun(s) since the last report'
+        else:
+            level, message = OK, 'on time'
+        edges = [f'<{e}' for e in HISTOGRAM_EDGES_US] + [f'>={HISTOGRAM_EDGES_US[-1]}']
+        values = {
+            'rate [Hz]': 1e9 / stats.period_ns,
+            'ticks': stats.ticks,
+            'overruns': stats.overruns,
+            'skipped_ticks': stats.skipped_ticks,
+            'period_error_mean [us]': stats.mean_error_us,
+            'period_error_max [us]': stats.max_error_us,
+            'tick_max [us]': stats.max_tick_us,
+            'errors': stats.errors,
+        }
+        values.update(
+            {f'period_error {edge} [us]': n for edge, n in zip(edges, stats.histogram, strict=True)}
+        )
+        return _status(f'{self._prefix}scheduler', level, message, 'scheduler', values)
+
+    def _commands(self, stats: CommandStats) -> DiagnosticStatus:
+        total = stats.rejected_total
+        new = total - self._last_rejected
+        self._last_rejected = total
+        if new > 0:
+            level = WARN
+            message = f'{new} /actuator_cmd message(s) rejected since the last report'
+        else:
+            level, message = OK, 'ok'
+        values: dict[str, Any] = {'accepted': stats.accepted, 'rejected': total}
+        values.update({f'rejected {reason}': n for reason, n in sorted(stats.rejected.items())})
+        values['last_rejection'] = stats.last_rejection or ''
+        return _status(f'{self._prefix}commands', level, message, 'actuator_cmd', values)

@@ -1,0 +1,101 @@
+"""can_bridge executable: ``can_bridge --ros-args --params-file robot.yaml [-p sim:=true]``."""
+
+from __future__ import annotations
+
+import logging
+import sys
+
+import rclpy
+from rclpy.executors import ExternalShutdownException
+from rclpy.experimental import EventsExecutor
+from rclpy.signals import SignalHandlerOptions
+
+from rm_base.bridge.node import NODE_NAME, CanBridgeNode
+from rm_base.errors import ConfigError
+from rm_base.hardware import BusError
+from rm_base.ros_env import prepare_ros_process
+
+# How long one spin_once may block [s]; bounds the reaction to SIGINT/SIGTERM.
+_SPIN_TIMEOUT = 0.1
+
+# The 1 kHz scheduler thread shares the GIL with the receive, publisher and executor
+# threads (and the physics thread on rm_sim). A thread that wakes up may wait up to one
+# switch interval (5 ms by default) for a CPU-bound one to yield; 1 ms keeps a tick late
+# by at most about a period.
+_GIL_SWITCH_INTERVAL = 0.001  # [s]
+
+
+class RosLogHandler(logging.Handler):
+    """Forwards Python ``logging`` records (the hardware layer's) to an rclpy logger."""
+
+    def __init__(self, logger: object) -> None:
+        super().__init__()
+        self._logger = logger
+        self.setFormatter(logging.Formatter('%(name)s: %(message)s'))
+
+    def emit(self, record: logging.LogRecord) -> None:
+        """Log the record at the matching rclpy severity."""
+        try:
+            text = self.format(record)
+            if record.levelno >= logging.ERROR:
+                self._logger.error(text)
+            elif record.levelno >= logging.WARNING:
+                self._logger.warning(text)
+            elif record.levelno >= logging.INFO:
+                self._logger.info(text)
+            else:
+                self._logger.debug(text)
+        except Exception:
+            self.handleError(record)
+
+
+def _one_line(err: BaseException) -> str:
+    return ' '.join(str(err).split())
+
+
+def main(args: list[str] | None = None) -> int:
+    """Run can_bridge until SIGINT/SIGTERM; return the exit status (1 on a config error)."""
+    prepare_ros_process()
+    sys.setswitchinterval(min(sys.getswitchinterval(), _GIL_SWITCH_INTERVAL))
+    # rclpy's signal handlers would shut the context down before the node could publish
+    # its final states; Python's KeyboardInterrupt leaves the shutdown to the finally below.
+    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    package_logger = logging.getLogger('rm_base')
+    handler = RosLogHandler(rclpy.logging.get_logger(NODE_NAME))
+    package_logger.addHandler(handler)
+    package_logger.setLevel(logging.INFO)
+    package_logger.propagate = False
+    try:
+        node = CanBridgeNode()
+    except (ConfigError, BusError) as err:
+        # One line the operator can act on, not a traceback.
+        print(f'[{NODE_NAME}] configuration error: {_one_line(err)}', file=sys.stderr)
+        rclpy.try_shutdown()
+        return 1
+    except KeyboardInterrupt:
+        rclpy.try_shutdown()
+        return 0
+
+    # The executor runs only the ROS callbacks (/actuator_cmd, the sim services, parameter
+    # services): the 1 kHz loop is CanHardware's own thread and the states go out from the
+    # node's publisher thread. EventsExecutor costs about a quarter of the
+    # SingleThreadedExecutor's CPU per message (ROS_WHEELS.md: 12 % vs 46 % of a core at
+    # 1000 msg/s); its spin() ignores SIGINT on rclpy 7.1.6, hence spin_once in a loop.
+    executor = EventsExecutor(context=node.context)
+    executor.add_node(node)
+    try:
+        while rclpy.ok(context=node.context):
+            executor.spin_once(timeout_sec=_SPIN_TIMEOUT)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        # Zero output on the wire (DISABLE to MIT motors) before anything else goes.
+        node.destroy_node()
+        executor.shutdown()
+        rclpy.try_shutdown()
+        package_logger.removeHandler(handler)
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

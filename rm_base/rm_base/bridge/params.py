@@ -1,0 +1,256 @@
+"""can_bridge parameters -> the CanHardware config dict, the simulator and node settings.
+
+ROS parameters are flat, dotted names: a params YAML's nested keys joined with ``.``
+(``joints: {yaw: {velocity_pid: {kp: 0.5}}}`` is ``joints.yaw.velocity_pid.kp``). The
+hardware keys are exactly the schema of :mod:`rm_base.hardware.config`; this module nests
+them back into the dict :class:`~rm_base.hardware.CanHardware` takes, and lets that
+schema's own validation name any bad key (its names are the parameter names).
+
+Parameters (units in brackets; typed ones are declared by the node with a descriptor):
+
+==================================  =========  ============================================
+``buses.<bus>.<key>``               --         a bus of the hardware schema (``interface``,
+                                               ``channel``, ``bitrate``, ``options.*``...)
+``joints.<joint>.<key>``            --         a joint of the hardware schema (``type``,
+                                               ``bus``, ``id``, ``velocity_pid.kp``...)
+``joints.<joint>.sim.<key>``        --         simulated-motor overrides (sim only): any
+                                               key of ``rm_base.sim.device_from_config``
+                                               (``load_inertia``, ``overtemp_c``, ``type``)
+``scheduler.rate_hz``               [Hz]       control loop rate, 1000
+``safety.feedback_timeout_s``       [s]        offline after no feedback this long, 0.1
+``safety.command_timeout_s``        [s]        zero output after no command this long, 0.1
+``safety.temperature_hysteresis_c`` [°C]       resume below limit - this, 5
+``publish_rate``                    [Hz]       /joint_states and /actuator_states, 200
+``diagnostics_rate``                [Hz]       /diagnostics, 1
+``publish_frames``                  bool       every CAN frame on ``~/frames``, false
+``log_file``                        path       python-can log of every frame, '' = none;
+                                               several buses: ``<stem>_<bus><suffix>``
+``sim``                             bool       run on the simulator ``rm_sim``, false
+``sim.timing``                      --         ``realtime`` (default) or ``stepped``
+``sim.seed``                        --         random seed of the world (garbage faults), 0
+``sim.body.<key>``                  --         robot body (``rm_base.sim.body_from_config``:
+                                               ``chassis.type``, ``chassis.motors``,
+                                               ``gimbal.yaw.motor``, ``initial_pose``...)
+``sim.imu.<key>``                   --         one IMU (``path``, ``mount``, ``rate_hz``,
+                                               ``mount_rpy``...; ``${VAR}`` in the path)
+==================================  =========  ============================================
+
+With ``sim: false`` the ``sim.*`` groups are ignored, so one robot config serves both.
+"""
+
+from __future__ import annotations
+
+import array
+import dataclasses
+from collections.abc import Mapping
+from pathlib import PurePath
+from types import MappingProxyType
+from typing import Any
+
+from rm_base.bridge.errors import BridgeConfigError
+from rm_base.hardware.config import HardwareConfig
+from rm_base.sim import Timing
+
+#: Parameters every rclpy node has; never part of the bridge config.
+ROS_OWN_PARAMETERS = frozenset({'use_sim_time', 'start_type_description_service'})
+ROS_OWN_PREFIXES = ('qos_overrides.',)
+
+#: Prefixes of the open-ended parameter groups (names chosen by the robot config).
+HARDWARE_PREFIXES = ('buses.', 'joints.')
+SIM_BODY_PREFIX = 'sim.body.'
+SIM_IMU_PREFIX = 'sim.imu.'
+_JOINT_SIM_KEY = 'sim'
+
+
+@dataclasses.dataclass(frozen=True)
+class SimSettings:
+    """What the bridge needs to build its simulated world.
+
+    Attributes:
+        timing: who drives the world's clock.
+        seed: random seed of the world.
+        body: ``body`` of the world config (nested; empty for none).
+        imu: the one IMU's config, or None.
+        motors: per joint, overrides of its simulated motor (nested).
+    """
+
+    timing: Timing = Timing.REALTIME
+    seed: int = 0
+    body: Mapping[str, Any] = dataclasses.field(default_factory=dict)
+    imu: Mapping[str, Any] | None = None
+    motors: Mapping[str, Mapping[str, Any]] = dataclasses.field(default_factory=dict)
+
+
+@dataclasses.dataclass(frozen=True)
+class BridgeSettings:
+    """Everything the node is built from.
+
+    Attributes:
+        hardware: the nested CanHardware config dict (validated); in sim mode every bus
+            has ``interface: rm_sim`` but no world yet (see :func:`with_sim_world`).
+        hardware_config: the same, parsed.
+        publish_rate_hz: joint/actuator state rate [Hz].
+        diagnostics_rate_hz: /diagnostics rate [Hz].
+        publish_frames: publish every CAN frame on ``~/frames``.
+        sim: simulator settings, or None on real hardware.
+    """
+
+    hardware: Mapping[str, Any]
+    hardware_config: HardwareConfig
+    publish_rate_hz: float = 200.0
+    diagnostics_rate_hz: float = 1.0
+    publish_frames: bool = False
+    sim: SimSettings | None = None
+
+
+def plain(value: Any) -> Any:
+    """A parameter value as plain Python: arrays (``array.array``, tuples) become lists."""
+    if isinstance(value, array.array | tuple):
+        return list(value)
+    return value
+
+
+def is_ros_own(name: str) -> bool:
+    """True for parameters rclpy declares on every node (not bridge config)."""
+    return name in ROS_OWN_PARAMETERS or name.startswith(ROS_OWN_PREFIXES)
+
+
+def nest(flat: Mapping[str, Any]) -> dict[str, Any]:
+    """Turn dotted names into nested dicts: ``{'a.b': 1, 'a.c': 2}`` -> ``{'a': {'b': 1, 'c': 2}}``.
+
+    Raises:
+        BridgeConfigError: a name has an empty part, or a name has both a value and
+            keys below it (``joints.yaw`` and ``joints.yaw.id``).
+    """
+    root: dict[str, Any] = {}
+    # Sorted, a name comes before the names below it, so a conflict is always seen.
+    for name in sorted(flat):
+        parts = name.split('.')
+        if not all(parts):
+            raise BridgeConfigError(f'parameter {name!r} has an empty name part')
+        node = root
+        for depth, part in enumerate(parts[:-1]):
+            child = node.setdefault(part, {})
+            if not isinstance(child, dict):
+                owner = '.'.join(parts[: depth + 1])
+                raise BridgeConfigError(
+                    f'parameter {name!r} is below {owner!r}, which has a value itself; '
+                    f'{owner!r} must be a group of keys'
+                )
+            node = child
+        node[parts[-1]] = plain(flat[name])
+    return root
+
+
+def bus_log_path(path: str, bus: str, several: bool) -> str:
+    """The log file of one bus: ``path`` itself, or ``<stem>_<bus><suffix>`` with several."""
+    if not several:
+        return path
+    p = PurePath(path)
+    return str(p.with_name(f'{p.stem}_{bus}{p.suffix}'))
+
+
+def settings_from_parameters(
+    typed: Mapping[str, Any], open_params: Mapping[str, Any]
+) -> BridgeSettings:
+    """Build the bridge settings from its parameters.
+
+    Args:
+        typed: the declared, already type-checked parameters: ``publish_rate``,
+            ``diagnostics_rate``, ``publish_frames``, ``log_file``, ``sim``,
+            ``sim.timing`` (:class:`Timing` or its value), ``sim.seed``,
+            ``scheduler.rate_hz`` and ``safety.*``; missing ones take their defaults.
+        open_params: every other parameter by its flat name (rclpy's own excluded).
+
+    Returns:
+        The settings, with a validated hardware config.
+
+    Raises:
+        BridgeConfigError: an unknown parameter or a nesting conflict.
+        HardwareConfigError: the hardware schema refuses a key (the message names it).
+    """
+    hardware_flat: dict[str, Any] = {}
+    motors_flat: dict[str, dict[str, Any]] = {}
+    body_flat: dict[str, Any] = {}
+    imu_flat: dict[str, Any] = {}
+    for name, value in open_params.items():
+        if name.startswith(HARDWARE_PREFIXES):
+            parts = name.split('.')
+            if parts[0] == 'joints' and len(parts) > 2 and parts[2] == _JOINT_SIM_KEY:
+                if len(parts) == 3:
+                    raise BridgeConfigError(
+                        f'parameter {name!r} must be a group of simulated-motor keys '
+                        f'({name}.load_inertia, ...)'
+                    )
+                motors_flat.setdefault(parts[1], {})['.'.join(parts[3:])] = value
+            else:
+                hardware_flat[name] = value
+        elif name.startswith(SIM_BODY_PREFIX):
+            body_flat[name.removeprefix(SIM_BODY_PREFIX)] = value
+        elif name.startswith(SIM_IMU_PREFIX):
+            imu_flat[name.removeprefix(SIM_IMU_PREFIX)] = value
+        else:
+            raise BridgeConfigError(
+                f'unknown parameter {name!r}; the bridge takes buses.*, joints.*, '
+                'scheduler.rate_hz, safety.*, publish_rate, diagnostics_rate, '
+                'publish_frames, log_file, sim, sim.timing, sim.seed, sim.body.*, sim.imu.*'
+            )
+    hardware = nest(hardware_flat)
+    sim_on = bool(typed.get('sim', False))
+    buses = hardware.get('buses')
+    if isinstance(buses, dict):
+        log_file = typed.get('log_file') or None
+        for bus_name, bus in buses.items():
+            if not isinstance(bus, dict):
+                continue  # the hardware schema reports it, naming the key
+            if sim_on:
+                # Same code path as on a robot; only the python-can interface differs.
+                bus['interface'] = 'rm_sim'
+            if log_file and 'log_file' not in bus:
+                bus['log_file'] = bus_log_path(log_file, bus_name, len(buses) > 1)
+    scheduler = {'rate_hz': typed.get('scheduler.rate_hz', 1000.0)}
+    safety = {
+        key: typed[f'safety.{key}']
+        for key in ('feedback_timeout_s', 'command_timeout_s', 'temperature_hysteresis_c')
+        if f'safety.{key}' in typed
+    }
+    hardware['scheduler'] = scheduler
+    hardware['safety'] = safety
+    hardware_config = HardwareConfig.from_dict(hardware)
+    sim = None
+    if sim_on:
+        unknown_motors = sorted(set(motors_flat) - {j.name for j in hardware_config.joints})
+        if unknown_motors:
+            raise BridgeConfigError(
+                f'joints.{unknown_motors[0]}.sim.* is set, but joints.{unknown_motors[0]} '
+                'is not a configured joint (its type, bus or id is missing)'
+            )
+        sim = SimSettings(
+            timing=Timing(typed.get('sim.timing', Timing.REALTIME)),
+            seed=int(typed.get('sim.seed', 0)),
+            body=nest(body_flat),
+            imu=nest(imu_flat) if imu_flat else None,
+            motors={joint: nest(keys) for joint, keys in motors_flat.items()},
+        )
+    return BridgeSettings(
+        hardware=MappingProxyType(hardware),
+        hardware_config=hardware_config,
+        publish_rate_hz=float(typed.get('publish_rate', 200.0)),
+        diagnostics_rate_hz=float(typed.get('diagnostics_rate', 1.0)),
+        publish_frames=bool(typed.get('publish_frames', False)),
+        sim=sim,
+    )
+
+
+def with_sim_world(hardware: Mapping[str, Any], world: Any) -> dict[str, Any]:
+    """A copy of the hardware config whose every bus opens on ``world`` (``options.world``).
+
+    Passing the world object (not its config) makes every bus share it, and keeps it
+    alive when a bus is closed and reopened after an error.
+    """
+    config = dict(hardware)
+    config['buses'] = {
+        name: {**bus, 'options': {**bus.get('options', {}), 'world': world}}
+        for name, bus in hardware['buses'].items()
+    }
+    return config

@@ -1,0 +1,128 @@
+"""The simulated world of a bridge in sim mode, built from the bridge's own parameters.
+
+One world for all buses: a channel per bus (its ``channel``, default the bus name), on it
+one simulated motor per joint of that bus, named like the joint. The motor takes the
+joint's type and id, and the protocol options both sides must agree on (DJI scales,
+Damiao/Cheetah ``master_id``, ``limits``, ``model``), plus an explicit ``gear_ratio`` or
+``torque_constant``; ``joints.<joint>.sim.*`` overrides anything (physics such as
+``load_inertia``, driver settings such as ``overtemp_c``, or the simulated ``type``).
+``sim.body`` and ``sim.imu`` become the world's ``body`` and its one IMU.
+
+Hardware types without a simulated model of their own (``dm4340``, ``dm10010l``, a
+``damiao`` of another model) are simulated as the model that shares their protocol
+(``dm4310`` or ``dm8009``) with their own MIT limits, unless ``joints.<joint>.sim.type``
+says otherwise; a Piper joint cannot be simulated.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from rm_base.bridge.errors import BridgeConfigError
+from rm_base.bridge.params import SimSettings
+from rm_base.hardware.config import HardwareConfig, JointConfig
+
+#: Hardware joint type -> (simulated motor type, extra device keys).
+_SIM_TYPES: dict[str, tuple[str, dict[str, Any]]] = {
+    'm3508': ('m3508', {}),
+    'm2006': ('m2006', {}),
+    'gm6020': ('gm6020', {'control': 'voltage'}),
+    'gm6020_current': ('gm6020', {'control': 'current'}),
+    'dm4310': ('dm4310', {}),
+    'dm4340': ('dm4310', {'model': 'DM4340'}),
+    'dm8009': ('dm8009', {}),
+    'dm10010l': ('dm8009', {'model': 'DM10010L'}),
+    'cheetah': ('cheetah', {}),
+}
+
+#: Joint options that describe the device's protocol; the simulated device gets them too.
+_SHARED_OPTIONS = {
+    'dji': ('raw_limit', 'si_per_raw', 'feedback_amps_per_raw'),
+    'damiao': ('master_id', 'limits', 'model'),
+    'cheetah': ('master_id', 'limits'),
+}
+
+
+def _family(sim_type: str) -> str:
+    if sim_type in ('m3508', 'm2006', 'gm6020'):
+        return 'dji'
+    return 'cheetah' if sim_type == 'cheetah' else 'damiao'
+
+
+def _damiao_type(joint: JointConfig) -> tuple[str, dict[str, Any]]:
+    model = str(joint.options.get('model', '')).upper()
+    # The heavier models share the DM8009's size class, the others the DM4310's.
+    sim_type = 'dm8009' if model.startswith(('DM8', 'DM10', 'DM6')) else 'dm4310'
+    return sim_type, {}
+
+
+def motor_config(joint: JointConfig, overrides: Mapping[str, Any] | None = None) -> dict[str, Any]:
+    """The simulated motor (``rm_base.sim.device_from_config`` dict) for one joint.
+
+    Raises:
+        BridgeConfigError: the joint's type has no simulated model and no ``sim.type``.
+    """
+    overrides = dict(overrides or {})
+    if joint.type == 'damiao':
+        sim_type, extra = _damiao_type(joint)
+    elif joint.type in _SIM_TYPES:
+        sim_type, extra = _SIM_TYPES[joint.type]
+    elif 'type' in overrides:
+        sim_type, extra = str(overrides['type']), {}
+    else:
+        raise BridgeConfigError(
+            f'joints.{joint.name}.type {joint.type!r} has no simulated motor; simulated '
+            f'types: {", ".join(sorted(_SIM_TYPES))} (or set joints.{joint.name}.sim.type)'
+        )
+    config: dict[str, Any] = {'type': sim_type, 'id': joint.id, 'name': joint.name, **extra}
+    sim_family = _family(str(overrides.get('type', sim_type)))
+    for key in _SHARED_OPTIONS[sim_family]:
+        if key in joint.options:
+            value = joint.options[key]
+            config[key] = dict(value) if isinstance(value, Mapping) else value
+    if joint.gear_ratio is not None:
+        config['gear_ratio'] = joint.gear_ratio
+    if joint.torque_constant is not None:
+        config['torque_constant'] = joint.torque_constant
+    config.update(overrides)
+    return config
+
+
+def world_config(hardware: HardwareConfig, sim: SimSettings) -> dict[str, Any]:
+    """The world config (``rm_base.sim.SimWorld.from_config`` schema) of a sim-mode bridge.
+
+    Args:
+        hardware: the bridge's parsed hardware config.
+        sim: the simulator settings from the parameters.
+
+    Returns:
+        A plain dict: timing, seed, channels, and body / imus if configured.
+
+    Raises:
+        BridgeConfigError: a joint has no simulated model, or two buses share a channel.
+    """
+    channels: dict[str, list[dict[str, Any]]] = {}
+    channel_of_bus: dict[str, str] = {}
+    for bus in hardware.buses:
+        name = str(bus.channel)
+        if name in channels:
+            other = next(b for b, c in channel_of_bus.items() if c == name)
+            raise BridgeConfigError(
+                f'buses.{bus.name}.channel and buses.{other}.channel are both {name!r}; '
+                'in sim mode every bus needs a channel of its own'
+            )
+        channels[name] = []
+        channel_of_bus[bus.name] = name
+    for joint in hardware.joints:
+        channels[channel_of_bus[joint.bus]].append(motor_config(joint, sim.motors.get(joint.name)))
+    config: dict[str, Any] = {
+        'timing': sim.timing.value,
+        'seed': sim.seed,
+        'channels': channels,
+    }
+    if sim.body:
+        config['body'] = dict(sim.body)
+    if sim.imu is not None:
+        config['imus'] = [dict(sim.imu)]
+    return config

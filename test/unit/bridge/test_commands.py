@@ -1,0 +1,64 @@
+"""/actuator_cmd validation: a message is applied whole or rejected whole."""
+
+import math
+
+import pytest
+from rm_base.bridge.commands import JointTarget, parse_actuator_cmd
+from rm_base.bridge.errors import ActuatorCmdRejectedError, Rejection
+from rm_base.hardware import Mode
+
+from rm_msgs.msg import ActuatorCmd
+
+JOINTS = frozenset({'fl', 'fr', 'yaw'})
+
+
+def cmd(names=('fl', 'fr'), mode=2, **columns):
+    msg = ActuatorCmd()
+    n = len(names)
+    msg.name = list(names)
+    msg.mode = columns.pop('modes', [mode] * n)
+    for field in ('position', 'velocity', 'effort', 'kp', 'kd'):
+        setattr(msg, field, columns.pop(field, [0.0] * n))
+    assert not columns
+    return msg
+
+
+def test_a_well_formed_message_gives_one_target_per_entry_in_order():
+    msg = cmd(
+        ('yaw', 'fl'),
+        modes=[4, 2],
+        position=[0.5, 0.0],
+        velocity=[0.1, 3.0],
+        effort=[0.2, 0.0],
+        kp=[20.0, 0.0],
+        kd=[1.0, 0.0],
+    )
+    assert parse_actuator_cmd(msg, JOINTS) == [
+        JointTarget('yaw', Mode.MIT, 0.5, 0.1, 0.2, 20.0, 1.0),
+        JointTarget('fl', Mode.VELOCITY, 0.0, 3.0, 0.0, 0.0, 0.0),
+    ]
+
+
+def test_an_empty_message_is_well_formed():
+    assert parse_actuator_cmd(ActuatorCmd(), JOINTS) == []
+
+
+@pytest.mark.parametrize(
+    ('msg', 'reason', 'text'),
+    [
+        (cmd(velocity=[1.0]), Rejection.LENGTH_MISMATCH, '2 names but 1 velocity'),
+        (cmd(modes=[2]), Rejection.LENGTH_MISMATCH, '2 names but 1 mode'),
+        (cmd(('fl', 'fl')), Rejection.DUPLICATE_JOINT, "named twice: \\['fl'\\]"),
+        (cmd(('fl', 'rear')), Rejection.UNKNOWN_JOINT, "unknown joint\\(s\\) \\['rear'\\]"),
+        (cmd(modes=[2, 5]), Rejection.UNKNOWN_MODE, 'fr: unknown mode 5'),
+        (cmd(velocity=[1.0, math.nan]), Rejection.NON_FINITE, 'fr: velocity is nan'),
+        (cmd(effort=[math.inf, 0.0]), Rejection.NON_FINITE, 'fl: effort is inf'),
+        # a NaN in a field the mode does not use still rejects: it never reaches a motor
+        (cmd(kp=[0.0, -math.inf]), Rejection.NON_FINITE, 'fr: kp is -inf'),
+        (cmd(mode=4, kd=[0.0, -1.0]), Rejection.NEGATIVE_GAIN, 'kd=-1.0'),
+    ],
+)
+def test_a_malformed_message_is_rejected_whole_with_its_reason(msg, reason, text):
+    with pytest.raises(ActuatorCmdRejectedError, match=text) as info:
+        parse_actuator_cmd(msg, JOINTS)
+    assert info.value.reason is reason

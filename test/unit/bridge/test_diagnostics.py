@@ -1,0 +1,168 @@
+"""The bridge's DiagnosticArray: levels, messages and values."""
+
+import math
+
+import pytest
+from diagnostic_msgs.msg import DiagnosticStatus
+from rm_base.bridge.diagnostics import CommandStats, DiagnosticsReporter
+from rm_base.bridge.messages import time_msg
+from rm_base.hardware import BusStats, JointState, PeriodStats
+
+OK, WARN, ERROR = DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR
+
+
+def joint_diag(hold):
+    return {
+        'type': 'm3508',
+        'bus': 'can0',
+        'hold_reason': hold,
+        'frames_decoded': 10,
+        'decode_errors': 0,
+        'commands_accepted': 3,
+        'commands_rejected': 1,
+        'last_rejection': 'velocity is nan',
+        'update_errors': 0,
+    }
+
+
+def bus_stats(state='up', load=0.3, **changes):
+    values = dict(
+        name='can0',
+        state=state,
+        frames_sent=100,
+        frames_received=90,
+        frames_unmatched=0,
+        send_errors=0,
+        receive_errors=0,
+        error_frames=0,
+        handler_errors=0,
+        reopen_count=1,
+        open_failures=0,
+        generation=2,
+        load_bps=load * 1e6,
+        load_fraction=load,
+        last_error='send failed: bus-off',
+    )
+    values.update(changes)
+    return BusStats(**values)
+
+
+def scheduler_stats(overruns=0, errors=0):
+    return PeriodStats(1_000_000, 5000, overruns, overruns, 800.0, 60.0, (1,) * 9, 300.0, errors)
+
+
+def build(reporter, hold='none', online=True, bus=None, scheduler=None, commands=None):
+    state = JointState(
+        'wheel',
+        1.0,
+        2.0,
+        0.1,
+        40.0 if online else math.nan,
+        online,
+        0,
+        2 if hold == 'none' else 0,
+        0.2 if hold == 'none' else 0.0,
+    )
+    hardware = {
+        'joints': {'wheel': joint_diag(hold)},
+        'buses': {'can0': bus or bus_stats()},
+        'scheduler': scheduler or scheduler_stats(),
+    }
+    msg = reporter.build(hardware, [state], commands or CommandStats(), time_msg(0))
+    return {s.name: s for s in msg.status}
+
+
+def values(status):
+    return {kv.key: kv.value for kv in status.values}
+
+
+@pytest.mark.parametrize(
+    ('hold', 'level', 'message'),
+    [
+        ('none', OK, 'driven (VELOCITY)'),
+        ('no_command', OK, 'idle: no command yet'),
+        ('off', OK, 'off (commanded)'),
+        ('command_timeout', WARN, 'held at zero: command_timeout'),
+        ('bus_recovery', WARN, 'held at zero: bus_recovery'),
+        ('offline', ERROR, 'held at zero: offline'),
+        ('over_temperature', ERROR, 'held at zero: over_temperature'),
+        ('device_fault', ERROR, 'held at zero: device_fault'),
+        ('error', ERROR, 'held at zero: error'),
+    ],
+)
+def test_joint_level_and_message_follow_the_hold_reason(hold, level, message):
+    status = build(DiagnosticsReporter('can_bridge'), hold)['can_bridge: joint wheel']
+    assert (status.level, status.message) == (level, message)
+    assert values(status)['hold_reason'] == hold
+
+
+def test_joint_values_and_hardware_id():
+    reporter = DiagnosticsReporter('can_bridge', {'wheel': 'can0 m3508 id 1'})
+    status = build(reporter)['can_bridge: joint wheel']
+    assert status.hardware_id == 'can0 m3508 id 1'
+    v = values(status)
+    assert v['online'] == 'True'
+    assert v['temperature [degC]'] == '40'
+    assert v['error_code'] == '0'
+    assert v['mode'] == 'VELOCITY'
+    assert v['command [N*m]'] == '0.2'
+    assert v['last_rejection'] == 'velocity is nan'
+
+
+def test_offline_joint_reports_nan_temperature():
+    status = build(DiagnosticsReporter('b'), 'offline', online=False)['b: joint wheel']
+    assert values(status)['online'] == 'False'
+    assert values(status)['temperature [degC]'] == 'nan'
+
+
+@pytest.mark.parametrize(
+    ('bus', 'level', 'message'),
+    [
+        (bus_stats(), OK, 'up'),
+        (bus_stats(load=0.9), WARN, 'up, load 90 %'),
+        (bus_stats('down'), ERROR, 'down, reopening: send failed: bus-off'),
+        (bus_stats('closed'), WARN, 'closed'),
+    ],
+)
+def test_bus_level(bus, level, message):
+    status = build(DiagnosticsReporter('b'), bus=bus)['b: bus can0']
+    assert (status.level, status.message) == (level, message)
+    v = values(status)
+    assert v['reopen_count'] == '1'
+    assert v['send_errors'] == '0'
+
+
+def test_bus_without_bitrate_has_no_load_fraction():
+    status = build(DiagnosticsReporter('b'), bus=bus_stats(load_fraction=None))['b: bus can0']
+    assert values(status)['load [%]'] == 'unknown (no bitrate)'
+
+
+def test_scheduler_warns_about_new_overruns_only_once():
+    reporter = DiagnosticsReporter('b')
+    first = build(reporter, scheduler=scheduler_stats(overruns=3))['b: scheduler']
+    second = build(reporter, scheduler=scheduler_stats(overruns=3))['b: scheduler']
+    assert (first.level, first.message) == (WARN, '3 overrun(s) since the last report')
+    assert (second.level, second.message) == (OK, 'on time')
+    v = values(second)
+    assert v['rate [Hz]'] == '1000'
+    assert v['period_error_max [us]'] == '800'
+    assert v['period_error <10 [us]'] == '1'
+    assert v['period_error >=5000 [us]'] == '1'
+
+
+def test_scheduler_errors_are_errors():
+    status = build(DiagnosticsReporter('b'), scheduler=scheduler_stats(errors=1))['b: scheduler']
+    assert status.level == ERROR
+
+
+def test_commands_warn_about_new_rejections():
+    reporter = DiagnosticsReporter('b')
+    stats = CommandStats(10, {'non_finite': 2}, 'non_finite: fl: velocity is nan')
+    first = build(reporter, commands=stats)['b: commands']
+    second = build(reporter, commands=stats)['b: commands']
+    assert first.level == WARN and second.level == OK
+    v = values(first)
+    assert v['accepted'] == '10'
+    assert v['rejected'] == '2'
+    assert v['rejected non_finite'] == '2'
+    assert v['last_rejection'] == 'non_finite: fl: velocity is nan'

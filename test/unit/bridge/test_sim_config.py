@@ -1,0 +1,117 @@
+"""The simulated world of a sim-mode bridge, from its hardware config and sim settings."""
+
+import pytest
+from rm_base.bridge.errors import BridgeConfigError
+from rm_base.bridge.params import SimSettings
+from rm_base.bridge.sim_config import motor_config, world_config
+from rm_base.hardware import HardwareConfig
+from rm_base.hardware.config import JointConfig
+from rm_base.sim import SimWorld, Timing
+
+from .helpers import unique_name
+
+
+def joint(type_, id_=1, **extra):
+    return JointConfig.from_dict('j', {'type': type_, 'bus': 'can0', 'id': id_, **extra})
+
+
+@pytest.mark.parametrize(
+    ('hardware_type', 'expected'),
+    [
+        ('m3508', {'type': 'm3508'}),
+        ('m2006', {'type': 'm2006'}),
+        ('gm6020', {'type': 'gm6020', 'control': 'voltage'}),
+        ('gm6020_current', {'type': 'gm6020', 'control': 'current'}),
+        ('dm4310', {'type': 'dm4310'}),
+        ('dm4340', {'type': 'dm4310', 'model': 'DM4340'}),
+        ('dm8009', {'type': 'dm8009'}),
+        ('dm10010l', {'type': 'dm8009', 'model': 'DM10010L'}),
+        ('cheetah', {'type': 'cheetah'}),
+    ],
+)
+def test_motor_type_follows_the_joint_type(hardware_type, expected):
+    assert motor_config(joint(hardware_type)) == {'id': 1, 'name': 'j', **expected}
+
+
+def test_a_generic_damiao_is_simulated_by_its_size_class_with_its_model():
+    assert motor_config(joint('damiao', model='DM8009'))['type'] == 'dm8009'
+    config = motor_config(joint('damiao', model='DM4340'))
+    assert config['type'] == 'dm4310' and config['model'] == 'DM4340'
+
+
+def test_protocol_options_are_shared_with_the_simulated_device():
+    config = motor_config(joint('dm4310', 3, master_id=0x30, limits={'p_max': 3.0}))
+    assert config['master_id'] == 0x30 and config['limits'] == {'p_max': 3.0}
+    dji = motor_config(joint('gm6020_current', si_per_raw=1.62 / 16384))
+    assert dji['si_per_raw'] == 1.62 / 16384
+
+
+def test_explicit_gear_and_torque_constant_reach_the_physics():
+    config = motor_config(joint('m3508', gear_ratio=14.0, torque_constant=0.22))
+    assert config['gear_ratio'] == 14.0 and config['torque_constant'] == 0.22
+
+
+def test_joint_sim_overrides_win():
+    config = motor_config(joint('m3508'), {'load_inertia': 0.01, 'overtemp_c': 100.0})
+    assert config['load_inertia'] == 0.01 and config['overtemp_c'] == 100.0
+
+
+def test_when_a_type_has_no_simulated_model_expect_error_naming_the_joint():
+    with pytest.raises(BridgeConfigError, match=r"joints\.j\.type 'piper' has no simulated"):
+        motor_config(joint('piper', 1))
+
+
+def hardware(**buses):
+    joints = {}
+    for bus, motors in buses.items():
+        for name, type_, id_ in motors:
+            joints[name] = {'type': type_, 'bus': bus, 'id': id_}
+    channels = {bus: {'interface': 'rm_sim', 'channel': unique_name()} for bus in buses}
+    return HardwareConfig.from_dict({'buses': channels, 'joints': joints})
+
+
+def test_world_config_builds_one_world_with_a_channel_per_bus_body_and_imu(tmp_path, monkeypatch):
+    monkeypatch.setenv('RM_TEST_IMU_DIR', str(tmp_path))
+    hw = hardware(
+        can0=[('fl', 'm3508', 1), ('fr', 'm3508', 2), ('rl', 'm3508', 3), ('rr', 'm3508', 4)],
+        can1=[('yaw', 'gm6020', 1), ('pitch', 'dm4310', 2)],
+    )
+    sim = SimSettings(
+        timing=Timing.STEPPED,
+        body={
+            'chassis': {
+                'type': 'mecanum',
+                'motors': ['fl', 'fr', 'rl', 'rr'],
+                'wheelbase': 0.4,
+                'track': 0.4,
+                'wheel_radius': 0.076,
+            },
+            'gimbal': {'yaw': {'motor': 'yaw'}, 'pitch': {'motor': 'pitch'}},
+        },
+        imu={'path': '${RM_TEST_IMU_DIR}/imu', 'mount': 'gimbal'},
+        motors={'yaw': {'load_inertia': 0.01}},
+    )
+    config = world_config(hw, sim)
+    channel0, channel1 = (str(b.channel) for b in hw.buses)
+    assert [m['name'] for m in config['channels'][channel0]] == ['fl', 'fr', 'rl', 'rr']
+    assert config['channels'][channel1][0]['load_inertia'] == 0.01
+    with SimWorld.from_config(config) as world:
+        assert world.timing is Timing.STEPPED
+        assert world.body.yaw_joint.device is world.motor('yaw')
+        assert len(world.body.wheels) == 4
+        assert world.imu().path == str(tmp_path / 'imu')
+        world.step(2)
+
+
+def test_when_two_buses_share_a_channel_expect_error():
+    hw = HardwareConfig.from_dict(
+        {
+            'buses': {
+                'can0': {'interface': 'rm_sim', 'channel': 'x'},
+                'can1': {'interface': 'rm_sim', 'channel': 'x'},
+            },
+            'joints': {'a': {'type': 'm3508', 'bus': 'can0', 'id': 1}},
+        }
+    )
+    with pytest.raises(BridgeConfigError, match="both 'x'"):
+        world_config(hw, SimSettings())
