@@ -1,0 +1,222 @@
+"""rmcli bag record/play round trips through child processes (private domain).
+
+A test node publishes a fixed schedule on two topics (one rm_msgs type, one std type)
+while `rmcli bag record` runs; the bag must hold the same messages in the same order with
+the same gaps, and `rmcli bag play` must give them back to a test subscriber the same way.
+
+Timing tolerance: every gap between consecutive messages may differ by GAP_TOLERANCE_S
+from the original. The machine is a 2-vCPU VM with bursty CPU steal; the two processes'
+executors and discovery add a few ms each on a quiet machine.
+"""
+
+import itertools
+import signal
+import sys
+import time
+from pathlib import Path
+
+import pytest
+import rclpy
+import yaml
+from rclpy.duration import Duration
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.serialization import deserialize_message
+from rosbags.highlevel import AnyReader
+from std_msgs.msg import String
+from support.ros import rclpy_context, start_process, stop_process, wait_until
+
+from rm_msgs.msg import ChassisCmd
+
+pytestmark = [pytest.mark.ros, pytest.mark.slow]
+
+TIMEOUT_S = 30.0
+GAP_TOLERANCE_S = 0.05
+CMD_TOPIC = '/cli_bag/chassis_cmd'
+TEXT_TOPIC = '/cli_bag/chatter'
+# (time from start [s], topic): gaps of 50..300 ms, alternating topics and not.
+SCHEDULE = [
+    (0.00, CMD_TOPIC),
+    (0.10, TEXT_TOPIC),
+    (0.35, CMD_TOPIC),
+    (0.40, TEXT_TOPIC),
+    (0.70, CMD_TOPIC),
+    (0.75, CMD_TOPIC),
+    (1.00, TEXT_TOPIC),
+    (1.15, CMD_TOPIC),
+]
+TYPES = {CMD_TOPIC: ChassisCmd, TEXT_TOPIC: String}
+
+
+def rmcli(*args):
+    return start_process([sys.executable, '-m', 'rm_bringup.cli', *args])
+
+
+def schedule_message(index, topic):
+    if topic == CMD_TOPIC:
+        msg = ChassisCmd(mode=index % 5, power_limit=10.0 * index, follow_source=f'cmd{index}')
+        msg.header.stamp.sec = 1000 + index
+        return msg
+    return String(data=f'text {index}')
+
+
+def gaps(times):
+    return [b - a for a, b in itertools.pairwise(times)]
+
+
+class Graph:
+    """A node with an executor in its own context, spun while waiting."""
+
+    def __init__(self, context):
+        self.node = rclpy.create_node('cli_bag_test', context=context)
+        self.executor = SingleThreadedExecutor(context=context)
+        self.executor.add_node(self.node)
+
+    def wait(self, predicate, timeout=TIMEOUT_S):
+        return wait_until(predicate, timeout, spin=self.executor.spin_once)
+
+    def close(self):
+        self.executor.shutdown()
+        self.node.destroy_node()
+
+
+def record_schedule(bag: Path, storage: str) -> dict:
+    """Record SCHEDULE with `rmcli bag record`; return what was published and learnt."""
+    with rclpy_context() as context:
+        graph = Graph(context)
+        try:
+            publishers = {t: graph.node.create_publisher(TYPES[t], t, 10) for t in TYPES}
+            # Publishers first: a recorder that starts later discovers them at once.
+            recorder = rmcli('bag', 'record', CMD_TOPIC, TEXT_TOPIC, '-o', str(bag), '-s', storage)
+            try:
+                subscribed = graph.wait(
+                    lambda: all(p.get_subscription_count() > 0 for p in publishers.values())
+                )
+                assert subscribed, 'the recorder never subscribed'
+                sent = []
+                start = time.monotonic()
+                for index, (due, topic) in enumerate(SCHEDULE):
+                    time.sleep(max(0.0, start + due - time.monotonic()))  # keep the schedule
+                    msg = schedule_message(index, topic)
+                    publishers[topic].publish(msg)
+                    sent.append((topic, msg))
+                for publisher in publishers.values():
+                    assert publisher.wait_for_all_acked(Duration(seconds=TIMEOUT_S))
+                hashes = {
+                    t: str(graph.node.get_publishers_info_by_topic(t)[0].topic_type_hash)
+                    for t in TYPES
+                }
+            finally:
+                out, err = stop_process(recorder)
+            assert recorder.returncode == 0, f'{out}\n{err}'
+            assert f'Recording stopped: {len(SCHEDULE)} messages on 2 topics' in out, out + err
+        finally:
+            graph.close()
+    return {'bag': bag, 'sent': sent, 'hashes': hashes}
+
+
+def read_bag(bag: Path):
+    """(topic, rclpy message, timestamp [s]) in bag order, decoded with rclpy."""
+    with AnyReader([bag]) as reader:
+        return [
+            (conn.topic, deserialize_message(bytes(raw), TYPES[conn.topic]), stamp * 1e-9)
+            for conn, stamp, raw in reader.messages()
+        ]
+
+
+def play(bag: Path, *options) -> list:
+    """Play bag into test subscribers; return (receive time [s], topic, msg) in order."""
+    received = []
+    with rclpy_context() as context:
+        graph = Graph(context)
+        try:
+            for topic, cls in TYPES.items():
+                graph.node.create_subscription(
+                    cls, topic, lambda msg, t=topic: received.append((time.monotonic(), t, msg)), 10
+                )
+            # The subscribers exist, so the wait ends when discovery has matched them.
+            player = rmcli(
+                'bag', 'play', str(bag), '--wait-for-subscribers', str(TIMEOUT_S), *options
+            )
+            try:
+                graph.wait(lambda: len(received) >= len(SCHEDULE) or player.poll() is not None)
+                graph.wait(lambda: len(received) >= len(SCHEDULE), timeout=2.0)
+            finally:
+                out, err = (
+                    stop_process(player, timeout=TIMEOUT_S)
+                    if player.poll() is None
+                    else player.communicate()
+                )
+            assert player.returncode == 0, f'{out}\n{err}'
+        finally:
+            graph.close()
+    return received
+
+
+@pytest.fixture(scope='module')
+def recording(tmp_path_factory):
+    return record_schedule(tmp_path_factory.mktemp('cli_bag') / 'bag', 'mcap')
+
+
+def test_record_keeps_every_message_in_order_with_its_timing(recording):
+    recorded = read_bag(recording['bag'])
+    assert [(topic, msg) for topic, msg, _ in recorded] == recording['sent']
+    expected = gaps([due for due, _ in SCHEDULE])
+    for got, want in zip(gaps([t for _, _, t in recorded]), expected, strict=True):
+        assert got == pytest.approx(want, abs=GAP_TOLERANCE_S)
+
+
+def test_recorded_bag_has_type_hashes_and_offered_qos(recording):
+    metadata = yaml.safe_load((recording['bag'] / 'metadata.yaml').read_text())
+    info = metadata['rosbag2_bagfile_information']
+    assert info['storage_identifier'] == 'mcap'
+    topics = {t['topic_metadata']['name']: t for t in info['topics_with_message_count']}
+    for topic in TYPES:
+        meta = topics[topic]['topic_metadata']
+        # The hash rosbags computed from the installed .msg is the publisher's own.
+        assert meta['type_description_hash'] == recording['hashes'][topic]
+        assert meta['offered_qos_profiles'][0]['reliability'] == 'reliable'
+        assert meta['offered_qos_profiles'][0]['durability'] == 'volatile'
+    assert topics[CMD_TOPIC]['topic_metadata']['type'] == 'rm_msgs/msg/ChassisCmd'
+    assert topics[CMD_TOPIC]['message_count'] == sum(t == CMD_TOPIC for _, t in SCHEDULE)
+
+
+def test_play_gives_back_the_same_messages_in_order_with_their_timing(recording):
+    received = play(recording['bag'])
+    assert [(topic, msg) for _, topic, msg in received] == recording['sent']
+    recorded_gaps = gaps([t for _, _, t in read_bag(recording['bag'])])
+    for got, want in zip(gaps([t for t, _, _ in received]), recorded_gaps, strict=True):
+        assert got == pytest.approx(want, abs=GAP_TOLERANCE_S)
+
+
+def test_play_at_rate_2_halves_the_duration(recording):
+    received = play(recording['bag'], '--rate', '2')
+    assert [(topic, msg) for _, topic, msg in received] == recording['sent']
+    recorded = read_bag(recording['bag'])
+    recorded_span = recorded[-1][2] - recorded[0][2]  # ~1.15 s
+    played_span = received[-1][0] - received[0][0]
+    # Half of ~1.15 s is ~0.58 s; 1x playback would be 0.5 s longer than the tolerance.
+    assert played_span == pytest.approx(recorded_span / 2, abs=2 * GAP_TOLERANCE_S)
+
+
+def test_sqlite3_storage_records_and_plays_back(tmp_path):
+    recording = record_schedule(tmp_path / 'bag', 'sqlite3')
+    assert (tmp_path / 'bag' / 'bag.db3').is_file()
+    received = play(recording['bag'])
+    assert [(topic, msg) for _, topic, msg in received] == recording['sent']
+
+
+def test_record_stops_on_sigterm_with_a_readable_bag(tmp_path):
+    # SIGTERM (how launch stops a process) closes the bag like SIGINT does.
+    recorder = rmcli('bag', 'record', '-a', '-o', str(tmp_path / 'bag'))
+    try:
+        wait_until((tmp_path / 'bag').exists, TIMEOUT_S)
+    finally:
+        recorder.send_signal(signal.SIGTERM)
+        out, err = recorder.communicate(timeout=TIMEOUT_S)
+    assert recorder.returncode == 0, err
+    assert 'Recording stopped' in out
+    # rosbags writes metadata.yaml only when the bag is closed.
+    assert (tmp_path / 'bag' / 'metadata.yaml').is_file()
+    with AnyReader([tmp_path / 'bag']) as reader:
+        # The counts in metadata.yaml agree with what the storage file holds.
+        assert reader.message_count == sum(1 for _ in reader.messages())

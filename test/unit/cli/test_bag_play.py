@@ -1,0 +1,95 @@
+"""Broken bags: one clear line naming the file, exit 1, before any ROS node starts."""
+
+import pytest
+from rm_bringup.cli.errors import BagError
+from rm_bringup.cli.main import main
+
+S = 1_000_000_000
+
+
+@pytest.fixture
+def good_bag(write_bag, make):
+    return write_bag(
+        [
+            (
+                '/chatter',
+                'std_msgs/msg/String',
+                S + i * S // 100,
+                make('std_msgs/msg/String', data='x' * 40),
+            )
+            for i in range(200)
+        ]
+    )
+
+
+def error_line(capsys):
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1, err
+    assert 'Traceback' not in err[0]
+    return err[0]
+
+
+def test_truncated_mcap_is_one_clear_line_naming_the_file(good_bag, capsys):
+    data_file = good_bag / f'{good_bag.name}.mcap'
+    data_file.write_bytes(data_file.read_bytes()[: data_file.stat().st_size // 2])
+    assert main(['bag', 'play', str(good_bag)]) == 1
+    line = error_line(capsys)
+    assert line.startswith('rmcli: error: cannot read bag')
+    assert str(data_file) in line
+    assert 'truncated' in line
+
+
+def test_garbage_inside_an_mcap_is_one_clear_line(write_bag, make, tmp_path, capsys):
+    # This damage only shows while reading the messages (rosbags raises OverflowError), so
+    # it is read through `bag plot`, which reads every message without starting ROS.
+    gimbal = make('rm_msgs/msg/GimbalState', reason='x' * 40)
+    bag = write_bag(
+        [('/g', 'rm_msgs/msg/GimbalState', S + i * S // 100, gimbal) for i in range(200)]
+    )
+    data_file = bag / f'{bag.name}.mcap'
+    data = bytearray(data_file.read_bytes())
+    third = len(data) // 3
+    data[third : third + 2000] = b'\xff' * 2000
+    data_file.write_bytes(bytes(data))
+    assert main(['bag', 'plot', str(bag), '-o', str(tmp_path / 'plots')]) == 1
+    assert str(data_file) in error_line(capsys)
+
+
+def test_corrupted_sqlite3_bag_is_one_clear_line(write_bag, make, capsys):
+    bag = write_bag(
+        [('/chatter', 'std_msgs/msg/String', S, make('std_msgs/msg/String', data='a'))],
+        storage='sqlite3',
+    )
+    db = bag / f'{bag.name}.db3'
+    db.write_bytes(b'not a database' * 100)
+    assert main(['bag', 'play', str(bag)]) == 1
+    assert str(db) in error_line(capsys)
+
+
+def test_missing_bag_and_folder_without_metadata(tmp_path, capsys):
+    assert main(['bag', 'play', str(tmp_path / 'nothing')]) == 1
+    assert 'does not exist' in error_line(capsys)
+    assert main(['bag', 'play', str(tmp_path)]) == 1
+    assert 'no metadata.yaml' in error_line(capsys)
+
+
+def test_topics_not_in_the_bag_are_an_error_listing_what_is(good_bag, capsys):
+    assert main(['bag', 'play', str(good_bag), '--topics', '/odom']) == 1
+    line = error_line(capsys)
+    assert '/odom' in line and '/chatter' in line
+
+
+def test_damage_found_while_reading_is_a_bag_error(tmp_path):
+    # rosbags may only hit damaged chunks while iterating; read_messages wraps that too.
+    from rm_bringup.cli.bag_io import read_messages
+
+    class DamagedReader:
+        def messages(self, connections=(), start=None):
+            yield ('connection', 1, b'ok')
+            raise OverflowError('Python int too large to convert to C ssize_t')
+
+    got = []
+    with pytest.raises(BagError, match=r'cannot read bag .*bag: Python int too large'):
+        for item in read_messages(DamagedReader(), tmp_path / 'bag'):
+            got.append(item)
+    assert got == [('connection', 1, b'ok')]

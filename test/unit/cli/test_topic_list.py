@@ -1,0 +1,31 @@
+"""topic list output (ros2's format: names, -t types, -c count, hidden topics)."""
+
+from rm_bringup.cli.topic_list import format_topics
+
+GRAPH = [
+    ('/rosout', ['rcl_interfaces/msg/Log']),
+    ('/chassis_cmd', ['rm_msgs/msg/ChassisCmd']),
+    ('/_hidden/x', ['std_msgs/msg/String']),
+    ('/mixed', ['std_msgs/msg/String', 'std_msgs/msg/Int32']),
+]
+
+
+def fmt(**kwargs):
+    options = {'show_types': False, 'count_only': False, 'include_hidden': False} | kwargs
+    return format_topics(GRAPH, **options)
+
+
+def test_names_are_sorted_and_hidden_topics_left_out():
+    assert fmt() == ['/chassis_cmd', '/mixed', '/rosout']
+
+
+def test_show_types_appends_every_type_in_brackets():
+    assert fmt(show_types=True)[:2] == [
+        '/chassis_cmd [rm_msgs/msg/ChassisCmd]',
+        '/mixed [std_msgs/msg/String, std_msgs/msg/Int32]',
+    ]
+
+
+def test_count_and_hidden_topics():
+    assert fmt(count_only=True) == ['3']
+    assert fmt(include_hidden=True)[0] == '/_hidden/x'
