@@ -1,0 +1,343 @@
+"""rm_plugins/Hi220 in rm_robot: HiPNUC frames on a pty -> /imu, /diagnostics, states.
+
+Each test runs the host in-process (private context, parameter_overrides) with the Hi220
+plugin reading a pseudo-terminal symlinked at a temporary path, as it reads the
+simulator's IMU or /dev/ttyUSB0 on a robot. The test writes frames built with the HiPNUC
+encoder into the pty's master side and watches the plugin's topics only.
+"""
+
+import contextlib
+import math
+import os
+import threading
+import tty
+
+import pytest
+import rclpy
+from diagnostic_msgs.msg import DiagnosticArray
+from rclpy.experimental import EventsExecutor
+from rclpy.parameter import Parameter
+from rm_base.geometry import quaternion_from_rpy
+from rm_base.hardware.protocols import hipnuc
+from rm_base.host import RobotHost
+from rm_base.plugin import STATE_QOS
+from rm_plugins.imu import ImuState
+from sensor_msgs.msg import Imu
+from std_srvs.srv import SetBool
+from support.ros import wait_until
+
+from rm_msgs.msg import PluginState
+
+pytestmark = pytest.mark.ros
+
+WAIT = 10.0  # longest wait for any condition [s]; normally met in well under a second
+
+
+class Pty:
+    """A pseudo-terminal whose slave is symlinked at path."""
+
+    def __init__(self, path):
+        self.path = path
+        self.master, self.slave = os.openpty()
+        tty.setraw(self.slave)
+        os.symlink(os.ttyname(self.slave), path)
+
+    def write(self, data):
+        os.write(self.master, data)
+
+    def close(self):
+        with contextlib.suppress(OSError):
+            os.unlink(self.path)
+        for fd in (self.master, self.slave):
+            with contextlib.suppress(OSError):
+                os.close(fd)
+
+
+class Streamer:
+    """Writes a frame (from make_frame()) to a pty every period [s] in a thread."""
+
+    def __init__(self, make_frame, period=0.005):
+        self.make_frame = make_frame
+        self.port = None
+        self._period = period
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+
+    def start(self, port):
+        self.port = port
+        self._thread.start()
+
+    def _run(self):
+        while not self._stop.wait(self._period):
+            port = self.port
+            if port is not None:
+                with contextlib.suppress(OSError):
+                    port.write(self.make_frame())
+
+    def stop(self):
+        self._stop.set()
+        self._thread.join()
+
+
+# Roll 0.1, pitch -0.2 (nose up), yaw 1.0 rad; rates and specific force in SI.
+RPY = (0.1, -0.2, 1.0)
+GYR = (0.01, -0.02, 0.5)  # [rad/s]
+ACC = (0.3, -0.1, 9.7)  # [m/s^2]
+
+
+def imusol_frame():
+    q = quaternion_from_rpy(*RPY)
+    return hipnuc.encode_frame(
+        hipnuc.encode_imusol(
+            acc=ACC, gyr=GYR, mag=(10.0, 0.0, -40.0), euler=RPY, quat=(q.w, q.x, q.y, q.z)
+        )
+    )
+
+
+class Harness:
+    def __init__(self, context, port, **params):
+        overrides = {
+            'plugins': ['imu'],
+            'imu.type': 'rm_plugins/Hi220',
+            'imu.rate': 100.0,
+            'imu.port': port,
+            'imu.frame_id': 'gimbal_imu',
+            'imu.reopen_backoff_min': 0.05,
+            'imu.reopen_backoff_max': 0.2,
+            'imu.diagnostics_period': 0.1,
+            **{f'imu.{k}': v for k, v in params.items()},
+        }
+        self.host = RobotHost(
+            context=context,
+            parameter_overrides=[Parameter(k, value=v) for k, v in overrides.items()],
+        )
+        self.probe = rclpy.create_node('probe', context=context)
+        self.executor = EventsExecutor(context=context)
+        self.imu = self.collect(Imu, '/imu')
+        self.diagnostics = self.collect(DiagnosticArray, '/diagnostics')
+        self.states = self.collect(PluginState, '/rm_robot/imu/state', STATE_QOS)
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._spin, daemon=True)
+
+    def collect(self, msg_type, topic, qos=50):
+        received = []
+        self.probe.create_subscription(msg_type, topic, received.append, qos)
+        return received
+
+    def start(self):
+        self.executor.add_node(self.host)
+        self.executor.add_node(self.probe)
+        self._thread.start()
+        return self
+
+    def state(self):
+        return ImuState(self.states[-1].state) if self.states else None
+
+    def imu_status(self):
+        """The newest /diagnostics status of the plugin as a dict (plus 'level')."""
+        for array in reversed(self.diagnostics):
+            for status in array.status:
+                if status.name == 'rm_robot: imu':
+                    values = {kv.key: kv.value for kv in status.values}
+                    values['level'] = status.level
+                    values['message'] = status.message
+                    return values
+        return None
+
+    def close(self):
+        self._stop.set()
+        self._thread.join()
+        self.host.destroy_node()
+        self.probe.destroy_node()
+        self.executor.shutdown()
+
+    def _spin(self):
+        while not self._stop.is_set():
+            self.executor.spin_once(timeout_sec=0.02)
+
+
+@pytest.fixture
+def run(ros_context):
+    made = []
+
+    def make(port, **params):
+        made.append(Harness(ros_context, port, **params))
+        return made[-1].start()
+
+    yield made, make
+    for h in made:
+        h.close()
+
+
+@pytest.fixture
+def streamer():
+    s = Streamer(imusol_frame)
+    yield s
+    s.stop()
+    if s.port is not None:
+        s.port.close()
+
+
+def test_hi220_loads_by_name(run, tmp_path):
+    _, make = run
+    h = make(str(tmp_path / 'imu'))
+    plugin = h.host.plugin('imu')
+    assert type(plugin).__module__ == 'rm_plugins.imu.plugin'
+    assert h.host.get_parameter('imu.type').value == 'rm_plugins/Hi220'
+
+
+def test_when_frames_stream_expect_imu_messages_in_si_and_ros_order(run, tmp_path, streamer):
+    _, make = run
+    path = str(tmp_path / 'imu')
+    h = make(path)
+    streamer.start(Pty(path))
+    assert wait_until(lambda: len(h.imu) >= 5, WAIT)
+    msg = h.imu[-1]
+    assert msg.header.frame_id == 'gimbal_imu'
+    # ROS order (x, y, z, w) of the rotation encoded from RPY (HiPNUC sent w first). The
+    # frame carries float32, so agreement is to ~1e-7.
+    q = quaternion_from_rpy(*RPY)
+    o = msg.orientation
+    assert (o.x, o.y, o.z, o.w) == pytest.approx(tuple(q), abs=1e-6)
+    v = msg.angular_velocity  # sent in deg/s, published in rad/s
+    assert (v.x, v.y, v.z) == pytest.approx(GYR, abs=1e-6)
+    a = msg.linear_acceleration  # sent in g, published in m/s^2
+    assert (a.x, a.y, a.z) == pytest.approx(ACC, abs=1e-5)
+    # Default covariances: diagonal, positive.
+    assert msg.orientation_covariance[0] > 0 and msg.orientation_covariance[1] == 0
+    assert msg.angular_velocity_covariance[4] > 0
+    assert msg.linear_acceleration_covariance[8] > 0
+    assert wait_until(lambda: h.state() is ImuState.STREAMING, WAIT)
+
+
+def test_the_port_name_expands_environment_variables(run, tmp_path, streamer, monkeypatch):
+    monkeypatch.setenv('RM_TEST_IMU_DIR', str(tmp_path))
+    _, make = run
+    h = make('${RM_TEST_IMU_DIR}/imu')
+    streamer.start(Pty(str(tmp_path / 'imu')))
+    assert wait_until(lambda: len(h.imu) >= 1, WAIT)
+    assert wait_until(lambda: h.state() is ImuState.STREAMING, WAIT)
+    assert h.states[-1].reason == f'streaming from {tmp_path}/imu'
+
+
+def test_when_garbage_comes_between_frames_expect_it_skipped_and_counted(run, tmp_path):
+    _, make = run
+    path = str(tmp_path / 'imu')
+    h = make(path)
+    port = Pty(path)
+    try:
+        assert wait_until(lambda: h.state() is ImuState.NO_DATA, WAIT)  # open, nothing yet
+        good = imusol_frame()
+        corrupted = bytearray(good)
+        corrupted[30] ^= 0x55
+        garbage = bytes(range(0x20, 0x40))  # 32 bytes with no sync word
+        port.write(garbage + good + bytes(corrupted) + good[:50] + good + garbage + good)
+        # Three good frames get through; the corrupted one and the cut-off one fail their
+        # CRC (the cut-off one's length runs into the next frame, which is then found by
+        # rescanning), and the garbage is discarded.
+        assert wait_until(lambda: len(h.imu) == 3, WAIT)
+        assert wait_until(
+            lambda: (s := h.imu_status()) is not None and s['frames_ok'] == '3', WAIT
+        )
+        status = h.imu_status()
+        assert status['crc_errors'] == '2'
+        assert int(status['bytes_discarded']) >= 2 * len(garbage)
+        assert h.host.plugin('imu').error_count == 0
+    finally:
+        port.close()
+
+
+def test_when_frames_stop_expect_no_data_and_no_stale_imu(run, tmp_path, streamer):
+    _, make = run
+    path = str(tmp_path / 'imu')
+    h = make(path, data_timeout=0.1, silence_reopen=0.0)
+    streamer.start(Pty(path))
+    assert wait_until(lambda: h.state() is ImuState.STREAMING, WAIT)
+    streamer.make_frame = lambda: b''  # the device stops sending; the port stays open
+    assert wait_until(lambda: h.state() is ImuState.NO_DATA, WAIT)
+    assert h.states[-1].reason == f'no valid frame from {path} within 0.100 s'
+    count = len(h.imu)
+    # Nothing is published while there is no new frame: wait 3 data timeouts worth of
+    # diagnostics and check no /imu message came (the diagnostics prove the plugin ran).
+    seen = len(h.diagnostics)
+    assert wait_until(lambda: len(h.diagnostics) >= seen + 3, WAIT)
+    assert len(h.imu) == count
+    assert h.imu_status()['level'] == b'\x01'  # WARN
+
+
+def test_when_the_port_vanishes_expect_no_port_then_recovery(run, tmp_path, streamer):
+    _, make = run
+    path = str(tmp_path / 'imu')
+    h = make(path)
+    streamer.start(Pty(path))
+    assert wait_until(lambda: h.state() is ImuState.STREAMING, WAIT)
+
+    old, streamer.port = streamer.port, None
+    old.close()  # unplugged: reads fail, the path disappears
+    assert wait_until(lambda: h.state() is ImuState.NO_PORT, WAIT)
+    assert 'reopening with back-off' in h.states[-1].reason
+    assert wait_until(lambda: (s := h.imu_status()) is not None and s['level'] == b'\x02', WAIT)
+
+    count = len(h.imu)
+    streamer.port = Pty(path)  # plugged back in
+    assert wait_until(lambda: h.state() is ImuState.STREAMING, WAIT)
+    assert wait_until(lambda: len(h.imu) > count, WAIT)
+    assert wait_until(lambda: h.imu_status()['port_losses'] == '1', WAIT)
+
+
+def test_when_disabled_expect_the_port_closed_and_passive(run, tmp_path, streamer):
+    _, make = run
+    path = str(tmp_path / 'imu')
+    h = make(path)
+    streamer.start(Pty(path))
+    assert wait_until(lambda: h.state() is ImuState.STREAMING, WAIT)
+    client = h.probe.create_client(SetBool, '/rm_robot/imu/enable')
+    assert client.wait_for_service(timeout_sec=WAIT)
+    future = client.call_async(SetBool.Request(data=False))
+    assert wait_until(future.done, WAIT) and future.result().success
+    assert wait_until(lambda: h.state() is ImuState.PASSIVE and not h.states[-1].enabled, WAIT)
+    assert not h.host.plugin('imu').reader.running
+    count = len(h.imu)
+    # Frames keep coming into the pty, but nothing is read or published any more.
+    assert not wait_until(lambda: len(h.imu) > count + 1, 0.3)
+
+
+@pytest.mark.parametrize(
+    ('params', 'message'),
+    [
+        ({'port': '${RM_SURELY_UNSET_VARIABLE}/imu'}, 'unset environment variable'),
+        ({'reopen_backoff_min': 1.0, 'reopen_backoff_max': 0.5}, 'reopen_backoff_max'),
+        ({'mount_rpy': [0.0, 0.0]}, 'must have 3 entries'),
+    ],
+    ids=['unset-variable', 'backoff-order', 'mount-length'],
+)
+def test_a_bad_config_is_one_clear_error(ros_context, tmp_path, params, message):
+    overrides = {
+        'plugins': ['imu'],
+        'imu.type': 'rm_plugins/Hi220',
+        'imu.port': str(tmp_path / 'imu'),
+        **{f'imu.{k}': v for k, v in params.items()},
+    }
+    with pytest.raises(Exception, match=message):
+        RobotHost(
+            context=ros_context,
+            parameter_overrides=[Parameter(k, value=v) for k, v in overrides.items()],
+        )
+
+
+def test_euler_only_legacy_frames_give_an_orientation(run, tmp_path):
+    _, make = run
+    path = str(tmp_path / 'imu')
+    h = make(path)
+    port = Pty(path)
+    try:
+        assert wait_until(lambda: h.state() is ImuState.NO_DATA, WAIT)
+        # Legacy 0xD0 Euler (0.01 deg pitch/roll, 0.1 deg yaw) + 0xB0 gyro (0.1 deg/s).
+        payload = hipnuc.encode_legacy(euler=(0.0, 0.0, math.radians(30.0)), gyr=(0, 0, 0.1))
+        port.write(hipnuc.encode_frame(payload))
+        assert wait_until(lambda: len(h.imu) == 1, WAIT)
+        o = h.imu[0].orientation
+        assert (o.z, o.w) == pytest.approx((math.sin(math.radians(15)), math.cos(math.radians(15))))
+        assert h.imu[0].linear_acceleration_covariance[0] == -1.0  # not provided
+    finally:
+        port.close()

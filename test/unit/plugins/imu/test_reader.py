@@ -1,0 +1,233 @@
+"""SerialReader on real pseudo-terminals and pyserial's loop://: frames, garbage, port loss."""
+
+import contextlib
+import math
+import os
+import threading
+import tty
+
+import pytest
+import serial
+from rm_base.hardware.protocols import hipnuc
+from rm_plugins.imu import SerialReader
+
+WAIT = 10.0  # longest wait for a condition [s]; normally met within a few read timeouts
+
+
+class Log:
+    def __init__(self):
+        self.lines = []
+
+    def info(self, message):
+        self.lines.append(('info', message))
+
+    def warning(self, message):
+        self.lines.append(('warning', message))
+
+
+class Pty:
+    """A pseudo-terminal whose slave is symlinked at path, like the simulator's IMU."""
+
+    def __init__(self, path):
+        self.path = path
+        self.master, self.slave = os.openpty()
+        tty.setraw(self.slave)
+        if os.path.lexists(path):
+            os.unlink(path)
+        os.symlink(os.ttyname(self.slave), path)
+
+    def write(self, data):
+        os.write(self.master, data)
+
+    def close(self):
+        with contextlib.suppress(OSError):
+            os.unlink(self.path)
+        for fd in (self.master, self.slave):
+            with contextlib.suppress(OSError):
+                os.close(fd)
+
+
+def frame(yaw=0.0, rate_z=0.0):
+    q = (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))  # (w, x, y, z)
+    return hipnuc.encode_frame(
+        hipnuc.encode_imusol(
+            acc=(0.0, 0.0, 9.80665),
+            gyr=(0.0, 0.0, rate_z),
+            mag=(0.0, 0.0, 0.0),
+            euler=(0.0, 0.0, yaw),
+            quat=q,
+        )
+    )
+
+
+class Collector:
+    def __init__(self):
+        self.samples = []
+        self.cond = threading.Condition()
+
+    def __call__(self, sample):
+        with self.cond:
+            self.samples.append(sample)
+            self.cond.notify_all()
+
+    def wait_for(self, count, timeout=WAIT):
+        with self.cond:
+            return self.cond.wait_for(lambda: len(self.samples) >= count, timeout)
+
+
+@pytest.fixture
+def reader_factory():
+    readers = []
+
+    def make(url, on_sample, **kwargs):
+        kwargs.setdefault('read_timeout', 0.01)
+        kwargs.setdefault('backoff_min', 0.02)
+        kwargs.setdefault('backoff_max', 0.05)
+        reader = SerialReader(url, 115200, on_sample, Log(), **kwargs)
+        readers.append(reader)
+        return reader
+
+    yield make
+    for reader in readers:
+        assert reader.stop()
+
+
+def wait(predicate, timeout=WAIT):
+    event = threading.Event()
+    for _ in range(int(timeout / 0.01)):
+        if predicate():
+            return True
+        event.wait(0.01)
+    return predicate()
+
+
+def test_when_frames_arrive_on_a_pty_expect_each_decoded(tmp_path, reader_factory):
+    port = Pty(str(tmp_path / 'imu'))
+    got = Collector()
+    reader = reader_factory(port.path, got)
+    reader.start()
+    assert wait(lambda: reader.stats().port_open)
+    for i in range(5):
+        port.write(frame(yaw=0.1 * i, rate_z=0.5))
+    assert got.wait_for(5)
+    # 0x91 carries float32 degrees: yaw 0.4 rad comes back within float precision.
+    assert got.samples[4].euler[2] == pytest.approx(0.4, abs=1e-6)
+    assert got.samples[4].gyr[2] == pytest.approx(0.5, abs=1e-6)
+    stats = reader.stats()
+    assert stats.frames_ok == 5 and stats.bad_frames == 0 and stats.bytes_discarded == 0
+    port.close()
+
+
+def test_when_garbage_and_broken_frames_come_between_good_ones_expect_them_skipped_and_counted(
+    tmp_path, reader_factory
+):
+    port = Pty(str(tmp_path / 'imu'))
+    got = Collector()
+    reader = reader_factory(port.path, got)
+    reader.start()
+    assert wait(lambda: reader.stats().port_open)
+    good = frame(yaw=0.2)
+    corrupted = bytearray(good)
+    corrupted[20] ^= 0xFF  # a payload byte: the CRC no longer matches
+    truncated = good[:40]  # a frame cut short, the next frame follows at once
+    garbage = b'\x00\x13\x11\xff' * 4  # 16 bytes, including XON/XOFF, which raw mode passes
+    port.write(garbage + good + bytes(corrupted) + good + truncated + good)
+    assert got.wait_for(3)
+    stats = reader.stats()
+    assert stats.frames_ok == 3
+    # The corrupted frame fails its CRC; so does the truncated one, whose LEN swallows the
+    # start of the next frame (the parser then rescans and still finds that frame).
+    assert stats.crc_errors == 2
+    assert stats.bytes_discarded >= len(garbage)
+    assert [s.euler[2] for s in got.samples] == pytest.approx([0.2] * 3, abs=1e-6)
+    port.close()
+
+
+def test_when_the_port_is_missing_expect_retries_until_it_appears(tmp_path, reader_factory):
+    path = str(tmp_path / 'imu')
+    got = Collector()
+    reader = reader_factory(path, got)
+    reader.start()
+    assert wait(lambda: reader.stats().open_failures >= 2)
+    assert not reader.stats().port_open
+    assert 'cannot open' in reader.stats().last_error
+    port = Pty(path)
+    assert wait(lambda: reader.stats().port_open)
+    port.write(frame())
+    assert got.wait_for(1)
+    port.close()
+
+
+def test_when_the_port_vanishes_expect_loss_counted_and_the_new_port_read(
+    tmp_path, reader_factory
+):
+    path = str(tmp_path / 'imu')
+    port = Pty(path)
+    got = Collector()
+    reader = reader_factory(path, got)
+    reader.start()
+    assert wait(lambda: reader.stats().port_open)
+    port.write(frame())
+    assert got.wait_for(1)
+
+    port.close()  # the device goes away: reads fail with EIO, the symlink is gone
+    assert wait(lambda: reader.stats().port_losses == 1 and not reader.stats().port_open)
+
+    port = Pty(path)  # it comes back (a new pty, as when the simulator restarts)
+    assert wait(lambda: reader.stats().port_open)
+    assert reader.stats().opens == 2
+    port.write(frame(yaw=0.3))
+    assert got.wait_for(2)
+    assert got.samples[-1].euler[2] == pytest.approx(0.3, abs=1e-6)
+    port.close()
+
+
+def test_when_the_port_goes_silent_expect_it_reopened(tmp_path, reader_factory):
+    port = Pty(str(tmp_path / 'imu'))
+    reader = reader_factory(port.path, Collector(), silence_reopen=0.1)
+    reader.start()
+    # Nothing is ever written: after 0.1 s of silence the reader closes and reopens.
+    assert wait(lambda: reader.stats().opens >= 2)
+    assert reader.stats().port_losses >= 1
+    assert 'no byte' in reader.stats().last_error
+    port.close()
+
+
+def test_a_pyserial_url_is_read_too(reader_factory):
+    # loop:// echoes what is written to it; the opener hands the reader a port that
+    # already holds two frames.
+    loop = serial.serial_for_url('loop://', timeout=0.01)
+    loop.write(frame(yaw=0.1) + frame(yaw=0.2))
+    got = Collector()
+    reader = reader_factory('loop://', got, opener=lambda url, baud, timeout: loop)
+    reader.start()
+    assert got.wait_for(2)
+    assert got.samples[1].euler[2] == pytest.approx(0.2, abs=1e-6)
+
+
+def test_when_on_sample_raises_expect_it_counted_and_reading_to_go_on(tmp_path, reader_factory):
+    port = Pty(str(tmp_path / 'imu'))
+    calls = []
+
+    def fussy(sample):
+        calls.append(sample)
+        if len(calls) == 1:
+            raise ValueError('bad sample')
+
+    reader = reader_factory(port.path, fussy)
+    reader.start()
+    assert wait(lambda: reader.stats().port_open)
+    port.write(frame() + frame())
+    assert wait(lambda: len(calls) == 2)
+    assert reader.stats().sample_errors == 1
+    port.close()
+
+
+def test_stop_is_prompt_and_closes_the_port(tmp_path, reader_factory):
+    port = Pty(str(tmp_path / 'imu'))
+    reader = reader_factory(port.path, Collector())
+    reader.start()
+    assert wait(lambda: reader.stats().port_open)
+    assert reader.stop(timeout=1.0)
+    assert not reader.running and not reader.stats().port_open
+    port.close()
