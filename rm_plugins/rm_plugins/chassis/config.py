@@ -1,0 +1,307 @@
+"""StandChassis parameters: read once at init from the robot config, checked, frozen.
+
+Every key is under the plugin's prefix (``chassis.``). Required geometry has no default,
+so a config that omits it fails at start-up with one line naming the key and its unit.
+See ``rm_bringup/config/standard.yaml`` for a complete, commented example.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from enum import Enum
+
+from rm_base.control import (
+    ChassisModeParams,
+    ChassisPowerModel,
+    FollowParams,
+    GyroParams,
+    PidGains,
+    RampLimits,
+    TwistParams,
+    TwistWaveform,
+)
+from rm_base.errors import ConfigError
+from rm_base.geometry import MECANUM_ROLLER_SIGNS, WheelKinematics, mecanum_wheels, omni_wheels
+from rm_base.plugin import ParameterError, PluginParams
+
+
+class Kinematics(Enum):
+    """Wheel layout."""
+
+    MECANUM = 'mecanum'  # four wheels FL, FR, RL, RR on a rectangle
+    OMNI = 'omni'  # N omni wheels on a circle, rolling tangentially
+
+
+class ImuMount(Enum):
+    """The body the IMU on the imu topic is fixed to."""
+
+    GIMBAL = 'gimbal'  # chassis yaw = IMU yaw - yaw joint angle
+    CHASSIS = 'chassis'  # chassis yaw = IMU yaw
+    NONE = 'none'  # no IMU: the odometry yaw comes from the wheels
+
+
+@dataclass(frozen=True)
+class ChassisConfig:
+    """Everything StandChassis reads from its parameters (SI units).
+
+    Attributes:
+        kinematics: wheel layout.
+        wheel_joints: joint names, in the kinematics' wheel order.
+        wheels: the wheel kinematics (Jacobian) built from the geometry.
+        max_wheel_speed: largest |wheel speed| target [rad/s].
+        wheel_gains: wheel speed PID, speed error [rad/s] -> effort [N·m].
+        wheel_feedback_timeout: wheel feedback older than this is missing [s].
+        vel_cmd_timeout: a /vel_cmd older than this is no velocity (brake to zero) [s].
+        yaw_joint: the gimbal yaw joint whose angle is the gimbal's heading on the chassis.
+        yaw_zero: joint position at which the gimbal points along chassis x [rad].
+        modes: FOLLOW/TWIST/GYRO parameters.
+        linear_limits: default ramp of vx and vy.
+        angular_limits: default ramp of wz.
+        power_model: power model of the chassis.
+        power_limit: default chassis power limit [W].
+        imu_mount: where the IMU on imu_topic is fixed.
+        imu_topic: sensor_msgs/Imu topic.
+        imu_timeout: an IMU sample older than this is not used [s].
+        odom_frame: frame of the odometry pose.
+        base_frame: child frame (the robot).
+        publish_tf: broadcast odom -> base_frame on /tf (where tf2_ros is available).
+        publish_rate: rate of /chassis_state and /odom [Hz].
+    """
+
+    kinematics: Kinematics
+    wheel_joints: tuple[str, ...]
+    wheels: WheelKinematics
+    max_wheel_speed: float
+    wheel_gains: PidGains
+    wheel_feedback_timeout: float
+    vel_cmd_timeout: float
+    yaw_joint: str
+    yaw_zero: float
+    modes: ChassisModeParams
+    linear_limits: RampLimits
+    angular_limits: RampLimits
+    power_model: ChassisPowerModel
+    power_limit: float
+    imu_mount: ImuMount
+    imu_topic: str
+    imu_timeout: float
+    odom_frame: str
+    base_frame: str
+    publish_tf: bool
+    publish_rate: float
+
+
+def _wheels(p: PluginParams, kind: Kinematics, joints: tuple[str, ...]) -> WheelKinematics:
+    radius = p.double('wheel_radius', description='wheel radius', unit='m', gt=0.0)
+    if kind is Kinematics.MECANUM:
+        if len(joints) != 4:
+            raise ParameterError(
+                f'{_where(p)}: parameter {p.key("wheel_joints")!r} must name 4 wheels in the '
+                f'order FL, FR, RL, RR for mecanum, got {len(joints)}',
+                plugin=p.plugin, key=p.key('wheel_joints'),
+            )
+        wheelbase = p.double(
+            'wheelbase', description='distance between front and rear axles', unit='m', gt=0.0
+        )
+        track = p.double(
+            'track', description='distance between left and right wheel centres', unit='m',
+            gt=0.0,
+        )
+        signs = p.integer_array(
+            'roller_signs', list(MECANUM_ROLLER_SIGNS),
+            description='sign of each roller angle, FL, FR, RL, RR (X layout: -1, 1, 1, -1)',
+            length=4, ge=-1, le=1,
+        )
+        if 0 in signs:
+            raise ParameterError(
+                f'{_where(p)}: parameter {p.key("roller_signs")!r} entries must be 1 or -1, '
+                f'got {list(signs)}',
+                plugin=p.plugin, key=p.key('roller_signs'),
+            )
+        wheels = mecanum_wheels(wheelbase, track, radius, signs)
+    else:
+        angles = p.double_array(
+            'mounting_angles',
+            description='angle of each wheel position from base x, in wheel_joints order',
+            unit='rad',
+        )
+        if len(angles) != len(joints):
+            raise ParameterError(
+                f'{_where(p)}: parameter {p.key("mounting_angles")!r} has {len(angles)} '
+                f'entries but wheel_joints names {len(joints)} wheels',
+                plugin=p.plugin, key=p.key('mounting_angles'),
+            )
+        distance = p.double(
+            'centre_distance', description='distance from the base origin to each wheel centre',
+            unit='m', gt=0.0,
+        )
+        wheels = omni_wheels(angles, distance, radius)
+    return WheelKinematics(wheels)
+
+
+def _ramp(p: PluginParams, axis: str, unit: str, defaults: tuple[float, ...]) -> RampLimits:
+    launch, normal, brake, launch_speed = defaults
+    return RampLimits(
+        launch_acceleration=p.double(
+            f'ramp.{axis}.launch_acceleration', launch,
+            description=f'{axis} acceleration limit from standstill (below launch_speed)',
+            unit=f'{unit}/s', gt=0.0,
+        ),
+        normal_acceleration=p.double(
+            f'ramp.{axis}.normal_acceleration', normal,
+            description=f'{axis} acceleration limit when already moving', unit=f'{unit}/s',
+            gt=0.0,
+        ),
+        brake_acceleration=p.double(
+            f'ramp.{axis}.brake_acceleration', brake,
+            description=f'{axis} deceleration limit (slowing down, reversing, no /vel_cmd)',
+            unit=f'{unit}/s', gt=0.0,
+        ),
+        launch_speed=p.double(
+            f'ramp.{axis}.launch_speed', launch_speed,
+            description=f'{axis} speed below which the launch limit applies', unit=unit, ge=0.0,
+        ),
+    )
+
+
+def _pid(p: PluginParams, group: str, unit_in: str, unit_out: str, *, angle: bool,
+         defaults: dict[str, float]) -> PidGains:
+    def number(key: str, description: str, unit: str, **bounds: float) -> float:
+        return p.double(f'{group}.{key}', defaults[key], description=description, unit=unit,
+                        **bounds)
+
+    return PidGains(
+        kp=number('kp', f'{group} proportional gain', f'{unit_out}/({unit_in})', ge=0.0),
+        ki=number('ki', f'{group} integral gain', f'{unit_out}/({unit_in}*s)', ge=0.0),
+        kd=number('kd', f'{group} derivative gain', f'{unit_out}/({unit_in}/s)', ge=0.0),
+        output_limit=number('output_limit', f'{group} output limit', unit_out, gt=0.0),
+        integral_limit=number('integral_limit', f'{group} integral term limit', unit_out,
+                              ge=0.0),
+        integral_separation=number(
+            'integral_separation', f'{group}: integrate only while |error| is below this',
+            unit_in, gt=0.0,
+        ),
+        angle_mode=angle,
+    )
+
+
+def _where(p: PluginParams) -> str:
+    kind = f' ({p.plugin_type})' if p.plugin_type else ''
+    return f"plugin '{p.plugin}'{kind}"
+
+
+def read_config(p: PluginParams) -> ChassisConfig:
+    """Declare and read every StandChassis parameter.
+
+    Raises:
+        ParameterError: a parameter is missing, of the wrong type or out of range; the
+            message names the plugin, the key and the expected unit.
+        PluginConfigError: the values do not fit together (e.g. the wheel count).
+    """
+    kind = p.choice('kinematics', Kinematics, description='wheel layout: mecanum or omni')
+    joints = p.string_array(
+        'wheel_joints',
+        description='wheel joint names; mecanum: FL, FR, RL, RR; omni: as mounting_angles',
+        unique=True,
+    )
+    wheels = _wheels(p, kind, joints)
+    max_wheel_speed = p.double(
+        'max_wheel_speed', description='largest wheel speed target', unit='rad/s', gt=0.0
+    )
+    wheel_gains = _pid(
+        p, 'wheel_pid', 'rad/s', 'N*m', angle=False,
+        defaults={'kp': 0.6, 'ki': 4.0, 'kd': 0.0, 'output_limit': 4.0,
+                  'integral_limit': 1.5, 'integral_separation': 5.0},
+    )
+    follow_gains = _pid(
+        p, 'follow.pid', 'rad', 'rad/s', angle=True,
+        defaults={'kp': 6.0, 'ki': 0.0, 'kd': 0.3, 'output_limit': 8.0,
+                  'integral_limit': 1.0, 'integral_separation': 0.3},
+    )
+    follow = FollowParams(
+        follow_gains,
+        p.double('follow.offset', 0.0,
+                 description='yaw joint angle held in FOLLOW (gimbal left of chassis > 0)',
+                 unit='rad', ge=-math.pi, le=math.pi),
+    )
+    twist = TwistParams(
+        p.double('twist.amplitude', 0.6,
+                 description='TWIST swing either side of the gimbal heading', unit='rad',
+                 ge=0.0, lt=math.pi),
+        p.double('twist.period', 1.2, description='TWIST period of one full swing', unit='s',
+                 gt=0.0),
+        p.choice('twist.waveform', TwistWaveform, TwistWaveform.SINE,
+                 description='TWIST wave: sine or triangle'),
+    )
+    spin = p.double('gyro.spin_rate', 6.0,
+                    description='GYRO spin rate at standstill (> 0 counter-clockwise)',
+                    unit='rad/s')
+    gyro = GyroParams(
+        spin,
+        p.double('gyro.translating_spin_rate', abs(spin),
+                 description='GYRO |spin rate| once translating at gyro.translating_speed',
+                 unit='rad/s', ge=0.0),
+        p.double('gyro.translating_speed', 1.0,
+                 description='translation speed at which GYRO spins at translating_spin_rate',
+                 unit='m/s', gt=0.0),
+    )
+    modes = ChassisModeParams(
+        follow, twist, gyro,
+        latency_s=p.double('latency', 0.01,
+                           description='command-to-wheel latency the gimbal-frame rotation '
+                           'looks ahead by', unit='s', ge=0.0, le=0.5),
+    )
+    try:
+        power_model = ChassisPowerModel(
+            k1=p.double('power.k1', 2.96,
+                        description='copper-loss coefficient per wheel motor', unit='W/(N*m)^2',
+                        ge=0.0),
+            k2=p.double('power.k2', 3.08e-3,
+                        description='speed-loss coefficient per wheel motor', unit='W/(rad/s)^2',
+                        ge=0.0),
+            static_power_w=p.double('power.static_power', 2.8,
+                                    description='chassis rail power at rest', unit='W', ge=0.0),
+        )
+    except ConfigError as err:  # the bounds above make this unreachable; keep one line
+        raise ParameterError(f'{_where(p)}: {err}', plugin=p.plugin) from err
+    return ChassisConfig(
+        kinematics=kind,
+        wheel_joints=joints,
+        wheels=wheels,
+        max_wheel_speed=max_wheel_speed,
+        wheel_gains=wheel_gains,
+        wheel_feedback_timeout=p.double(
+            'wheel_feedback_timeout', 0.1,
+            description='wheel feedback older than this counts as missing', unit='s', gt=0.0),
+        vel_cmd_timeout=p.double(
+            'vel_cmd_timeout', 0.25,
+            description='/vel_cmd older than this: translation brakes to zero', unit='s',
+            gt=0.0),
+        yaw_joint=p.string('yaw_joint', 'yaw',
+                           description='gimbal yaw joint (its angle is the gimbal heading '
+                           'relative to the chassis)'),
+        yaw_zero=p.double('yaw_zero', 0.0,
+                          description='yaw joint position with the gimbal along chassis x',
+                          unit='rad'),
+        modes=modes,
+        linear_limits=_ramp(p, 'linear', 'm/s', (4.0, 6.0, 8.0, 0.3)),
+        angular_limits=_ramp(p, 'angular', 'rad/s', (15.0, 20.0, 30.0, 1.0)),
+        power_model=power_model,
+        power_limit=p.double('power.default_limit', 60.0,
+                             description='chassis power limit when /chassis_cmd gives none',
+                             unit='W', gt=0.0),
+        imu_mount=p.choice('imu.mount', ImuMount, ImuMount.GIMBAL,
+                           description='body the IMU is fixed to: gimbal, chassis or none'),
+        imu_topic=p.string('imu.topic', 'imu', description='sensor_msgs/Imu topic'),
+        imu_timeout=p.double('imu.timeout', 0.1,
+                             description='IMU samples older than this are not used', unit='s',
+                             gt=0.0),
+        odom_frame=p.string('odom.frame_id', 'odom', description='odometry frame'),
+        base_frame=p.string('odom.child_frame_id', 'base_link', description='robot frame'),
+        publish_tf=p.boolean('odom.publish_tf', True,
+                             description='broadcast odom -> base_link on /tf'),
+        publish_rate=p.double('publish_rate', 100.0,
+                              description='rate of /chassis_state and /odom', unit='Hz',
+                              gt=0.0),
+    )

@@ -1,0 +1,500 @@
+"""StandChassis: a mecanum/omni chassis with PASSIVE, RAW, FOLLOW, TWIST and GYRO states.
+
+Inputs
+    /chassis_cmd (rm_msgs/ChassisCmd): the state, acceleration limits, power limit and
+        follow source. Watched: without a command for ``command_timeout`` the framework
+        puts the chassis in PASSIVE.
+    /vel_cmd (geometry_msgs/Twist): vx, vy [m/s] and (RAW only) wz [rad/s]. Not watched:
+        without one for ``vel_cmd_timeout`` the translation brakes to zero on the brake
+        ramp, in whatever state the chassis is.
+    /actuator_states: wheel speeds and the gimbal yaw joint angle (``yaw_joint``).
+    /imu (sensor_msgs/Imu, optional): the odometry yaw, and the gimbal's yaw rate that
+        FOLLOW feeds forward.
+
+Outputs
+    /actuator_cmd: MODE_EFFORT on every wheel while active, MODE_OFF in PASSIVE.
+    /chassis_state (rm_msgs/ChassisState) and /odom (nav_msgs/Odometry, odom -> base_link,
+        twist in base_link) at ``publish_rate``; odom -> base_link on /tf where tf2_ros
+        imports.
+
+States (values = ChassisCmd mode constants), all decided in ``_decide``:
+    PASSIVE: commanded; or no valid /chassis_cmd (watchdog); or a wheel (or, in a mode
+        that follows the gimbal, the yaw joint) without fresh feedback. Wheels get MODE_OFF.
+    RAW, FOLLOW, TWIST, GYRO: as commanded, see ``rm_base.control.chassis_modes``.
+
+An invalid /chassis_cmd (unknown mode or follow source, NaN) is rejected with a log line
+and changes nothing: the chassis keeps acting on the last valid command until that one is
+``command_timeout`` old, then falls back to PASSIVE. Staying is safer than an immediate
+PASSIVE on a moving robot (limp wheels coast with no braking at all), and a sender that
+sends only bad commands still ends in PASSIVE within the timeout.
+
+The wheels are driven in effort mode: the speed PIDs and the power limit run here (see
+``wheels``), because only where the torques are computed can they be scaled to the power
+limit, as RoboMaster firmware does on the MCU. Run the plugin fast (500 Hz) and keep the
+bridge's /actuator_states rate high: the speed loops close over it. If the plugin stalls
+the bridge's own command timeout (100 ms) zeroes the wheels.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from collections.abc import Sequence
+from typing import Any, NamedTuple
+
+from geometry_msgs.msg import TransformStamped, Twist
+from nav_msgs.msg import Odometry as OdometryMsg
+from rclpy.qos import qos_profile_sensor_data
+from rm_base.control import ChassisMotionMode
+from rm_base.errors import InputRejectedError
+from rm_base.geometry import Twist2D, quaternion_from_yaw, wrap_to_pi, yaw_from_quaternion
+from rm_base.plugin import JointTarget, PluginBase
+from rm_base.plugin.commands import stamp_ns_of
+from sensor_msgs.msg import Imu
+
+from rm_msgs.msg import ChassisCmd, ChassisState
+from rm_plugins.chassis.commands import (
+    ChassisMode,
+    ChassisRequest,
+    FollowSource,
+    parse_chassis_cmd,
+    parse_vel_cmd,
+)
+from rm_plugins.chassis.config import ChassisConfig, ImuMount, read_config
+from rm_plugins.chassis.motion import MotionPlanner
+from rm_plugins.chassis.odometry import Odometry
+from rm_plugins.chassis.wheels import WheelSpeedController
+
+_NS_PER_S = 1_000_000_000
+_LOG_PERIOD_NS = _NS_PER_S  # at most one line per second per kind of rejected input
+# Largest time difference between an IMU sample and the yaw joint sample over which the
+# joint angle is extrapolated to the IMU's time [s].
+_MAX_EXTRAPOLATION_S = 0.05
+
+_MOTION_MODES = {
+    ChassisMode.RAW: ChassisMotionMode.RAW,
+    ChassisMode.FOLLOW: ChassisMotionMode.FOLLOW,
+    ChassisMode.TWIST: ChassisMotionMode.TWIST,
+    ChassisMode.GYRO: ChassisMotionMode.GYRO,
+}
+
+# Odometry covariances (diagonal, x y z roll pitch yaw): planar, so z/roll/pitch are
+# "unknown" (large). Wheel odometry drifts; these are typical for mecanum on carpet.
+_POSE_COVARIANCE = (1e-3, 1e-3, 1e6, 1e6, 1e6, 1e-2)
+_TWIST_COVARIANCE = (1e-3, 1e-3, 1e6, 1e6, 1e6, 1e-2)
+
+
+class _Decision(NamedTuple):
+    """The state for this tick, why, and the request to act on (None in PASSIVE)."""
+
+    state: ChassisMode
+    reason: str
+    request: ChassisRequest | None
+
+
+class _Throttle:
+    """One log line per period; counts the ones held back."""
+
+    def __init__(self) -> None:
+        self._next_ns = 0
+        self._held = 0
+
+    def due(self, now_ns: int) -> str | None:
+        if now_ns < self._next_ns:
+            self._held += 1
+            return None
+        self._next_ns = now_ns + _LOG_PERIOD_NS
+        held, self._held = self._held, 0
+        return f' ({held} more since the last report)' if held else ''
+
+
+class _LatestImu:
+    """The newest sensor_msgs/Imu with its receive time, shared by two threads."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._sample: tuple[Any, int] | None = None
+
+    def put(self, msg: Any, receive_ns: int) -> None:
+        with self._lock:
+            self._sample = (msg, receive_ns)
+
+    def get(self) -> tuple[Any, int] | None:
+        with self._lock:
+            return self._sample
+
+
+class StandChassis(PluginBase):
+    """Mecanum/omni chassis; see the module docstring. Parameters: ``config.read_config``."""
+
+    State = ChassisMode
+
+    # -- hooks --------------------------------------------------------------------------
+
+    def on_init(self) -> None:
+        """Read the parameters, claim the wheels, subscribe, create publishers."""
+        cfg: ChassisConfig = read_config(self.params)
+        self.config = cfg
+        self.claim_joints(cfg.wheel_joints)
+        self._chassis_cmd = self.subscribe_command('chassis_cmd', ChassisCmd)
+        self._vel_cmd = self.subscribe_command(
+            'vel_cmd', Twist, timeout=cfg.vel_cmd_timeout, watchdog=False
+        )
+        self._planner = MotionPlanner(
+            cfg.wheels, cfg.modes, cfg.linear_limits, cfg.angular_limits, cfg.max_wheel_speed
+        )
+        self._drive = WheelSpeedController(len(cfg.wheel_joints), cfg.wheel_gains, cfg.power_model)
+        self._odometry = Odometry(cfg.wheels)
+        self._imu = _LatestImu()
+        if cfg.imu_mount is not ImuMount.NONE:
+            clock = self.node.get_clock()
+            # Sensor QoS (best effort, keep last): an old IMU sample is worthless.
+            self.node.create_subscription(
+                Imu, cfg.imu_topic,
+                lambda msg: self._imu.put(msg, clock.now().nanoseconds),
+                qos_profile_sensor_data,
+            )
+        self._chassis_state_pub = self.node.create_publisher(ChassisState, 'chassis_state', 10)
+        self._odom_pub = self.node.create_publisher(OdometryMsg, 'odom', 10)
+        self._tf = self._make_tf_broadcaster() if cfg.publish_tf else None
+        self._publish_period_ns = round(_NS_PER_S / cfg.publish_rate)
+        self._next_publish_ns = 0
+        self._last_odom_ns: int | None = None
+        self._throttles = {kind: _Throttle() for kind in ('chassis_cmd', 'vel_cmd', 'imu')}
+        self._report = _Report(len(cfg.wheel_joints))
+        self.on_reset()
+
+    def on_reset(self) -> None:
+        """Forget commands, ramps and PIDs (not the odometry: the pose stays continuous)."""
+        # Commands: never act on one from before the reset.
+        self._last_cmd_msg: Any = None
+        self._request: ChassisRequest | None = None
+        self._request_ns = 0
+        self._last_vel_msg: Any = None
+        self._vel = (0.0, 0.0, 0.0)
+        self._vel_ns: int | None = None
+        # Control: restarted from the measured motion when a motion state is entered.
+        self._active = False
+        self._held_heading: float | None = None
+        self._drive.reset()
+        self._planner.reset()
+
+    def update(self, now: Any, dt: float) -> None:
+        """One tick: feedback and odometry, the state, then the wheels and the reports."""
+        now_ns = now.nanoseconds
+        speeds, wheel_problem = self._wheel_speeds(now_ns)
+        self._update_odometry(now_ns, speeds)
+        decision = self._decide(now_ns, wheel_problem)
+        if decision.request is None or speeds is None:
+            self._passive(decision.state, decision.reason, speeds)
+        else:
+            self._drive_wheels(now_ns, dt, decision, speeds)
+        self._maybe_publish(now_ns)
+
+    def on_command_lost(self, now: Any, dt: float) -> None:
+        """Zero output while /chassis_cmd is missing; odometry and reports go on."""
+        # The framework has gone to PASSIVE with the watchdog's reason and reset us.
+        now_ns = now.nanoseconds
+        speeds, _ = self._wheel_speeds(now_ns)
+        self._update_odometry(now_ns, speeds)
+        self._passive(None, '', speeds)
+        self._maybe_publish(now_ns)
+
+    # -- commands -----------------------------------------------------------------------
+
+    def _take_chassis_cmd(self, now_ns: int) -> None:
+        msg = self._chassis_cmd.latest(now_ns)
+        if msg is None or msg is self._last_cmd_msg:
+            return
+        self._last_cmd_msg = msg
+        try:
+            request = parse_chassis_cmd(msg)
+        except InputRejectedError as err:
+            more = self._throttles['chassis_cmd'].due(now_ns)
+            if more is not None:
+                self.logger.warning(
+                    f'rejected /chassis_cmd: {err}; keeping {self.state.name} until the last '
+                    f'valid command times out{more}'
+                )
+            return
+        self._request = request
+        self._request_ns = stamp_ns_of(msg) or now_ns
+
+    def _take_vel_cmd(self, now_ns: int) -> tuple[float, float, float]:
+        msg = self._vel_cmd.latest(now_ns)
+        if msg is not None and msg is not self._last_vel_msg:
+            self._last_vel_msg = msg
+            try:
+                self._vel = parse_vel_cmd(msg)
+                self._vel_ns = now_ns
+            except InputRejectedError as err:
+                more = self._throttles['vel_cmd'].due(now_ns)
+                if more is not None:
+                    self.logger.warning(f'rejected /vel_cmd: {err}{more}')
+        timeout_ns = self.config.vel_cmd_timeout * _NS_PER_S
+        if self._vel_ns is None or now_ns - self._vel_ns > timeout_ns:
+            return (0.0, 0.0, 0.0)  # brake to a stop on the ramp, not PASSIVE
+        return self._vel
+
+    def _decide(self, now_ns: int, wheel_problem: str | None) -> _Decision:
+        """Return the state, its reason, and the request to act on (None: PASSIVE)."""
+        self._take_chassis_cmd(now_ns)
+        request = self._request
+        if request is not None and now_ns - self._request_ns > self.command_timeout * _NS_PER_S:
+            self._request = request = None
+        if request is None:
+            return _Decision(
+                ChassisMode.PASSIVE, 'no valid /chassis_cmd within command_timeout', None
+            )
+        if request.mode is ChassisMode.PASSIVE:
+            return _Decision(ChassisMode.PASSIVE, 'commanded PASSIVE', None)
+        if wheel_problem is not None:
+            return _Decision(ChassisMode.PASSIVE, wheel_problem, None)
+        if request.mode is not ChassisMode.RAW and request.source is FollowSource.GIMBAL:
+            if self._yaw_joint_state(now_ns) is None:
+                return _Decision(
+                    ChassisMode.PASSIVE,
+                    f"{request.mode.name} needs the gimbal heading, but yaw joint "
+                    f"'{self.config.yaw_joint}' has no fresh feedback",
+                    None,
+                )
+        reason = f'commanded {request.mode.name}'
+        if request.mode is not ChassisMode.RAW and request.source is FollowSource.BASE_LINK:
+            reason += ' (follow source base_link)'
+        return _Decision(request.mode, reason, request)
+
+    # -- feedback -----------------------------------------------------------------------
+
+    def _fresh(self, joint: str, now_ns: int) -> Any:
+        state = self.joint_states.get(joint)
+        timeout_ns = self.config.wheel_feedback_timeout * _NS_PER_S
+        if state is None or not state.online or now_ns - state.stamp_ns > timeout_ns:
+            return None
+        return state
+
+    def _wheel_speeds(self, now_ns: int) -> tuple[list[float] | None, str | None]:
+        speeds = []
+        for joint in self.config.wheel_joints:
+            state = self._fresh(joint, now_ns)
+            if state is None:
+                return None, f"wheel '{joint}' has no fresh feedback (offline or stale)"
+            speeds.append(state.velocity)
+        return speeds, None
+
+    def _yaw_joint_state(self, now_ns: int) -> Any:
+        return self._fresh(self.config.yaw_joint, now_ns)
+
+    def _imu_sample(self, now_ns: int) -> tuple[Any, int] | None:
+        """Return the newest IMU message and its stamp [ns] if fresh and usable."""
+        sample = self._imu.get()
+        if sample is None:
+            return None
+        msg, receive_ns = sample
+        stamp_ns = stamp_ns_of(msg) or receive_ns
+        if abs(now_ns - stamp_ns) > self.config.imu_timeout * _NS_PER_S:
+            return None
+        if msg.orientation_covariance[0] == -1.0:  # REP 145: no orientation estimate
+            return None
+        return msg, stamp_ns
+
+    def _imu_chassis_yaw(self, now_ns: int) -> float | None:
+        """Chassis yaw from the IMU (any reference heading) [rad], or None."""
+        sample = self._imu_sample(now_ns)
+        if sample is None:
+            return None
+        msg, stamp_ns = sample
+        q = msg.orientation
+        try:
+            yaw = yaw_from_quaternion((q.x, q.y, q.z, q.w))
+        except InputRejectedError as err:
+            more = self._throttles['imu'].due(now_ns)
+            if more is not None:
+                self.logger.warning(f'ignored /imu orientation: {err}{more}')
+            return None
+        if self.config.imu_mount is ImuMount.CHASSIS:
+            return yaw
+        joint = self._yaw_joint_state(now_ns)
+        if joint is None:
+            return None
+        # The joint angle at the IMU's sample time: at 8 rad/s of spin 5 ms is 0.04 rad.
+        lag_s = max(-_MAX_EXTRAPOLATION_S,
+                    min(_MAX_EXTRAPOLATION_S, (stamp_ns - joint.stamp_ns) / _NS_PER_S))
+        return yaw - (joint.position - self.config.yaw_zero + joint.velocity * lag_s)
+
+    def _gimbal_world_yaw_rate(self, now_ns: int, phi_rate: float) -> float:
+        """Yaw rate of the gimbal in the world [rad/s] (FOLLOW's feed-forward)."""
+        sample = self._imu_sample(now_ns) if self.config.imu_mount is ImuMount.GIMBAL else None
+        if sample is not None:
+            msg = sample[0]
+            q, w = msg.orientation, msg.angular_velocity
+            # z row of the body -> world rotation: the world z part of the body rate.
+            return (
+                2.0 * (q.x * q.z - q.w * q.y) * w.x
+                + 2.0 * (q.y * q.z + q.w * q.x) * w.y
+                + (1.0 - 2.0 * (q.x * q.x + q.y * q.y)) * w.z
+            )
+        return self._odometry.twist.wz + phi_rate
+
+    def _update_odometry(self, now_ns: int, speeds: Sequence[float] | None) -> None:
+        last, self._last_odom_ns = self._last_odom_ns, now_ns
+        if speeds is None or last is None:
+            return  # no wheel speeds: hold the pose
+        dt = max(0.0, (now_ns - last) / _NS_PER_S)
+        yaw = None if self.config.imu_mount is ImuMount.NONE else self._imu_chassis_yaw(now_ns)
+        self._odometry.update(speeds, dt, yaw)
+
+    # -- actuation ----------------------------------------------------------------------
+
+    def _passive(self, state: ChassisMode | None, reason: str, speeds: Any) -> None:
+        if state is not None:
+            self.transition(state, reason)
+        self.zero_output()
+        if self._active:
+            self._active = False
+            self._held_heading = None
+        count = len(self.config.wheel_joints)
+        self._report.set_output(
+            Twist2D(), [0.0] * count, [0.0] * count,
+            self._drive.idle_power(speeds) if speeds is not None else 0.0,
+            self.config.power_limit if self._request is None or self._request.power_limit is None
+            else self._request.power_limit,
+        )
+        self._report.speeds = speeds
+
+    def _drive_wheels(
+        self, now_ns: int, dt: float, decision: _Decision, speeds: list[float]
+    ) -> None:
+        request = decision.request
+        self.transition(decision.state, decision.reason)
+        if not self._active:
+            # Take over from the measured motion (the chassis may still be rolling).
+            self._planner.reset(self._odometry.twist)
+            self._drive.reset()
+            self._active = True
+        command = self._take_vel_cmd(now_ns)
+        mode = _MOTION_MODES[request.mode]
+        if mode is ChassisMotionMode.RAW:
+            self._held_heading = None
+            frame: Any = 'base_link'
+            phi = phi_rate = gimbal_rate = 0.0
+        elif request.source is FollowSource.GIMBAL:
+            self._held_heading = None
+            joint = self._yaw_joint_state(now_ns)
+            frame = 'gimbal'
+            phi = wrap_to_pi(joint.position - self.config.yaw_zero)
+            phi_rate = joint.velocity
+            gimbal_rate = self._gimbal_world_yaw_rate(now_ns, phi_rate)
+        else:
+            yaw = self._odometry.pose.yaw
+            if self._held_heading is None:
+                self._held_heading = yaw  # the robot's heading now is the one to follow
+            frame = ('held', self._held_heading)
+            phi = wrap_to_pi(self._held_heading - yaw)
+            phi_rate = -self._odometry.twist.wz
+            gimbal_rate = 0.0
+        motion = self._planner.update(
+            mode, frame, command, dt, accel=request.accel,
+            yaw_joint=phi, yaw_joint_rate=phi_rate, gimbal_yaw_rate=gimbal_rate,
+        )
+        limit = self.config.power_limit if request.power_limit is None else request.power_limit
+        wheels = self._drive.update(motion.wheel_targets, speeds, dt, limit)
+        self.send_joint_targets({
+            joint: JointTarget.with_effort(effort)
+            for joint, effort in zip(self.config.wheel_joints, wheels.efforts, strict=True)
+        })
+        self._report.set_output(motion.twist, motion.wheel_targets, wheels.efforts,
+                                wheels.power_w, limit)
+        self._report.speeds = speeds
+
+    # -- reports ------------------------------------------------------------------------
+
+    def _maybe_publish(self, now_ns: int) -> None:
+        if now_ns < self._next_publish_ns:
+            return
+        self._next_publish_ns = max(self._next_publish_ns + self._publish_period_ns, now_ns)
+        stamp = self.node.get_clock().now().to_msg()
+        self._publish_state(stamp)
+        self._publish_odometry(stamp)
+
+    def _publish_state(self, stamp: Any) -> None:
+        cfg, report = self.config, self._report
+        state, reason = self.state, self.reason
+        msg = ChassisState()
+        msg.header.stamp = stamp
+        msg.header.frame_id = cfg.base_frame
+        msg.state = int(state.value)
+        msg.reason = reason
+        _set_twist(msg.cmd_vel, report.twist)
+        _set_twist(msg.measured_vel, self._odometry.twist)
+        msg.wheel_name = list(cfg.wheel_joints)
+        msg.wheel_target = [float(v) for v in report.targets]
+        msg.wheel_speed = (
+            [float(v) for v in report.speeds] if report.speeds is not None
+            else [math.nan] * len(cfg.wheel_joints)
+        )
+        msg.power = float(report.power_w)
+        msg.power_limit = float(report.power_limit_w)
+        self._chassis_state_pub.publish(msg)
+
+    def _publish_odometry(self, stamp: Any) -> None:
+        cfg = self.config
+        pose, twist = self._odometry.pose, self._odometry.twist
+        q = quaternion_from_yaw(pose.yaw)
+        msg = OdometryMsg()
+        msg.header.stamp = stamp
+        msg.header.frame_id = cfg.odom_frame
+        msg.child_frame_id = cfg.base_frame
+        msg.pose.pose.position.x = pose.x
+        msg.pose.pose.position.y = pose.y
+        msg.pose.pose.orientation.x = q.x
+        msg.pose.pose.orientation.y = q.y
+        msg.pose.pose.orientation.z = q.z
+        msg.pose.pose.orientation.w = q.w
+        _set_twist(msg.twist.twist, twist)
+        for i, value in enumerate(_POSE_COVARIANCE):
+            msg.pose.covariance[7 * i] = value
+        for i, value in enumerate(_TWIST_COVARIANCE):
+            msg.twist.covariance[7 * i] = value
+        self._odom_pub.publish(msg)
+        if self._tf is not None:
+            tf = TransformStamped()
+            tf.header = msg.header
+            tf.child_frame_id = cfg.base_frame
+            tf.transform.translation.x = pose.x
+            tf.transform.translation.y = pose.y
+            tf.transform.rotation = msg.pose.pose.orientation
+            self._tf.sendTransform(tf)
+
+    def _make_tf_broadcaster(self) -> Any:
+        try:
+            from tf2_ros import TransformBroadcaster
+        except ImportError as err:
+            self.logger.info(
+                f'tf2_ros is not importable here ({err}): /odom is published, the '
+                f'{self.config.odom_frame} -> {self.config.base_frame} TF is not'
+            )
+            return None
+        return TransformBroadcaster(self.node)
+
+
+class _Report:
+    """What the last tick commanded, for /chassis_state."""
+
+    def __init__(self, count: int) -> None:
+        self.twist = Twist2D()
+        self.targets: Sequence[float] = [0.0] * count
+        self.efforts: Sequence[float] = [0.0] * count
+        self.speeds: Sequence[float] | None = None
+        self.power_w = 0.0
+        self.power_limit_w = 0.0
+
+    def set_output(self, twist: Twist2D, targets: Sequence[float], efforts: Sequence[float],
+                   power_w: float, power_limit_w: float) -> None:
+        self.twist, self.targets, self.efforts = twist, targets, efforts
+        self.power_w, self.power_limit_w = power_w, power_limit_w
+
+
+def _set_twist(out: Any, twist: Twist2D) -> None:
+    out.linear.x = float(twist.vx)
+    out.linear.y = float(twist.vy)
+    out.angular.z = float(twist.wz)
