@@ -21,6 +21,7 @@ from typing import Any
 
 from rm_base.bridge.errors import BridgeConfigError
 from rm_base.bridge.params import SimSettings
+from rm_base.hardware import ACTUATOR_TYPES
 from rm_base.hardware.config import HardwareConfig, JointConfig
 
 #: Hardware joint type -> (simulated motor type, extra device keys).
@@ -61,9 +62,16 @@ def motor_config(joint: JointConfig, overrides: Mapping[str, Any] | None = None)
     """The simulated motor (``rm_base.sim.device_from_config`` dict) for one joint.
 
     Raises:
-        BridgeConfigError: the joint's type has no simulated model and no ``sim.type``.
+        BridgeConfigError: the joint's type is unknown, or has no simulated model and no
+            ``sim.type``.
     """
     overrides = dict(overrides or {})
+    if joint.type not in ACTUATOR_TYPES:
+        # the hardware layer's own message, before the simulator's would hide a typo
+        raise BridgeConfigError(
+            f'joints.{joint.name}.type {joint.type!r} is unknown; known: '
+            f'{", ".join(sorted(ACTUATOR_TYPES))}'
+        )
     if joint.type == 'damiao':
         sim_type, extra = _damiao_type(joint)
     elif joint.type in _SIM_TYPES:

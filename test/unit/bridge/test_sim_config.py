@@ -61,6 +61,11 @@ def test_when_a_type_has_no_simulated_model_expect_error_naming_the_joint():
         motor_config(joint('piper', 1))
 
 
+def test_when_a_type_is_unknown_expect_the_hardware_message_not_the_simulators():
+    with pytest.raises(BridgeConfigError, match=r"joints\.j\.type 'm3509' is unknown; known: "):
+        motor_config(joint('m3509'))
+
+
 def hardware(**buses):
     joints = {}
     for bus, motors in buses.items():
