@@ -26,7 +26,7 @@ from rm_base.bridge import CanBridgeNode
 from rm_base.errors import ConfigError
 from rm_base.hardware import MODE_OFF, MODE_VELOCITY
 from rm_base.hardware.protocols import dji
-from rm_base.sim import Fault, SimBus, find_channel
+from rm_base.sim import Fault, SimBus, Timing, find_channel
 from sensor_msgs.msg import JointState
 from std_srvs.srv import SetBool
 from support.ros import wait_until
@@ -358,6 +358,40 @@ def test_wrong_parameter_type_names_the_parameter(ros_context):
     ]
     with pytest.raises(ConfigError, match=r"parameter 'publish_rate' must be double \[Hz\]"):
         CanBridgeNode(context=ros_context, parameter_overrides=overrides)
+
+
+def test_sim_world_error_is_a_config_error_naming_the_group(ros_context):
+    params = {
+        'sim': True,
+        'buses.can0.channel': f'rm-bridge-bad-{uuid.uuid4().hex[:8]}',
+        **wheel(),
+        'sim.body.gimbal.yaw.motor': 'yaw',  # no joint of that name
+    }
+    overrides = [Parameter(k, value=v) for k, v in params.items()]
+    with pytest.raises(ConfigError, match=r"simulated world .*gimbal\.yaw names motor 'yaw'"):
+        CanBridgeNode(context=ros_context, parameter_overrides=overrides)
+
+
+def test_stepped_world_moves_only_when_stepped(ros_context):
+    params = {
+        'sim': True,
+        'sim.timing': 'stepped',
+        'buses.can0.channel': f'rm-bridge-stepped-{uuid.uuid4().hex[:8]}',
+        **wheel(),
+    }
+    bridge = CanBridgeNode(
+        context=ros_context, parameter_overrides=[Parameter(k, value=v) for k, v in params.items()]
+    )
+    try:
+        world = bridge.sim_world
+        assert world.timing is Timing.STEPPED and not world.running
+        actuator = bridge.hardware.actuators['wheel']
+        assert actuator.feedback is None  # a motor sends feedback only when the world ticks
+        world.step(5)
+        assert world.time_ns == 5 * 1_000_000
+        assert wait_until(lambda: actuator.feedback is not None, WAIT)
+    finally:
+        bridge.destroy_node()
 
 
 # --- safety: every fault ends with zero current on the wire, and the node runs on -----------

@@ -20,7 +20,7 @@ from std_srvs.srv import SetBool
 
 from rm_base.bridge.commands import parse_actuator_cmd
 from rm_base.bridge.diagnostics import CommandStats, DiagnosticsReporter
-from rm_base.bridge.errors import ActuatorCmdRejectedError, Rejection
+from rm_base.bridge.errors import ActuatorCmdRejectedError, BridgeConfigError, Rejection
 from rm_base.bridge.frames import FrameTap
 from rm_base.bridge.messages import (
     actuator_state_msg,
@@ -38,7 +38,7 @@ from rm_base.bridge.params import (
 from rm_base.bridge.sim_config import world_config
 from rm_base.hardware import CanHardware, CommandRejectedError
 from rm_base.plugin.params import PluginParams
-from rm_base.sim import Fault, FaultKind, SimError, SimWorld, Timing
+from rm_base.sim import Fault, FaultKind, SimConfigError, SimError, SimWorld, Timing
 from rm_msgs.msg import ActuatorCmd, ActuatorState, CanFrame
 
 NODE_NAME = 'can_bridge'
@@ -100,7 +100,6 @@ class CanBridgeNode(Node):
       MIT motors) before the buses close.
 
     Args:
-        bus_factory: builds the python-can buses (``can.Bus``; tests may wrap it).
         **kwargs: passed to ``rclpy.node.Node`` (``context``, ``parameter_overrides``...).
 
     Raises:
@@ -108,7 +107,7 @@ class CanBridgeNode(Node):
         BusError: a CAN log file cannot be opened.
     """
 
-    def __init__(self, *, bus_factory: Callable[..., can.BusABC] = can.Bus, **kwargs: Any):
+    def __init__(self, **kwargs: Any) -> None:
         # Bus and joint names are the robot config's own, so the parameters under buses.*
         # and joints.* cannot be declared one by one in advance.
         super().__init__(NODE_NAME, automatically_declare_parameters_from_overrides=True, **kwargs)
@@ -122,22 +121,29 @@ class CanBridgeNode(Node):
         self._accepted = 0
         self._rejected: dict[str, int] = {}
         self._last_rejection: str | None = None
+        self._frames_dropped_reported = 0
         try:
-            self._setup(bus_factory)
+            self._setup()
         except BaseException:
             self.shutdown()
             super().destroy_node()
             raise
 
     # --- set-up ------------------------------------------------------------------------
-    def _setup(self, bus_factory: Callable[..., can.BusABC]) -> None:
+    def _setup(self) -> None:
         self.settings = settings = self._read_parameters()
         hardware = dict(settings.hardware)
         if settings.sim is not None:
-            self.sim_world = SimWorld.from_config(
-                world_config(settings.hardware_config, settings.sim)
-            )
+            try:
+                self.sim_world = SimWorld.from_config(
+                    world_config(settings.hardware_config, settings.sim)
+                )
+            except SimConfigError as err:
+                raise BridgeConfigError(
+                    f'simulated world (sim.*, joints.<joint>.sim.*): {err}'
+                ) from err
             hardware = with_sim_world(hardware, self.sim_world)
+        bus_factory: Callable[..., can.BusABC] = can.Bus
         if settings.publish_frames:
             names = {(b.interface, str(b.channel)): b.name for b in settings.hardware_config.buses}
             self._frame_tap = FrameTap(names, bus_factory)
@@ -407,17 +413,19 @@ class CanBridgeNode(Node):
 
     def publish_frames(self) -> None:
         """Publish the frames seen since the last call on ~/frames."""
-        if self._frame_tap is None or self._frames_pub is None:
+        tap = self._frame_tap
+        if tap is None or self._frames_pub is None:
             return
-        for frame in self._frame_tap.drain():
+        for frame in tap.drain():
             self._frames_pub.publish(
                 can_frame_msg(frame.bus, frame.frame, frame.is_rx, time_msg(frame.stamp_ns))
             )
-
-    @property
-    def frames_dropped(self) -> int:
-        """Frames the ~/frames queue dropped because publishing fell behind."""
-        return self._frame_tap.dropped if self._frame_tap is not None else 0
+        if tap.dropped != self._frames_dropped_reported:
+            self._frames_dropped_reported = tap.dropped
+            self.get_logger().warning(
+                f'~/frames fell behind: {tap.dropped} frame(s) dropped so far',
+                throttle_duration_sec=_REJECT_LOG_PERIOD,
+            )
 
     def _run_publisher(self) -> None:
         state_period = round(1e9 / self.settings.publish_rate_hz)
