@@ -29,7 +29,7 @@ phi will have on average over that time::
     phi_used = phi + dphi/dt * (latency_s + dt / 2)
 
 with dphi/dt the measured yaw joint rate if given, else ``gimbal_yaw_rate - wz``. This
-matters in GYRO (at 10 rad/s and 25 ms the uncompensated path bends by 0.25 rad) and is
+matters in GYRO (at 10 rad/s and 25 ms an uncompensated path heads 0.25 rad off) and is
 negligible in FOLLOW, where phi barely moves; the same rule applies to every gimbal-frame
 mode. PASSIVE (motors limp) is not a motion mode: the plugin stops commanding instead.
 """
