@@ -63,8 +63,8 @@ _NAME_TOKEN = re.compile(r'[A-Za-z][A-Za-z0-9_]*')
 #   EventsExecutor timer                           8.7-9.6 %
 #   plain thread + idle EventsExecutor             6.7-8.8 %
 #   plain thread + idle SingleThreadedExecutor     7.7-10.3 %
-# The thread is as cheap as the best executor timer, keeps the 200 Hz cadence when
-# /actuator_cmd bursts occupy the executor, and works whichever executor spins the node
+# The thread is at least as cheap as the best executor timer, never waits behind
+# /actuator_cmd callbacks on the executor, and works whichever executor spins the node
 # (main() uses the EventsExecutor for the callbacks: 4x cheaper per message, ROS_WHEELS.md).
 
 # /actuator_cmd: reliable, as the plugins publish it; rm_robot waits for reliable readers
@@ -73,7 +73,7 @@ _COMMAND_QOS = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 _STATE_QOS_DEPTH = 10
 # ~/frames is a debug stream: a deeper history so a slow reader loses fewer frames.
 _FRAMES_QOS_DEPTH = 1000
-# Shortest time between two log lines of one kind of rejected command [s].
+# Shortest time between two log lines about rejected commands (or dropped frames) [s].
 _REJECT_LOG_PERIOD = 1.0
 
 
