@@ -1,0 +1,590 @@
+"""StandShooter: friction wheels and a trigger, from /shoot_cmd to shots."""
+
+from __future__ import annotations
+
+import threading
+from dataclasses import dataclass
+from typing import Any
+
+from rclpy.qos import qos_profile_sensor_data
+from rm_base.control import JamDetector, JamDetectorParams, LookupTable
+from rm_base.errors import InputRejectedError
+from rm_base.plugin import JointState, JointTarget, PluginBase
+
+from rm_msgs.msg import GpioState, ShootCmd, ShooterState
+from rm_plugins.shooter.command import (
+    ShootCommand,
+    ShooterConfig,
+    ShooterStage,
+    ShootMode,
+    parse_shoot_cmd,
+)
+
+COMMAND_TOPIC = 'shoot_cmd'
+STATE_TOPIC = 'shooter_state'
+GPIO_STATE_TOPIC = 'gpio_state'
+STATE_QOS_DEPTH = 10
+
+_NS_PER_S = 1_000_000_000
+_LOG_PERIOD_NS = _NS_PER_S  # at most one "rejected command" line a second
+_WAIT_FRICTION = 'waiting for the friction wheels to reach speed'
+
+S = ShooterStage
+
+
+class _SwitchInput:
+    """Latest value of one named pin from /gpio_state, handed from the executor thread.
+
+    Args:
+        pin: the pin's name.
+        timeout_ns: a value older than this is unknown [ns].
+        logger: told once if /gpio_state does not carry the pin.
+    """
+
+    def __init__(self, pin: str, timeout_ns: int, logger: Any) -> None:
+        self.pin = pin
+        self._timeout_ns = timeout_ns
+        self._logger = logger
+        self._lock = threading.Lock()
+        self._value: bool | None = None
+        self._stamp_ns = 0
+        self._reported_missing = False
+
+    def handle(self, msg: GpioState, receive_ns: int) -> None:
+        """Take one GpioState (executor thread)."""
+        names = list(msg.name)
+        if self.pin not in names:
+            if not self._reported_missing:
+                self._reported_missing = True
+                self._logger.warning(
+                    f'/gpio_state has no pin {self.pin!r} (pins: {", ".join(names) or "none"}); '
+                    'the limit switch stays unknown'
+                )
+            return
+        index = names.index(self.pin)
+        if index >= len(msg.value):
+            return
+        with self._lock:
+            self._value = msg.value[index] >= 0.5
+            self._stamp_ns = receive_ns
+
+    def read(self, now_ns: int) -> bool | None:
+        """Return whether the switch is closed, or None if unknown or too old."""
+        with self._lock:
+            value, stamp_ns = self._value, self._stamp_ns
+        if value is None or now_ns - stamp_ns > self._timeout_ns:
+            return None
+        return value
+
+
+@dataclass
+class _Burst:
+    """The burst being fired: shots left (None: continuous) and when the last step began."""
+
+    remaining: int | None
+    hz: float
+    last_step_ns: int | None = None
+
+
+class StandShooter(PluginBase):
+    """Friction-wheel shooter with a slotted trigger, a ball switch and jam recovery.
+
+    Topics:
+        shoot_cmd (rm_msgs/ShootCmd, in, watched): mode PASSIVE/READY/PUSH, bullet speed
+            [m/s], rate hz [shots/s], num (0 = continuous while PUSH), burst_id. A new
+            burst_id in PUSH starts a burst; the same command repeated never fires again.
+            An unknown mode, NaN/inf, speed <= 0 (READY/PUSH) or hz <= 0 (PUSH) is rejected
+            and logged; the last valid command stays in force until its own timeout.
+        gpio_state (rm_msgs/GpioState, in): the ball switch (``limit_switch``).
+        shooter_state (rm_msgs/ShooterState, out): at ``state_rate`` and on every change.
+
+    States (every transition in ``_advance``):
+        PASSIVE: all joints off. No valid command, mode PASSIVE, a joint without state, or
+            a fault (too many jams in a row: stays until a new burst_id or another mode).
+        FEED: friction wheels at the looked-up speed; trigger turning at ``feed_speed``
+            (velocity) until the switch reports a ball -> READY.
+        READY: trigger holding the position where the ball arrived. A burst (PUSH with a
+            new burst_id) -> PUSH.
+        PUSH: one slot step (position + 2*pi/slots) per shot, a step beginning at most
+            every 1/hz s and only with every friction wheel at speed (within
+            ``friction_tolerance``) and a ball at the switch (none -> FEED). A shot counts
+            when the trigger ends its step within ``step_tolerance``. Burst done -> READY.
+        BLOCK: jam (trigger effort high and speed low for a while, in FEED or PUSH): the
+            trigger turns back ``reverse_angle`` (position) until there or
+            ``block_timeout`` -> FEED. The step that jammed is not counted. After
+            ``jam_retries`` recoveries in which the trigger never got past the point where
+            it jammed (by a shot, or by feeding beyond it), the next jam gives up: PASSIVE
+            with ShooterState.fault.
+    """
+
+    State = ShooterStage
+    TRANSITIONS = {  # noqa: RUF012 (read-only table of the framework's)
+        S.PASSIVE: (S.FEED,),
+        S.FEED: (S.READY, S.BLOCK),
+        S.READY: (S.PUSH, S.FEED),
+        S.PUSH: (S.READY, S.FEED, S.BLOCK),
+        S.BLOCK: (S.FEED,),
+    }
+
+    # -- set-up -------------------------------------------------------------------------------
+
+    def on_init(self) -> None:
+        """Read the config, claim the joints, subscribe the topics."""
+        self.config = self._read_config()
+        cfg = self.config
+        self._trigger = cfg.trigger_joint
+        self._joints = self.claim_joints((*cfg.friction_joints, cfg.trigger_joint))
+        self._cmd_input = self.subscribe_command(COMMAND_TOPIC, ShootCmd)
+        self._switch = _SwitchInput(
+            cfg.limit_switch, round(cfg.switch_timeout * _NS_PER_S), self.logger
+        )
+        clock = self.node.get_clock()
+        self.node.create_subscription(
+            GpioState,
+            GPIO_STATE_TOPIC,
+            lambda msg: self._switch.handle(msg, clock.now().nanoseconds),
+            qos_profile_sensor_data,
+        )
+        self.state_pub = self.node.create_publisher(ShooterState, STATE_TOPIC, STATE_QOS_DEPTH)
+        self._state_period_ns = round(_NS_PER_S / cfg.state_rate)
+        self._detector = JamDetector(cfg.jam)
+        # Kept across resets: a command that returns after a dropout must not fire its burst
+        # again, and a fault holds until a new burst or mode.
+        self._shots_fired = 0
+        self._last_burst_id: int | None = None
+        self._last_mode: ShootMode | None = None
+        self._fault = False
+        self._fault_reason = ''
+        self._next_reject_log_ns = 0
+        self._last_published: tuple | None = None
+        self._next_publish_ns = 0
+        self.on_reset()
+
+    def on_reset(self) -> None:
+        """Forget the command, the burst, the trigger's targets and the jam timer."""
+        self._command: ShootCommand | None = None
+        self._command_stamp_ns = 0
+        self._last_msg: ShootCmd | None = None
+        self._rejection: str | None = None
+        self._burst: _Burst | None = None
+        self._jam_count = 0
+        self._attempts = 0  # BLOCK recoveries since the trigger last got past a jam
+        self._jam_position: float | None = None  # trigger position at the last jam [rad]
+        self._hold: float | None = None  # READY/PUSH: trigger position held [rad]
+        self._step_target: float | None = None  # PUSH: end of the step in progress [rad]
+        self._reverse_target = 0.0  # BLOCK [rad]
+        self._block_start_ns = 0
+        self._detector.reset()
+        self._friction_target = [0.0] * len(self.config.friction_joints)
+        self._friction_ready = False
+        self._speed = 0.0
+
+    def on_enable(self) -> None:
+        """A fault does not survive an explicit disable/enable."""
+        self._fault = False
+
+    def on_disable(self) -> None:
+        """A fault does not survive an explicit disable/enable."""
+        self._fault = False
+
+    # -- tick ---------------------------------------------------------------------------------
+
+    def update(self, now: Any, dt: float) -> None:
+        """Read the command, switch and joints; decide the state; send the targets."""
+        now_ns = now.nanoseconds
+        command = self._valid_command(now_ns)
+        if command is not None:
+            self._follow_command(command)
+        joints = self.joint_states.snapshot(self._joints)
+        self._advance(command, joints, self._switch.read(now_ns), now_ns, dt)
+        self._publish_state(now)
+
+    def on_command_lost(self, now: Any, dt: float) -> None:
+        """No command: joints off (the framework went PASSIVE); keep reporting the state."""
+        self.zero_output()
+        self._friction_ready = False
+        self._publish_state(now)
+
+    # -- commands -----------------------------------------------------------------------------
+
+    def _valid_command(self, now_ns: int) -> ShootCommand | None:
+        """Return the newest valid command still within its timeout, or None."""
+        msg = self._cmd_input.latest(now_ns)
+        if msg is not None and msg is not self._last_msg:
+            self._last_msg = msg
+            try:
+                command = parse_shoot_cmd(msg)
+            except InputRejectedError as err:
+                self._rejection = f'rejected /shoot_cmd: {err}'
+                self._log_rejection(self._rejection, now_ns)
+            else:
+                self._command = command
+                self._command_stamp_ns = self._cmd_input.stamp_ns() or now_ns
+                self._rejection = None
+        if self._command is None:
+            return None
+        if now_ns - self._command_stamp_ns > round(self._cmd_input.timeout * _NS_PER_S):
+            return None
+        return self._command
+
+    def _log_rejection(self, text: str, now_ns: int) -> None:
+        if now_ns >= self._next_reject_log_ns:
+            self._next_reject_log_ns = now_ns + _LOG_PERIOD_NS
+            self.logger.warning(text)
+
+    def _follow_command(self, command: ShootCommand) -> None:
+        """Track mode changes and new bursts (which also clear a fault)."""
+        if command.mode != self._last_mode:
+            if self._fault:
+                self._fault = False
+                self._attempts, self._jam_position = 0, None
+                self.logger.info(f'fault cleared: mode changed to {command.mode.name}')
+            self._last_mode = command.mode
+            if command.mode is not ShootMode.PUSH:
+                self._burst = None  # releasing PUSH ends the burst
+        if command.mode is ShootMode.PUSH and command.burst_id != self._last_burst_id:
+            self._last_burst_id = command.burst_id
+            if self._fault:
+                self._fault = False
+                self.logger.info(f'fault cleared: new burst {command.burst_id}')
+            hz = min(command.hz, self.config.max_hz)
+            if hz < command.hz:
+                self.logger.warning(
+                    f'burst {command.burst_id}: {command.hz:g} shots/s limited to max_hz '
+                    f'{self.config.max_hz:g}'
+                )
+            self._burst = _Burst(command.num or None, hz)
+            self._jam_count = 0
+            self._attempts, self._jam_position = 0, None
+        if self._burst is not None:
+            self._burst.hz = min(command.hz, self.config.max_hz) or self._burst.hz
+
+    # -- the state machine --------------------------------------------------------------------
+
+    def _advance(
+        self,
+        command: ShootCommand | None,
+        joints: dict[str, JointState],
+        ball: bool | None,
+        now_ns: int,
+        dt: float,
+    ) -> None:
+        """Decide the state for this tick and send the joint targets (all transitions)."""
+        cfg = self.config
+        passive_reason = self._passive_reason(command, joints)
+        if passive_reason is not None:
+            self._go_passive(passive_reason)
+            return
+        self._speed = command.speed
+        wheel = cfg.wheel_speed(command.speed)
+        self._friction_target = [wheel * d for d in cfg.friction_directions]
+        self._friction_ready = all(
+            abs(joints[j].velocity - target) <= cfg.friction_tolerance
+            for j, target in zip(cfg.friction_joints, self._friction_target, strict=True)
+        )
+        trigger = joints[self._trigger]
+        if self.state is S.PASSIVE:
+            self._enter(S.FEED, 'feeding a ball')
+
+        state = self.state
+        if state is S.FEED:
+            target = self._feed(trigger, ball, now_ns, dt)
+        elif state is S.BLOCK:
+            target = self._reverse(trigger, now_ns)
+        else:  # READY or PUSH
+            target = self._fire(trigger, ball, now_ns, dt)
+        if self.state is S.PASSIVE:  # gave up on a jam
+            return
+        targets = {
+            j: JointTarget.with_velocity(v)
+            for j, v in zip(cfg.friction_joints, self._friction_target, strict=True)
+        }
+        targets[self._trigger] = target
+        self.send_joint_targets(targets)
+
+    def _passive_reason(
+        self, command: ShootCommand | None, joints: dict[str, JointState]
+    ) -> str | None:
+        if command is None:
+            return self._rejection or 'no valid command on /shoot_cmd'
+        if command.mode is ShootMode.PASSIVE:
+            return 'commanded PASSIVE'
+        if self._fault:
+            return self._fault_reason
+        missing = [j for j in self._joints if j not in joints or not joints[j].online]
+        if missing:
+            return f'no state from joint(s) {", ".join(missing)} (offline or never seen)'
+        return None
+
+    def _go_passive(self, reason: str) -> None:
+        self.zero_output()
+        self._hold = None
+        self._step_target = None
+        self._detector.reset()
+        self._friction_ready = False
+        self._friction_target = [0.0] * len(self.config.friction_joints)
+        self._speed = 0.0
+        self.transition(S.PASSIVE, reason)
+
+    def _enter(self, state: ShooterStage, reason: str) -> None:
+        if state is not self.state:
+            self._detector.reset()
+        self.transition(state, reason)
+
+    def _feed(self, trigger: JointState, ball: bool | None, now_ns: int, dt: float) -> JointTarget:
+        cfg = self.config
+        if ball:
+            self._hold = trigger.position
+            if self._jam_position is not None:
+                # A recovery counts once the trigger got past the point where it jammed.
+                past = (trigger.position - self._jam_position) * cfg.trigger_direction
+                if past > cfg.step_tolerance:
+                    self._attempts, self._jam_position = 0, None
+            self._enter(S.READY, 'ball at the limit switch')
+            return JointTarget.with_position(self._hold)
+        # The trigger only ever turns forward with every friction wheel at speed, so a ball
+        # never reaches stopped wheels.
+        if not self._friction_ready:
+            self._enter(S.FEED, _WAIT_FRICTION)
+            self._detector.reset()
+            return JointTarget.with_velocity(0.0)
+        if ball is None:
+            self._enter(S.FEED, self._wait_switch_text())
+            self._detector.reset()
+            return JointTarget.with_velocity(0.0)
+        self._enter(S.FEED, 'feeding a ball')
+        if self._jammed(trigger, dt):
+            return self._start_block(trigger, now_ns)
+        return JointTarget.with_velocity(cfg.feed_speed * cfg.trigger_direction)
+
+    def _fire(self, trigger: JointState, ball: bool | None, now_ns: int, dt: float) -> JointTarget:
+        cfg = self.config
+        if self._hold is None:
+            self._hold = trigger.position
+        burst = self._burst
+        if self._step_target is not None:  # a step in progress
+            if self._jammed(trigger, dt):
+                return self._start_block(trigger, now_ns)
+            if abs(trigger.position - self._step_target) > cfg.step_tolerance:
+                return JointTarget.with_position(self._step_target)
+            self._hold, self._step_target = self._step_target, None
+            self._shots_fired += 1
+            self._attempts, self._jam_position = 0, None
+            if burst is not None and burst.remaining is not None:
+                burst.remaining -= 1
+                if burst.remaining <= 0:
+                    self._burst = burst = None
+        if burst is None:
+            reason = 'burst complete' if self.state is S.PUSH else 'ball at the limit switch'
+            self._enter(S.READY, reason)
+            return JointTarget.with_position(self._hold)
+        hold = JointTarget.with_position(self._hold)
+        if burst.last_step_ns is not None and now_ns - burst.last_step_ns < _NS_PER_S / burst.hz:
+            self._enter(S.PUSH, self._burst_text(burst))
+            return hold
+        if not self._friction_ready:
+            self._enter(S.PUSH, _WAIT_FRICTION)
+            return hold
+        if ball is None:
+            self._enter(S.PUSH, self._wait_switch_text())
+            return hold
+        if not ball:
+            self._enter(S.FEED, 'no ball at the limit switch')
+            return JointTarget.with_velocity(cfg.feed_speed * cfg.trigger_direction)
+        self._enter(S.PUSH, self._burst_text(burst))
+        self._step_target = self._hold + cfg.slot_angle * cfg.trigger_direction
+        burst.last_step_ns = now_ns
+        self._detector.reset()
+        return JointTarget.with_position(self._step_target)
+
+    def _wait_switch_text(self) -> str:
+        return f'waiting for the limit switch {self.config.limit_switch!r} on /gpio_state'
+
+    def _reverse(self, trigger: JointState, now_ns: int) -> JointTarget:
+        cfg = self.config
+        if abs(trigger.position - self._reverse_target) <= cfg.step_tolerance:
+            self._enter(S.FEED, f'reversed {cfg.reverse_angle:g} rad after a jam; feeding')
+        elif now_ns - self._block_start_ns >= cfg.block_timeout * _NS_PER_S:
+            self._enter(
+                S.FEED, f'reverse not done within {cfg.block_timeout:g} s after a jam; feeding'
+            )
+        else:
+            return JointTarget.with_position(self._reverse_target)
+        return JointTarget.with_velocity(cfg.feed_speed * cfg.trigger_direction)
+
+    def _jammed(self, trigger: JointState, dt: float) -> bool:
+        if dt <= 0.0:
+            return self._detector.jammed
+        return self._detector.update(trigger.effort, trigger.velocity, dt)
+
+    def _start_block(self, trigger: JointState, now_ns: int) -> JointTarget:
+        """A jam: reverse (BLOCK), or give up (PASSIVE + fault) after too many in a row."""
+        cfg = self.config
+        self._jam_count += 1
+        self._attempts += 1
+        self._step_target = None
+        what = (
+            f'jam {self._jam_count}: trigger effort {trigger.effort:.2f} N*m at '
+            f'{trigger.velocity:.2f} rad/s for {self._detector.stalled_s:.2f} s'
+        )
+        if self._attempts > cfg.jam_retries:
+            self._fault = True
+            self._fault_reason = (
+                f'fault: {what}; gave up after {cfg.jam_retries} recoveries; '
+                'send a new burst_id or change mode'
+            )
+            self.logger.error(self._fault_reason)
+            self._go_passive(self._fault_reason)
+            return JointTarget.off()
+        self._jam_position = trigger.position
+        self._reverse_target = trigger.position - cfg.reverse_angle * cfg.trigger_direction
+        self._block_start_ns = now_ns
+        self._hold = None
+        self._enter(S.BLOCK, f'{what}; reversing {cfg.reverse_angle:g} rad')
+        return JointTarget.with_position(self._reverse_target)
+
+    @staticmethod
+    def _burst_text(burst: _Burst) -> str:
+        if burst.remaining is None:
+            return f'firing continuously at {burst.hz:g} shots/s'
+        return f'firing a burst at {burst.hz:g} shots/s'
+
+    # -- state topic --------------------------------------------------------------------------
+
+    def _publish_state(self, now: Any, *, force: bool = False) -> None:
+        now_ns = now.nanoseconds
+        remaining = 0
+        if self._burst is not None and self._burst.remaining is not None:
+            remaining = self._burst.remaining
+        key = (
+            self.state,
+            self.reason,
+            self._friction_ready,
+            self._shots_fired,
+            remaining,
+            self._jam_count,
+            self._fault,
+        )
+        if not force and key == self._last_published and now_ns < self._next_publish_ns:
+            return
+        self._last_published = key
+        self._next_publish_ns = now_ns + self._state_period_ns
+        joints = self.joint_states.snapshot(self.config.friction_joints)
+        msg = ShooterState()
+        msg.header.stamp = now.to_msg()
+        msg.state = int(self.state)
+        msg.reason = self.reason
+        msg.bullet_speed = float(self._speed)
+        msg.friction_target = [float(v) for v in self._friction_target]
+        msg.friction_speed = [
+            float(joints[j].velocity) if j in joints else 0.0 for j in self.config.friction_joints
+        ]
+        msg.friction_ready = bool(self._friction_ready)
+        msg.shots_fired = self._shots_fired
+        msg.burst_remaining = remaining
+        msg.jam_count = self._jam_count
+        msg.fault = self._fault
+        self.state_pub.publish(msg)
+
+    # -- config -------------------------------------------------------------------------------
+
+    def _read_config(self) -> ShooterConfig:
+        p = self.params
+        friction_joints = p.string_array(
+            'friction_joints', description='friction wheel joints', unique=True
+        )
+        friction_directions = p.double_array(
+            'friction_directions',
+            description='per friction wheel, the sign (+1/-1) of the joint velocity that '
+            'launches a ball',
+        )
+        bullet_speeds = p.double_array(
+            'bullet_speeds',
+            description='bullet speeds of the lookup table (x, increasing)',
+            unit='m/s',
+            gt=0.0,
+        )
+        wheel_speeds = p.double_array(
+            'wheel_speeds',
+            description='friction wheel speed giving each of bullet_speeds',
+            unit='rad/s',
+            gt=0.0,
+        )
+        return ShooterConfig(
+            friction_joints=friction_joints,
+            friction_directions=friction_directions,
+            trigger_joint=p.string('trigger_joint', description='trigger (loader) joint'),
+            trigger_direction=p.double(
+                'trigger_direction',
+                1.0,
+                description='sign (+1/-1) of the trigger motion that feeds balls',
+            ),
+            wheel_speed=LookupTable.from_columns(bullet_speeds, wheel_speeds),
+            friction_tolerance=p.double(
+                'friction_tolerance',
+                description='a friction wheel is at speed within this of its target',
+                unit='rad/s',
+                gt=0.0,
+            ),
+            slots=p.integer('slots', description='trigger pockets per turn', ge=1),
+            feed_speed=p.double(
+                'feed_speed', description='trigger speed while feeding', unit='rad/s', gt=0.0
+            ),
+            step_tolerance=p.double(
+                'step_tolerance',
+                description='a slot step or the reverse is done within this',
+                unit='rad',
+                gt=0.0,
+            ),
+            max_hz=p.double('max_hz', description='highest firing rate', unit='shots/s', gt=0.0),
+            limit_switch=p.string(
+                'limit_switch', description='name of the ball switch on /gpio_state'
+            ),
+            switch_timeout=p.double(
+                'switch_timeout',
+                0.2,
+                description='an older limit switch state is unknown',
+                unit='s',
+                gt=0.0,
+            ),
+            jam=JamDetectorParams(
+                effort_threshold=p.double(
+                    'jam.effort',
+                    description='trigger effort above which it may be jammed',
+                    unit='N*m',
+                    gt=0.0,
+                ),
+                speed_threshold=p.double(
+                    'jam.speed',
+                    description='trigger speed below which it may be jammed',
+                    unit='rad/s',
+                    gt=0.0,
+                ),
+                time_s=p.double(
+                    'jam.time',
+                    description='how long both must hold to be a jam',
+                    unit='s',
+                    gt=0.0,
+                ),
+            ),
+            reverse_angle=p.double(
+                'reverse_angle',
+                description='how far the trigger turns back after a jam',
+                unit='rad',
+                gt=0.0,
+            ),
+            block_timeout=p.double(
+                'block_timeout',
+                description='longest reverse before feeding again',
+                unit='s',
+                gt=0.0,
+            ),
+            jam_retries=p.integer(
+                'jam_retries',
+                description='recoveries tried after jams in a row before giving up (fault)',
+                ge=0,
+            ),
+            state_rate=p.double(
+                'state_rate', 50.0, description='rate of /shooter_state', unit='Hz', gt=0.0
+            ),
+        )
