@@ -60,7 +60,13 @@ def test_pub_takes_the_type_from_the_graph_and_stamps_header_auto(graph):
     received = []
     node.create_subscription(ChassisCmd, '/cli_test/inferred', received.append, 10)
     proc = rmcli(
-        'topic', 'pub', '-1', '/cli_test/inferred', '{header: auto, mode: twist, power_limit: 80}'
+        'topic',
+        'pub',
+        '-1',
+        '--discovery-timeout',
+        str(TIMEOUT_S),
+        '/cli_test/inferred',
+        '{header: auto, mode: twist, power_limit: 80}',
     )
     try:
         arrived = wait_until(lambda: received, TIMEOUT_S, spin=executor.spin_once)
@@ -114,7 +120,8 @@ def test_echo_once_prints_what_a_publisher_sends(graph):
     publisher = node.create_publisher(ChassisCmd, '/cli_test/echo', 10)
     msg = ChassisCmd(mode=ChassisCmd.FOLLOW, follow_source='gimbal')
     msg.accel.linear.x = 1.25
-    proc = rmcli('topic', 'echo', '--once', '/cli_test/echo')  # type from the graph
+    # Type from the graph; the wait for discovery ends as soon as the topic is seen.
+    proc = rmcli('topic', 'echo', '--once', '--discovery-timeout', str(TIMEOUT_S), '/cli_test/echo')
 
     def publish_until_done():
         publisher.publish(msg)
@@ -136,8 +143,13 @@ def test_echo_once_prints_what_a_publisher_sends(graph):
 def test_list_shows_topics_with_their_types(graph):
     node, _ = graph
     node.create_publisher(String, '/cli_test/listed', 10)
-    code, out, err = finish(rmcli('topic', 'list', '-t', '--spin-time', '2'))
-    assert code == 0, err
+    # A new process can need one discovery announcement period (~3 s) to see this node;
+    # list again instead of waiting the worst case every time.
+    for _ in range(5):
+        code, out, err = finish(rmcli('topic', 'list', '-t', '--spin-time', '1'))
+        assert code == 0, err
+        if '/cli_test/listed [std_msgs/msg/String]' in out.splitlines():
+            break
     assert '/cli_test/listed [std_msgs/msg/String]' in out.splitlines()
 
 
@@ -180,3 +192,13 @@ def test_echo_ends_cleanly_on_sigint(graph):
         out, err = stop_process(proc)
     assert proc.returncode == 0, err
     assert (out, err) == ('', '')
+
+
+def test_echo_once_with_timeout_fails_clearly_when_nothing_arrives():
+    proc = rmcli(
+        'topic', 'echo', '--once', '--timeout', '0.5', '/cli_test/quiet', 'std_msgs/msg/String'
+    )
+    code, out, err = finish(proc)
+    assert code == 1
+    assert out == ''
+    assert err.strip() == "rmcli: error: no message on '/cli_test/quiet' within 0.5 s"

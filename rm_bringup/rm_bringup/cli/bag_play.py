@@ -18,6 +18,7 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 from .bag_io import open_bag, read_messages
@@ -104,22 +105,8 @@ def run(args: argparse.Namespace) -> int:
                 raise CliError(f'nothing to play in {path}: no topic has a known message type')
             playable = [c for c in connections if c.topic in publishers]
             _wait_for_subscribers(publishers.values(), args.wait_for_subscribers, stop)
-            start_ns = reader.start_time + round(args.start_offset * 1e9)
-            played = 0
-            while not stop.is_set():
-                if args.delay and stop.wait(args.delay):
-                    break
-                played += _play_once(
-                    reader,
-                    path,
-                    playable,
-                    publishers=publishers,
-                    start_ns=start_ns,
-                    rate=args.rate,
-                    stop=stop,
-                )
-                if not args.loop:
-                    break
+            options = PlayOptions(args.rate, args.loop, args.start_offset, args.delay)
+            played = play(reader, path, playable, publishers, options=options, stop=stop)
             for publisher in publishers.values():
                 _flush(publisher)
     print(f'Played {played} messages on {len(publishers)} topics')
@@ -160,6 +147,49 @@ def _wait_for_subscribers(publishers, timeout_s: float, stop) -> None:
         if all(p.get_subscription_count() > 0 for p in publishers):
             return
         time.sleep(_POLL_S)
+
+
+@dataclass(frozen=True)
+class PlayOptions:
+    """How to play: speed, repetition and where to start."""
+
+    rate: float = 1.0  # playback speed factor (2: twice as fast)
+    loop: bool = False  # start over at the end until stopped
+    start_offset_s: float = 0.0  # skip this much of the bag's beginning [s]
+    delay_s: float = 0.0  # wait before each pass [s]
+
+
+def play(reader, path: Path, connections, publishers, *, options: PlayOptions, stop) -> int:
+    """Publish the bag's messages with their relative timing; return how many were sent.
+
+    Args:
+        reader: an open rosbags Reader.
+        path: the bag, for error messages.
+        connections: the connections to play.
+        publishers: topic -> object with ``publish(bytes)`` (an rclpy publisher).
+        options: rate, loop, start offset and delay.
+        stop: threading.Event that ends playback at once when set.
+
+    Raises:
+        BagError: the bag is damaged part-way.
+    """
+    start_ns = reader.start_time + round(options.start_offset_s * 1e9)
+    played = 0
+    while not stop.is_set():
+        if options.delay_s and stop.wait(options.delay_s):
+            break
+        played += _play_once(
+            reader,
+            path,
+            connections,
+            publishers=publishers,
+            start_ns=start_ns,
+            rate=options.rate,
+            stop=stop,
+        )
+        if not options.loop:
+            break
+    return played
 
 
 def _play_once(reader, path, connections, *, publishers, start_ns: int, rate: float, stop) -> int:

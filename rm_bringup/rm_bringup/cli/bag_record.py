@@ -244,6 +244,25 @@ class Recorder:
         self.counts[topic] += 1
 
 
+def record(executor, recorder: Recorder, stop, poll_period_s: float | None) -> None:
+    """Spin the recorder until stop is set, then write what already arrived.
+
+    Args:
+        executor: executor of the recorder's node.
+        recorder: subscribes and writes.
+        stop: threading.Event set by SIGINT/SIGTERM.
+        poll_period_s: period of topic discovery [s]; None discovers at the start only.
+    """
+    recorder.discover()
+    next_poll = None if poll_period_s is None else time.monotonic() + poll_period_s
+    while not stop.is_set():
+        executor.spin_once(timeout_sec=_SPIN_PERIOD_S)
+        if next_poll is not None and time.monotonic() >= next_poll:
+            recorder.discover()
+            next_poll = time.monotonic() + poll_period_s
+    _drain(executor, recorder)
+
+
 def _drain(executor, recorder: Recorder) -> None:
     """Write what arrived before the stop signal but has not been handled yet."""
     deadline = time.monotonic() + _DRAIN_MAX_S
@@ -277,15 +296,8 @@ def run(args: argparse.Namespace) -> int:
         executor.add_node(node)
         print(f"Recording to '{output}' ({args.storage}); Ctrl-C to stop", flush=True)
         try:
-            recorder.discover()
-            poll_period_s = args.polling_interval / 1000.0
-            next_poll = time.monotonic() + poll_period_s
-            while not stop.is_set():
-                executor.spin_once(timeout_sec=_SPIN_PERIOD_S)
-                if not args.no_discovery and time.monotonic() >= next_poll:
-                    recorder.discover()
-                    next_poll = time.monotonic() + poll_period_s
-            _drain(executor, recorder)
+            poll_period_s = None if args.no_discovery else args.polling_interval / 1000.0
+            record(executor, recorder, stop, poll_period_s)
         finally:
             executor.shutdown()
             writer.close()  # also after an error: what was written stays readable

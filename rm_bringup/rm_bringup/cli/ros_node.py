@@ -17,11 +17,12 @@ from .errors import CliError
 if TYPE_CHECKING:
     from rclpy.node import Node
 
-DISCOVERY_TIMEOUT_S = 3.0
+DISCOVERY_TIMEOUT_S = 5.0
 """Longest wait [s] for a topic to show up when its type is taken from the graph.
 
-Discovery takes ~0.4 s on a quiet machine (ROS_WHEELS.md); the wait ends as soon as the
-topic is seen, so only a missing topic pays the whole timeout.
+Discovery is often immediate, but a new process regularly needs one announcement period
+of the others (measured here: ~2-2.5 s, Fast DDS, localhost only) and more under CPU
+steal. The wait ends as soon as the topic is seen, so only a missing topic pays it all.
 """
 
 _POLL_PERIOD_S = 0.05

@@ -1,8 +1,15 @@
 """Broken bags: one clear line naming the file, exit 1, before any ROS node starts."""
 
+import threading
+import time
+
 import pytest
+from rclpy.serialization import deserialize_message
+from rm_bringup.cli.bag_io import open_bag
+from rm_bringup.cli.bag_play import PlayOptions, play
 from rm_bringup.cli.errors import BagError
 from rm_bringup.cli.main import main
+from std_msgs.msg import String
 
 S = 1_000_000_000
 
@@ -93,3 +100,75 @@ def test_damage_found_while_reading_is_a_bag_error(tmp_path):
         for item in read_messages(DamagedReader(), tmp_path / 'bag'):
             got.append(item)
     assert got == [('connection', 1, b'ok')]
+
+
+# --- the playback loop, with stand-in publishers (no ROS) ------------------------------------
+
+
+class FakePublisher:
+    """Collects what would be published; sets stop after stop_after messages."""
+
+    def __init__(self, sent, stop, stop_after):
+        self._sent, self._stop, self._stop_after = sent, stop, stop_after
+
+    def publish(self, data):
+        self._sent.append((time.monotonic(), deserialize_message(data, String).data))
+        if len(self._sent) >= self._stop_after:
+            self._stop.set()
+
+
+@pytest.fixture
+def five_messages(write_bag, make):
+    # 'm0'..'m4', 40 ms apart
+    return write_bag(
+        [
+            (
+                '/chatter',
+                'std_msgs/msg/String',
+                S + i * 40_000_000,
+                make('std_msgs/msg/String', data=f'm{i}'),
+            )
+            for i in range(5)
+        ]
+    )
+
+
+def played(bag, stop_after=100, preset_stop=False, **options):
+    sent = []
+    stop = threading.Event()
+    if preset_stop:
+        stop.set()
+    with open_bag(bag) as reader:
+        publishers = {'/chatter': FakePublisher(sent, stop, stop_after)}
+        start = time.monotonic()
+        count = play(
+            reader, bag, reader.connections, publishers, options=PlayOptions(**options), stop=stop
+        )
+    assert count == len(sent)
+    return start, sent
+
+
+def test_play_sends_every_message_once_in_order(five_messages):
+    _, sent = played(five_messages)
+    assert [data for _, data in sent] == ['m0', 'm1', 'm2', 'm3', 'm4']
+
+
+def test_start_offset_skips_the_beginning_of_the_bag(five_messages):
+    # offset 0.1 s: messages at 120 and 160 ms remain
+    _, sent = played(five_messages, start_offset_s=0.1)
+    assert [data for _, data in sent] == ['m3', 'm4']
+
+
+def test_loop_starts_over_until_stopped(five_messages):
+    _, sent = played(five_messages, loop=True, rate=4.0, stop_after=7)
+    assert [data for _, data in sent] == ['m0', 'm1', 'm2', 'm3', 'm4', 'm0', 'm1']
+
+
+def test_delay_waits_before_playing(five_messages):
+    start, sent = played(five_messages, delay_s=0.2)
+    assert sent[0][0] - start >= 0.2
+
+
+def test_stop_ends_playback_at_once(five_messages):
+    _, sent = played(five_messages, preset_stop=True)
+    assert sent == []
