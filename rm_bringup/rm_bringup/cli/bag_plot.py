@@ -174,7 +174,7 @@ def _new_figure(rows: int, title: str):
 
 def plot_chassis(data: PlotData, out: Path) -> Path | None:
     """Commanded vs measured chassis velocity, and the chassis mode; None if no data."""
-    commands = [t for t in data.of_type(TWIST)]
+    commands = data.of_type(TWIST)
     states = data.of_type(CHASSIS_STATE)
     odometry = data.of_type(ODOMETRY)
     modes = data.of_type(CHASSIS_CMD)
