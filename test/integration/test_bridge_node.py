@@ -372,6 +372,57 @@ def test_sim_world_error_is_a_config_error_naming_the_group(ros_context):
         CanBridgeNode(context=ros_context, parameter_overrides=overrides)
 
 
+SIM_YAML = """\
+can_bridge:
+  ros__parameters:
+    sim: true
+    {sim_group}
+    buses:
+      can0: {{channel: {channel}}}
+    joints:
+      wheel: {{type: m3508, bus: can0, id: 1}}
+      yaw: {{type: gm6020, bus: can0, id: 1, sim: {{load_inertia: 0.02}}}}
+"""
+
+DOTTED_GROUP = """sim.timing: stepped
+    sim.body:
+      gimbal: {yaw: {motor: yaw}}
+    sim.imu: {path: '${RM_TEST_BRIDGE_IMU}', mount: gimbal, rate_hz: 100.0}"""
+
+NESTED_GROUP = """sim:
+      timing: stepped"""
+
+
+def bridge_from_file(context, path):
+    return CanBridgeNode(context=context, cli_args=['--ros-args', '--params-file', str(path)])
+
+
+def test_a_params_file_with_the_dotted_sim_group_builds_body_and_imu(
+    ros_context, tmp_path, monkeypatch
+):
+    monkeypatch.setenv('RM_TEST_BRIDGE_IMU', str(tmp_path / 'imu'))
+    channel = f'rm-bridge-yaml-{uuid.uuid4().hex[:8]}'
+    path = tmp_path / 'bridge.yaml'
+    path.write_text(SIM_YAML.format(sim_group=DOTTED_GROUP, channel=channel))
+    bridge = bridge_from_file(ros_context, path)
+    try:
+        world = bridge.sim_world
+        assert world.timing is Timing.STEPPED
+        assert world.body.yaw_joint.device is world.motor('yaw')
+        assert world.motor('yaw').model.params.load_inertia == 0.02
+        assert world.imu().path == str(tmp_path / 'imu')
+        assert (tmp_path / 'imu').is_symlink()
+    finally:
+        bridge.destroy_node()
+
+
+def test_a_params_file_with_sim_twice_gets_a_hint_not_a_type_error(ros_context, tmp_path):
+    path = tmp_path / 'bridge.yaml'
+    path.write_text(SIM_YAML.format(sim_group=NESTED_GROUP, channel='unused'))
+    with pytest.raises(ConfigError, match=r"the params file has the key 'sim' twice"):
+        bridge_from_file(ros_context, path)
+
+
 def test_stepped_world_moves_only_when_stepped(ros_context):
     params = {
         'sim': True,

@@ -186,6 +186,7 @@ class CanBridgeNode(Node):
         )
 
     def _read_parameters(self) -> BridgeSettings:
+        self._check_sim_group()
         params = PluginParams(self, plugin='', prefix='')
         typed: dict[str, Any] = {}
 
@@ -285,6 +286,20 @@ class CanBridgeNode(Node):
             if name not in typed and not is_ros_own(name)
         }
         return settings_from_parameters(typed, open_params)
+
+    def _check_sim_group(self) -> None:
+        # A params file with both `sim: true` and a `sim:` group (one YAML key twice) is
+        # read by rcl as no `sim` at all and the `true` moved onto the group's first key.
+        if self.has_parameter('sim'):
+            return
+        for name, parameter in self.get_parameters_by_prefix('sim').items():
+            if isinstance(parameter.value, bool):
+                raise BridgeConfigError(
+                    f"parameter 'sim.{name}' is {parameter.value} and 'sim' is missing: the "
+                    "params file has the key 'sim' twice (sim: true and a sim: group); write "
+                    "sim: true and the group's keys as dotted names: sim.timing: realtime, "
+                    'sim.body: {...}, sim.imu: {...}'
+                )
 
     def _create_sim_services(self) -> None:
         assert self.hardware is not None

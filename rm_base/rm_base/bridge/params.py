@@ -36,6 +36,19 @@ Parameters (units in brackets; typed ones are declared by the node with a descri
 ==================================  =========  ============================================
 
 With ``sim: false`` the ``sim.*`` groups are ignored, so one robot config serves both.
+In a params file ``sim`` and its group cannot both be YAML keys named ``sim`` (rcl reads
+a key written twice wrongly); write the group's keys as dotted names::
+
+    can_bridge:
+      ros__parameters:
+        sim: true
+        sim.timing: realtime
+        sim.body:
+          chassis: {type: mecanum, motors: [wheel_fl, wheel_fr, wheel_rl, wheel_rr], ...}
+          gimbal: {yaw: {motor: yaw}, pitch: {motor: pitch}}
+        sim.imu: {path: '/tmp/rm_sim_${ROS_DOMAIN_ID}/imu', mount: gimbal}
+        joints:
+          yaw: {type: gm6020, bus: can0, id: 1, sim: {load_inertia: 0.02}}
 """
 
 from __future__ import annotations

@@ -3,10 +3,13 @@
 One world for all buses: a channel per bus (its ``channel``, default the bus name), on it
 one simulated motor per joint of that bus, named like the joint. The motor takes the
 joint's type and id, and the protocol options both sides must agree on (DJI scales,
-Damiao/Cheetah ``master_id``, ``limits``, ``model``), plus an explicit ``gear_ratio`` or
-``torque_constant``; ``joints.<joint>.sim.*`` overrides anything (physics such as
-``load_inertia``, driver settings such as ``overtemp_c``, or the simulated ``type``).
-``sim.body`` and ``sim.imu`` become the world's ``body`` and its one IMU.
+Damiao/Cheetah ``master_id``, ``limits``, ``model``). A joint with its own ``gear_ratio``
+(an M3508 without its gearbox on a friction wheel) gets the same rotor behind that gear:
+the simulator's output-shaft constants are rescaled by ``k = gear_ratio / default gear``
+(torque and back-EMF constants and Coulomb friction by ``k``, viscous friction by
+``k²``). ``joints.<joint>.sim.*`` overrides anything (physics such as ``load_inertia``,
+driver settings such as ``overtemp_c``, or the simulated ``type``). ``sim.body`` and
+``sim.imu`` become the world's ``body`` and its one IMU.
 
 Hardware types without a simulated model of their own (``dm4340``, ``dm10010l``, a
 ``damiao`` of another model) are simulated as the model that shares their protocol
@@ -23,6 +26,7 @@ from rm_base.bridge.errors import BridgeConfigError
 from rm_base.bridge.params import SimSettings
 from rm_base.hardware import ACTUATOR_TYPES
 from rm_base.hardware.config import HardwareConfig, JointConfig
+from rm_base.sim import MOTOR_DEFAULTS, MotorType
 
 #: Hardware joint type -> (simulated motor type, extra device keys).
 _SIM_TYPES: dict[str, tuple[str, dict[str, Any]]] = {
@@ -84,17 +88,46 @@ def motor_config(joint: JointConfig, overrides: Mapping[str, Any] | None = None)
             f'types: {", ".join(sorted(_SIM_TYPES))} (or set joints.{joint.name}.sim.type)'
         )
     config: dict[str, Any] = {'type': sim_type, 'id': joint.id, 'name': joint.name, **extra}
-    sim_family = _family(str(overrides.get('type', sim_type)))
-    for key in _SHARED_OPTIONS[sim_family]:
+    final_type = str(overrides.get('type', sim_type))
+    for key in _SHARED_OPTIONS[_family(final_type)]:
         if key in joint.options:
             value = joint.options[key]
             config[key] = dict(value) if isinstance(value, Mapping) else value
     if joint.gear_ratio is not None:
-        config['gear_ratio'] = joint.gear_ratio
-    if joint.torque_constant is not None:
-        config['torque_constant'] = joint.torque_constant
+        config.update(regeared(final_type, joint.gear_ratio))
     config.update(overrides)
     return config
+
+
+def regeared(sim_type: str, gear_ratio: float) -> dict[str, float]:
+    """Output-shaft constants of a simulated motor type's rotor behind another gear.
+
+    Args:
+        sim_type: simulated motor type (``m3508``...).
+        gear_ratio: rotor turns per output turn.
+
+    Returns:
+        ``gear_ratio`` and the rescaled ``torque_constant``, ``back_emf_constant``,
+        ``coulomb_friction`` and ``viscous_friction`` (see the module docstring).
+
+    Raises:
+        BridgeConfigError: unknown simulated type.
+    """
+    try:
+        base = MOTOR_DEFAULTS[MotorType(sim_type)]
+    except ValueError:
+        known = ', '.join(sorted(t.value for t in MotorType))
+        raise BridgeConfigError(
+            f'unknown simulated motor type {sim_type!r}; known: {known}'
+        ) from None
+    k = gear_ratio / base.gear_ratio
+    return {
+        'gear_ratio': gear_ratio,
+        'torque_constant': base.torque_constant * k,
+        'back_emf_constant': base.back_emf_constant * k,
+        'coulomb_friction': base.coulomb_friction * k,
+        'viscous_friction': base.viscous_friction * k * k,
+    }
 
 
 def world_config(hardware: HardwareConfig, sim: SimSettings) -> dict[str, Any]:

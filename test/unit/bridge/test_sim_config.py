@@ -46,9 +46,25 @@ def test_protocol_options_are_shared_with_the_simulated_device():
     assert dji['si_per_raw'] == 1.62 / 16384
 
 
-def test_explicit_gear_and_torque_constant_reach_the_physics():
-    config = motor_config(joint('m3508', gear_ratio=14.0, torque_constant=0.22))
-    assert config['gear_ratio'] == 14.0 and config['torque_constant'] == 0.22
+def test_an_explicit_gear_ratio_keeps_the_rotor_and_rescales_the_output_constants():
+    # An M3508 without its 3591/187 gearbox (friction wheel): k = 1 / 19.2032
+    config = motor_config(joint('m3508', gear_ratio=1.0, torque_constant=0.0156))
+    k = 187.0 / 3591.0
+    assert config['gear_ratio'] == 1.0
+    assert config['torque_constant'] == pytest.approx(0.3 * k)  # 0.0156 N·m/A
+    assert config['back_emf_constant'] == pytest.approx(0.45 * k)
+    assert config['coulomb_friction'] == pytest.approx(0.1 * k)
+    assert config['viscous_friction'] == pytest.approx(2.5e-3 * k * k)
+    # the same rotor: the no-load speed at 24 V scales with 1/k (~53 -> ~1024 rad/s)
+    with SimWorld.from_config({'timing': 'stepped', 'channels': {unique_name(): [config]}}) as w:
+        params = w.motor('j').model.params
+        assert 24.0 / params.back_emf_constant == pytest.approx(24.0 / 0.45 / k)
+        assert params.inertia == pytest.approx(1.2e-5)  # rotor side, unchanged
+
+
+def test_joint_sim_overrides_win_over_the_rescaled_constants():
+    config = motor_config(joint('m3508', gear_ratio=1.0), {'coulomb_friction': 0.0})
+    assert config['coulomb_friction'] == 0.0
 
 
 def test_joint_sim_overrides_win():
