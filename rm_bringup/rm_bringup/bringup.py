@@ -1,0 +1,178 @@
+"""bringup: the whole robot in one process — can_bridge, rm_robot and a live status line.
+
+    bringup --robot standard --sim        # the standard robot on the simulated CAN bus
+    bringup --robot hero                  # the hero on its real buses (socketcan)
+    bringup --config my_robot.yaml --sim  # any robot config file
+
+The robot config is a ROS parameter file with a ``can_bridge`` and an ``rm_robot``
+section (rm_bringup/config/<robot>.yaml); ``--sim`` loads its simulation overlay
+(<robot>_sim.yaml) after it, as a second --params-file, so every bus runs on rm_sim.
+Both nodes share one EventsExecutor (the plugins and the 1 kHz CAN loop run in threads of
+their own). On Ctrl-C (or SIGTERM) every plugin commands zero output first, then the
+bridge sends zero-current frames, then the process exits.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import pathlib
+import sys
+import time
+
+import rclpy
+from rclpy.executors import ExternalShutdownException
+from rclpy.experimental import EventsExecutor
+from rclpy.signals import SignalHandlerOptions
+from rm_base.bridge import CanBridgeNode
+from rm_base.errors import ConfigError
+from rm_base.host.node import RobotHost
+from rm_base.ros_env import prepare_ros_process
+
+from rm_bringup.status import StatusView
+
+# How long one spin_once may block [s]; bounds the reaction to Ctrl-C.
+_SPIN_TIMEOUT = 0.05
+# Status line period [s] on a terminal (rewritten in place) and in a log (one per line).
+_TTY_PERIOD = 0.25
+_LOG_PERIOD = 2.0
+
+
+def config_dir() -> pathlib.Path:
+    """The installed config folder of rm_bringup (share/rm_bringup/config)."""
+    from ament_index_python.packages import get_package_share_directory
+
+    return pathlib.Path(get_package_share_directory('rm_bringup')) / 'config'
+
+
+def parameter_files(robot: str | None, config: str | None, sim: bool) -> list[pathlib.Path]:
+    """The parameter files to load, robot config first, then its simulation overlay.
+
+    Raises:
+        ConfigError: the config (or, with sim, its overlay) does not exist.
+    """
+    if config is not None:
+        base = pathlib.Path(config)
+    else:
+        base = config_dir() / f'{robot}.yaml'
+    if not base.is_file():
+        known = sorted(p.stem for p in config_dir().glob('*.yaml') if not p.stem.endswith('_sim'))
+        raise ConfigError(f'robot config {base} not found; installed robots: {", ".join(known)}')
+    files = [base]
+    if sim:
+        overlay = base.with_name(f'{base.stem}_sim.yaml')
+        if not overlay.is_file():
+            raise ConfigError(f'--sim needs the simulation overlay {overlay}, which is missing')
+        files.append(overlay)
+    return files
+
+
+def parse_args(argv: list[str] | None) -> argparse.Namespace:
+    """Parse the command line (see the module docstring)."""
+    parser = argparse.ArgumentParser(prog='bringup', description=__doc__.split('\n\n')[0])
+    which = parser.add_mutually_exclusive_group()
+    which.add_argument('--robot', default='standard', help='installed robot config name')
+    which.add_argument('--config', help='path of a robot config file (instead of --robot)')
+    parser.add_argument('--sim', action='store_true', help='run every bus on rm_sim')
+    parser.add_argument('--no-status', action='store_true', help='no live status line')
+    parser.add_argument(
+        '--duration', type=float, default=None, help='stop after this many seconds [s]'
+    )
+    return parser.parse_args(argv)
+
+
+class _StatusPrinter:
+    """Prints the status line: rewritten in place on a terminal, a line at a time otherwise."""
+
+    def __init__(self, view: StatusView, stream=sys.stdout) -> None:
+        self._view = view
+        self._stream = stream
+        self._tty = stream.isatty()
+        self._period = _TTY_PERIOD if self._tty else _LOG_PERIOD
+        self._next = time.monotonic() + self._period
+
+    def maybe_print(self) -> None:
+        now = time.monotonic()
+        if now < self._next:
+            return
+        self._next = now + self._period
+        line = self._view.line()
+        if self._tty:
+            width = os.get_terminal_size(self._stream.fileno()).columns
+            self._stream.write('\r\x1b[K' + line[: max(width - 1, 20)])
+        else:
+            self._stream.write(line + '\n')
+        self._stream.flush()
+
+    def finish(self) -> None:
+        if self._tty:
+            self._stream.write('\n')
+            self._stream.flush()
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the robot until Ctrl-C/SIGTERM (or --duration); return the exit status."""
+    args = parse_args(sys.argv[1:] if argv is None else argv)
+    prepare_ros_process()
+    try:
+        files = parameter_files(args.robot, args.config, args.sim)
+    except ConfigError as err:
+        print(f'[bringup] {err}', file=sys.stderr)
+        return 1
+    ros_args = ['--ros-args']
+    for path in files:
+        ros_args += ['--params-file', str(path)]
+    # rclpy's handlers would shut the context down before the zero commands go out.
+    rclpy.init(args=['bringup', *ros_args], signal_handler_options=SignalHandlerOptions.NO)
+    bridge = host = None
+    try:
+        bridge = CanBridgeNode()
+        host = RobotHost()
+    except ConfigError as err:
+        print(f'[bringup] configuration error: {err}', file=sys.stderr)
+        for node in (host, bridge):
+            if node is not None:
+                node.destroy_node()
+        rclpy.try_shutdown()
+        return 1
+    except KeyboardInterrupt:
+        for node in (host, bridge):
+            if node is not None:
+                node.destroy_node()
+        rclpy.try_shutdown()
+        return 0
+
+    # One EventsExecutor for both nodes' callbacks: 4x cheaper per message than the
+    # SingleThreadedExecutor (ROS_WHEELS.md); its spin() ignores SIGINT, so spin_once.
+    executor = EventsExecutor()
+    executor.add_node(bridge)
+    executor.add_node(host)
+    printer = None if args.no_status else _StatusPrinter(StatusView(host))
+    deadline = None if args.duration is None else time.monotonic() + args.duration
+    mode = 'on rm_sim' if args.sim else 'on its CAN buses'
+    print(f'[bringup] {", ".join(p.name for p in files)}: robot running {mode}; Ctrl-C stops')
+    try:
+        while rclpy.ok():
+            executor.spin_once(timeout_sec=_SPIN_TIMEOUT)
+            if printer is not None:
+                printer.maybe_print()
+            if deadline is not None and time.monotonic() >= deadline:
+                break
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if printer is not None:
+            printer.finish()
+        # Plugins first (zero targets on /actuator_cmd), then the bridge's zero frames.
+        host.shutdown()
+        bridge.shutdown()
+        executor.shutdown()
+        host.destroy_node()
+        bridge.destroy_node()
+        rclpy.try_shutdown()
+        print('[bringup] stopped: zero output sent', file=sys.stderr)
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

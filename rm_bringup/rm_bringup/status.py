@@ -1,0 +1,146 @@
+"""A compact live status line of the robot, built from its ROS topics.
+
+``StatusView`` subscribes to the mechanism states, /actuator_states and /diagnostics and
+keeps the latest of each; ``format_status`` turns them into one line such as::
+
+    chassis GYRO v(0.98,0.00,5.97) | wheels 19.1 -3.2 3.2 -19.1 | gimbal RATE y 0.12 p -0.05
+    | shooter READY 5 shots | can0 31% can1 18% | overruns 0 | offline -
+
+It reads topics only, so the same view works whether the nodes run in this process (the
+bringup runner) or elsewhere.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from collections.abc import Mapping
+from typing import Any
+
+from diagnostic_msgs.msg import DiagnosticArray
+from rclpy.node import Node
+from rclpy.qos import qos_profile_sensor_data
+
+from rm_msgs.msg import ActuatorState, ChassisCmd, ChassisState, GimbalCmd, GimbalState
+from rm_msgs.msg import ShooterState as ShooterStateMsg
+
+_CHASSIS_NAMES = {
+    ChassisCmd.PASSIVE: 'PASSIVE',
+    ChassisCmd.RAW: 'RAW',
+    ChassisCmd.FOLLOW: 'FOLLOW',
+    ChassisCmd.TWIST: 'TWIST',
+    ChassisCmd.GYRO: 'GYRO',
+}
+_GIMBAL_NAMES = {GimbalCmd.PASSIVE: 'PASSIVE', GimbalCmd.RATE: 'RATE', GimbalCmd.TRACK: 'TRACK'}
+_SHOOTER_NAMES = {
+    ShooterStateMsg.PASSIVE: 'PASSIVE',
+    ShooterStateMsg.FEED: 'FEED',
+    ShooterStateMsg.READY: 'READY',
+    ShooterStateMsg.PUSH: 'PUSH',
+    ShooterStateMsg.BLOCK: 'BLOCK',
+}
+
+
+def _diag_values(status: Any) -> dict[str, str]:
+    return {kv.key: kv.value for kv in status.values}
+
+
+def format_status(latest: Mapping[str, Any]) -> str:
+    """One status line from the latest messages; a missing source is left out.
+
+    Args:
+        latest: the latest message per source: ``chassis`` (ChassisState), ``gimbal``,
+            ``shooter``, ``actuators`` (ActuatorState) and ``diagnostics`` (status name ->
+            DiagnosticStatus).
+    """
+    parts = []
+    chassis = latest.get('chassis')
+    if chassis is not None:
+        v = chassis.measured_vel
+        parts.append(
+            f'chassis {_CHASSIS_NAMES.get(chassis.state, chassis.state)} '
+            f'v({v.linear.x:.2f},{v.linear.y:.2f},{v.angular.z:.2f})'
+        )
+        if len(chassis.wheel_speed):
+            parts.append('wheels ' + ' '.join(f'{w:.1f}' for w in chassis.wheel_speed))
+    gimbal = latest.get('gimbal')
+    if gimbal is not None:
+        parts.append(
+            f'gimbal {_GIMBAL_NAMES.get(gimbal.state, gimbal.state)} '
+            f'y {gimbal.yaw:.2f} p {gimbal.pitch:.2f}'
+        )
+    shooter = latest.get('shooter')
+    if shooter is not None:
+        fault = ' FAULT' if shooter.fault else ''
+        parts.append(
+            f'shooter {_SHOOTER_NAMES.get(shooter.state, shooter.state)} '
+            f'{shooter.shots_fired} shots{fault}'
+        )
+    diagnostics = latest.get('diagnostics')
+    if diagnostics:
+        loads, overruns = [], None
+        for status in diagnostics.values():
+            values = _diag_values(status)
+            kind = status.name.split(': ', 1)[-1]  # 'can_bridge: bus can0' -> 'bus can0'
+            if kind.startswith('bus '):
+                load = values.get('load [%]', '')
+                name = kind.removeprefix('bus ')
+                try:
+                    loads.append(f'{name} {float(load):.0f}%')
+                except ValueError:
+                    loads.append(f'{name} ?')
+            elif kind == 'scheduler':
+                overruns = values.get('overruns')
+        if loads:
+            parts.append(' '.join(sorted(loads)))
+        if overruns is not None:
+            parts.append(f'overruns {overruns}')
+    actuators = latest.get('actuators')
+    if actuators is not None:
+        offline = [n for n, ok in zip(actuators.name, actuators.online, strict=False) if not ok]
+        hot = [
+            f'{n} {t:.0f}C'
+            for n, t in zip(actuators.name, actuators.temperature, strict=False)
+            if not math.isnan(t) and t >= 70.0
+        ]
+        parts.append('offline ' + (','.join(offline) if offline else '-'))
+        if hot:
+            parts.append('hot ' + ','.join(hot))
+    return ' | '.join(parts) if parts else 'waiting for the robot...'
+
+
+class StatusView:
+    """Keeps the latest robot states from topics, for :func:`format_status`.
+
+    Args:
+        node: node to create the subscriptions on (callbacks run on its executor).
+    """
+
+    def __init__(self, node: Node) -> None:
+        self._lock = threading.Lock()
+        self._latest: dict[str, Any] = {'diagnostics': {}}
+        qos = qos_profile_sensor_data
+        node.create_subscription(ChassisState, '/chassis_state', self._keep('chassis'), qos)
+        node.create_subscription(GimbalState, '/gimbal_state', self._keep('gimbal'), qos)
+        node.create_subscription(ShooterStateMsg, '/shooter_state', self._keep('shooter'), qos)
+        node.create_subscription(ActuatorState, 'actuator_states', self._keep('actuators'), qos)
+        node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diagnostics, 10)
+
+    def _keep(self, key: str):
+        def store(msg: Any) -> None:
+            with self._lock:
+                self._latest[key] = msg
+
+        return store
+
+    def _on_diagnostics(self, msg: DiagnosticArray) -> None:
+        with self._lock:
+            for status in msg.status:
+                self._latest['diagnostics'][status.name] = status
+
+    def line(self) -> str:
+        """The current status line."""
+        with self._lock:
+            latest = dict(self._latest)
+            latest['diagnostics'] = dict(latest['diagnostics'])
+        return format_status(latest)

@@ -1,0 +1,53 @@
+"""The bringup status line, from the latest messages."""
+
+import math
+
+from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
+from rm_bringup.status import format_status
+
+from rm_msgs.msg import ActuatorState, ChassisCmd, ChassisState, GimbalState, ShooterState
+
+
+def _status(name, values):
+    return DiagnosticStatus(
+        name=name, values=[KeyValue(key=k, value=str(v)) for k, v in values.items()]
+    )
+
+
+def test_when_nothing_arrived_expect_waiting():
+    assert format_status({'diagnostics': {}}) == 'waiting for the robot...'
+
+
+def test_when_every_source_reports_expect_one_line_with_all_of_them():
+    chassis = ChassisState(state=ChassisCmd.GYRO, wheel_speed=[19.1, -3.2, 3.25, -19.1])
+    chassis.measured_vel.linear.x = 0.98
+    chassis.measured_vel.angular.z = 5.97
+    gimbal = GimbalState(state=1, yaw=0.123, pitch=-0.05)
+    shooter = ShooterState(state=ShooterState.READY, shots_fired=5)
+    actuators = ActuatorState(
+        name=['wheel_fl', 'yaw'], online=[True, False], temperature=[75.0, math.nan]
+    )
+    diagnostics = {
+        'can_bridge: bus can0': _status('can_bridge: bus can0', {'load [%]': 31.4}),
+        'can_bridge: bus can1': _status('can_bridge: bus can1', {'load [%]': 18.0}),
+        'can_bridge: scheduler': _status('can_bridge: scheduler', {'overruns': 2}),
+    }
+    line = format_status(
+        {
+            'chassis': chassis,
+            'gimbal': gimbal,
+            'shooter': shooter,
+            'actuators': actuators,
+            'diagnostics': diagnostics,
+        }
+    )
+    assert line == (
+        'chassis GYRO v(0.98,0.00,5.97) | wheels 19.1 -3.2 3.2 -19.1 | gimbal RATE y 0.12 '
+        'p -0.05 | shooter READY 5 shots | can0 31% can1 18% | overruns 2 | offline yaw | '
+        'hot wheel_fl 75C'
+    )
+
+
+def test_when_a_shooter_faults_expect_fault_shown():
+    line = format_status({'shooter': ShooterState(state=0, fault=True), 'diagnostics': {}})
+    assert line == 'shooter PASSIVE 0 shots FAULT'
