@@ -292,11 +292,12 @@ def test_when_push_5_at_5_hz_expect_5_slot_steps_and_5_shots_in_about_a_second(r
     # rad is a tenth of a slot, while a step too many or too few would be 0.785 rad.
     assert abs(advanced - 5 * SLOT) < 0.08
     assert shots(r) == 5 and r.state().burst_remaining == 0
-    # Steps begin 1/hz = 0.2 s apart: at 0, 0.2, .., 0.8 s; the last one ends about 0.15 s
-    # later (position loop kp 20 1/s: ln(0.785 / 0.05) / 20 = 0.14 s), so ~0.95 s after the
-    # command. Accepted: 0.8 s (never faster than the rate) to 1.6 s (command latency and
-    # CPU steal on a 2-core VM).
-    assert 0.8 <= elapsed <= 1.6
+    # Steps begin 1/hz = 0.2 s apart: at 0, 0.2, .., 0.8 s; each moves its slot at
+    # step_speed 12 rad/s (0.785 / 12 = 65 ms) and settles within step_tolerance, so the
+    # fifth shot counts ~0.9 s after the command (measured 0.92-1.12 s). Accepted: 0.8 s
+    # (never faster than the rate) to 2.0 s (command latency and CPU steal on a shared
+    # 2-core VM, where ticks of all five threads stall for tens of ms).
+    assert 0.8 <= elapsed <= 2.0
 
 
 def test_when_the_same_push_command_repeats_expect_no_second_burst(rig):
@@ -308,10 +309,11 @@ def test_when_the_same_push_command_repeats_expect_no_second_burst(rig):
     angle = r.trigger_angle()
     mark = r.mark()
     # The same command keeps coming at 50 Hz; over the next 25 states (0.5 s at 50 Hz) not
-    # one more shot, and the trigger holds still.
+    # one more shot, and the trigger holds (it may still creep the last few hundredths of
+    # a rad onto its hold against friction; another step would be 0.785 rad).
     assert wait_until(lambda: r.mark() >= mark + 25, WAIT)
     assert {s.shots_fired for s in r.states_since(mark)} == {2}
-    assert abs(r.trigger_angle() - angle) < 0.01
+    assert abs(r.trigger_angle() - angle) < 0.1
     # A new burst_id fires again.
     r.send(ShootCmd.PUSH, speed=15.0, hz=10.0, num=1, burst_id=8)
     assert wait_until(lambda: shots(r) >= 3, WAIT)

@@ -88,10 +88,13 @@ class ShooterConfig:
         friction_tolerance: a wheel is at speed within this of its target [rad/s].
         slots: trigger pockets per turn; one shot is one slot step of 2*pi/slots.
         feed_speed: trigger speed while feeding [rad/s], > 0.
+        step_speed: trigger speed of a slot step [rad/s], > 0: the setpoint moves from the
+            hold to the step's end at this speed, which is also the velocity feed-forward.
         step_tolerance: a slot step (or the reverse) is done within this [rad].
         max_hz: highest firing rate; faster commands are limited to it [shots/s].
         limit_switch: name of the ball switch on /gpio_state.
         switch_timeout: an older switch state is unknown [s].
+        switch_debounce: between shots, "no ball" must last this long before FEED [s].
         jam: when the trigger counts as jammed.
         reverse_angle: how far BLOCK turns the trigger back [rad], > 0.
         block_timeout: longest reverse before feeding again [s].
@@ -107,10 +110,12 @@ class ShooterConfig:
     friction_tolerance: float
     slots: int
     feed_speed: float
+    step_speed: float
     step_tolerance: float
     max_hz: float
     limit_switch: str
     switch_timeout: float
+    switch_debounce: float
     jam: JamDetectorParams
     reverse_angle: float
     block_timeout: float

@@ -105,9 +105,11 @@ class StandShooter(PluginBase):
             (velocity) until the switch reports a ball -> READY.
         READY: trigger holding the position where the ball arrived. A burst (PUSH with a
             new burst_id) -> PUSH.
-        PUSH: one slot step (position + 2*pi/slots) per shot, a step beginning at most
+        PUSH: one slot step (position + 2*pi/slots, the setpoint moving at ``step_speed``
+            with that speed as feed-forward) per shot, a step beginning at most
             every 1/hz s and only with every friction wheel at speed (within
-            ``friction_tolerance``) and a ball at the switch (none -> FEED). A shot counts
+            ``friction_tolerance``) and a ball at the switch (none for ``switch_debounce``
+            -> FEED). A shot counts
             when the trigger ends its step within ``step_tolerance``. Burst done -> READY.
         BLOCK: jam (trigger effort high and speed low for a while, in FEED or PUSH): the
             trigger turns back ``reverse_angle`` (position) until there or
@@ -172,6 +174,8 @@ class StandShooter(PluginBase):
         self._jam_position: float | None = None  # trigger position at the last jam [rad]
         self._hold: float | None = None  # READY/PUSH: trigger position held [rad]
         self._step_target: float | None = None  # PUSH: end of the step in progress [rad]
+        self._step_start_ns = 0
+        self._no_ball_since_ns: int | None = None  # PUSH: switch open since [ns]
         self._reverse_target = 0.0  # BLOCK [rad]
         self._block_start_ns = 0
         self._detector.reset()
@@ -365,6 +369,13 @@ class StandShooter(PluginBase):
         if self._step_target is not None:  # a step in progress
             if self._jammed(trigger, dt):
                 return self._start_block(trigger, now_ns)
+            # The setpoint moves from the hold to the step's end at step_speed, with that
+            # speed as feed-forward, so the trigger tracks it closely instead of creeping
+            # up to a jump of a whole slot.
+            moved = cfg.step_speed * (now_ns - self._step_start_ns) / _NS_PER_S
+            if moved < cfg.slot_angle:
+                setpoint = self._hold + moved * cfg.trigger_direction
+                return JointTarget.with_position(setpoint, cfg.step_speed * cfg.trigger_direction)
             if abs(trigger.position - self._step_target) > cfg.step_tolerance:
                 return JointTarget.with_position(self._step_target)
             self._hold, self._step_target = self._step_target, None
@@ -389,13 +400,21 @@ class StandShooter(PluginBase):
             self._enter(S.PUSH, self._wait_switch_text())
             return hold
         if not ball:
+            # The switch state comes through the gpio plugin a little later than the
+            # trigger's position: believe "no ball" only once it has lasted a while.
+            if self._no_ball_since_ns is None:
+                self._no_ball_since_ns = now_ns
+            if now_ns - self._no_ball_since_ns < cfg.switch_debounce * _NS_PER_S:
+                self._enter(S.PUSH, self._burst_text(burst))
+                return hold
             self._enter(S.FEED, 'no ball at the limit switch')
             return JointTarget.with_velocity(cfg.feed_speed * cfg.trigger_direction)
+        self._no_ball_since_ns = None
         self._enter(S.PUSH, self._burst_text(burst))
         self._step_target = self._hold + cfg.slot_angle * cfg.trigger_direction
-        burst.last_step_ns = now_ns
+        burst.last_step_ns = self._step_start_ns = now_ns
         self._detector.reset()
-        return JointTarget.with_position(self._step_target)
+        return JointTarget.with_position(self._hold, cfg.step_speed * cfg.trigger_direction)
 
     def _wait_switch_text(self) -> str:
         return f'waiting for the limit switch {self.config.limit_switch!r} on /gpio_state'
@@ -530,6 +549,12 @@ class StandShooter(PluginBase):
             feed_speed=p.double(
                 'feed_speed', description='trigger speed while feeding', unit='rad/s', gt=0.0
             ),
+            step_speed=p.double(
+                'step_speed',
+                description='trigger speed of a slot step (setpoint ramp and feed-forward)',
+                unit='rad/s',
+                gt=0.0,
+            ),
             step_tolerance=p.double(
                 'step_tolerance',
                 description='a slot step or the reverse is done within this',
@@ -546,6 +571,14 @@ class StandShooter(PluginBase):
                 description='an older limit switch state is unknown',
                 unit='s',
                 gt=0.0,
+            ),
+            switch_debounce=p.double(
+                'switch_debounce',
+                0.05,
+                description='between shots, the switch must read "no ball" this long '
+                'before the trigger feeds again',
+                unit='s',
+                ge=0.0,
             ),
             jam=JamDetectorParams(
                 effort_threshold=p.double(
