@@ -1,148 +1,74 @@
-"""rm_plugins/StandShooter end to end: can_bridge on rm_sim + rm_robot (gpio + shooter).
+"""rm_plugins/StandShooter end to end on the simulated robot (test/support/robot.py).
 
-Each test builds, in a private rclpy Context, the bridge of rm_bringup/config/standard.yaml
-with ``sim: true`` (channels of its own) and an rm_robot host running the ``gpio`` plugin
-(simulated backend: the ball switch closes while the trigger's phase is in its window)
-and the ``shooter`` plugin, both from the same file, plus a probe node that publishes
-/shoot_cmd at 50 Hz and records /shooter_state, /gpio_state and /actuator_states. One
-EventsExecutor spins the three in a background thread; the sim world runs in real time,
-so tests wait on conditions and check the physical outcome on the sim's motors.
-
-(A local rig until the shared harness test/support/robot.py exists.)
+Each test runs SimRobot (can_bridge on rm_sim + rm_robot, from standard.yaml and its
+simulation overlay) with the ``gpio`` plugin (simulated backend: the ball switch closes
+while the trigger's phase is in its window) and the ``shooter`` plugin, publishes
+/shoot_cmd at 50 Hz, and records /shooter_state, /gpio_state and /actuator_states. The
+world runs in real time, so tests wait on conditions and check the physical outcome on
+the sim's motors (trigger angle, friction wheel speeds).
 """
 
 from __future__ import annotations
 
 import math
-import os
-import pathlib
 import threading
 import time
-import uuid
 from typing import Any
 
 import numpy
 import pytest
-import rclpy
-import yaml
-from rclpy.experimental import EventsExecutor
-from rclpy.parameter import Parameter
-from rm_base.bridge import CanBridgeNode
-from rm_base.host import RobotHost
 from rm_base.sim import Fault, FaultKind
+from support.robot import SimRobot
 from support.ros import wait_until
 
 from rm_msgs.msg import ActuatorState, GpioState, ShootCmd, ShooterState
 
 pytestmark = pytest.mark.ros
 
-CONFIG = pathlib.Path(__file__).resolve().parents[2] / 'rm_bringup' / 'config' / 'standard.yaml'
 WAIT = 10.0  # longest wait for a condition [s]
 SLOT = 2.0 * math.pi / 8  # the trigger's slot: 8 pockets -> 0.785 rad per shot
 
-# Simulated friction wheel: an M3508 rotor driving a 60 mm wheel directly (gear 1). The
-# motor defaults are output-shaft values behind the 19.2:1 gearbox; the rotor's own are
-# those divided by the ratio (Ke, Coulomb) or its square (viscous): 0.45 / 19.2 V*s/rad,
-# 0.1 / 19.2 N*m, 2.5e-3 / 19.2^2 N*m*s/rad. Wheel + hub ~100 g at r = 30 mm:
-# 0.5 * 0.1 * 0.03^2 = 4.5e-5 kg*m^2, plus the rotor's 1.2e-5.
-FRICTION_SIM = {
-    'back_emf_constant': 0.45 / (3591 / 187),
-    'coulomb_friction': 0.1 / (3591 / 187),
-    'viscous_friction': 2.5e-3 / (3591 / 187) ** 2,
-    'load_inertia': 4.5e-5,
-}
+# A friction wheel + hub of ~100 g at r = 30 mm on the M3508 rotor (gear 1):
+# 0.5 * 0.1 * 0.03^2 = 4.5e-5 kg*m^2 (the rotor adds its own 1.2e-5).
+FRICTION_LOAD_INERTIA = 4.5e-5
 # The bridge clamps velocity targets to the motor type's default (an M3508's ~50 rad/s
 # behind its gearbox); a direct-drive rotor runs to ~1000 rad/s at 24 V.
 FRICTION_MAX_VELOCITY = 1000.0  # [rad/s]
 TRIGGER_LOAD_INERTIA = 2e-4  # [kg*m^2] the trigger disc with balls, at the output shaft
 
 
-def flatten(tree: dict[str, Any], prefix: str = '') -> dict[str, Any]:
-    """Nested YAML dict -> dotted ROS parameter names."""
-    flat = {}
-    for key, value in tree.items():
-        name = f'{prefix}{key}'
-        if isinstance(value, dict):
-            flat.update(flatten(value, name + '.'))
-        else:
-            flat[name] = value
-    return flat
-
-
 class ShooterRig:
-    """Bridge (sim) + rm_robot (gpio, shooter) + probe in one context."""
+    """SimRobot with gpio + shooter, a /shoot_cmd stream and recorders."""
 
-    def __init__(self, context: Any, **shooter: Any) -> None:
-        # Five nodes' threads and the 1 kHz sim share two cores here: a stall of a few
-        # hundred ms would time the command out and (by design) abandon the burst, so the
-        # tests allow 0.5 s (the robot config: 0.2 s).
+    def __init__(self, **shooter: Any) -> None:
+        # Five threads and the 1 kHz sim share two cores here: a stall of a few hundred ms
+        # would time the command out and (by design) abandon the burst, so the tests allow
+        # 0.5 s (the robot config: 0.2 s).
         shooter.setdefault('command_timeout', 0.5)
-        config = yaml.safe_load(CONFIG.read_text())
-        bridge = flatten(config['can_bridge']['ros__parameters'])
-        tag = f'{os.getpid()}-{uuid.uuid4().hex[:6]}'
-        for bus in config['can_bridge']['ros__parameters']['buses']:
-            bridge[f'buses.{bus}.channel'] = f'shooter-{tag}-{bus}'
-        bridge['sim'] = True
+        bridge = {}
         for wheel in ('friction_l', 'friction_r'):
-            bridge.update({f'joints.{wheel}.sim.{k}': v for k, v in FRICTION_SIM.items()})
-            bridge.setdefault(f'joints.{wheel}.max_velocity', FRICTION_MAX_VELOCITY)
+            bridge[f'joints.{wheel}.sim.load_inertia'] = FRICTION_LOAD_INERTIA
+            bridge[f'joints.{wheel}.max_velocity'] = FRICTION_MAX_VELOCITY
         bridge['joints.trigger.sim.load_inertia'] = TRIGGER_LOAD_INERTIA
-        robot_config = config['rm_robot']['ros__parameters']
-        robot = {'plugins': ['gpio', 'shooter']}
-        robot.update(flatten(robot_config['gpio'], 'gpio.'))
-        robot.update(flatten(robot_config['shooter'], 'shooter.'))
-        robot['gpio.backend'] = 'sim'
-        robot.update({f'shooter.{k}': v for k, v in shooter.items()})
-        self.shooter_config = robot_config['shooter']
-
-        self.bridge = CanBridgeNode(
-            context=context, parameter_overrides=[Parameter(k, value=v) for k, v in bridge.items()]
+        self.robot = SimRobot(
+            'standard',
+            plugins=['gpio', 'shooter'],
+            overrides={
+                'can_bridge': bridge,
+                'rm_robot': {f'shooter.{k}': v for k, v in shooter.items()},
+            },
         )
-        self.world = self.bridge.sim_world
-        try:
-            self.host = RobotHost(
-                context=context,
-                parameter_overrides=[Parameter(k, value=v) for k, v in robot.items()],
-            )
-        except BaseException:
-            self.bridge.destroy_node()
-            raise
-        self.probe = rclpy.create_node('shooter_probe', context=context)
+        self.robot_params = self.robot.host_parameters
+        self.host = self.robot.host
+        self.world = self.robot.world
+        self.robot.subscribe('/shooter_state', ShooterState, keep_history=True)
+        self.robot.subscribe('/gpio_state', GpioState)
         self._lock = threading.Lock()
-        self.states: list[ShooterState] = []
         self.samples: list[tuple[float, dict[str, float], dict[str, float]]] = []
-        self.switch: float | None = None
+        self.robot.driver.create_subscription(
+            ActuatorState, '/actuator_states', self._on_joints, 50
+        )
         self.command: ShootCmd | None = None
-        self._cmd_pub = self.probe.create_publisher(ShootCmd, 'shoot_cmd', 10)
-        self.probe.create_timer(0.02, self._publish_command)
-        self.probe.create_subscription(ShooterState, 'shooter_state', self._on_state, 50)
-        self.probe.create_subscription(GpioState, 'gpio_state', self._on_gpio, 10)
-        self.probe.create_subscription(ActuatorState, 'actuator_states', self._on_joints, 50)
-        self.executor = EventsExecutor(context=context)
-        for node in (self.bridge, self.host, self.probe):
-            self.executor.add_node(node)
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._spin, daemon=True)
-        self._thread.start()
-
-    # -- probe --------------------------------------------------------------------------------
-
-    def _spin(self) -> None:
-        while not self._stop.is_set():
-            self.executor.spin_once(timeout_sec=0.02)
-
-    def _publish_command(self) -> None:
-        command = self.command
-        if command is not None:
-            command.header.stamp = self.probe.get_clock().now().to_msg()
-            self._cmd_pub.publish(command)
-
-    def _on_state(self, msg: ShooterState) -> None:
-        with self._lock:
-            self.states.append(msg)
-
-    def _on_gpio(self, msg: GpioState) -> None:
-        self.switch = dict(zip(msg.name, msg.value, strict=True)).get('ball_switch')
 
     def _on_joints(self, msg: ActuatorState) -> None:
         position = dict(zip(msg.name, msg.position, strict=True))
@@ -150,32 +76,41 @@ class ShooterRig:
         with self._lock:
             self.samples.append((time.monotonic(), position, velocity))
 
+    # -- commands and states ------------------------------------------------------------------
+
     def send(
         self, mode: int, speed: float = 15.0, hz: float = 0.0, num: int = 0, burst_id: int = 0
     ):
-        """Publish this ShootCmd at 50 Hz from now on (None stops publishing)."""
-        self.command = ShootCmd(
-            mode=mode, speed=float(speed), hz=float(hz), num=num, burst_id=burst_id
+        """Publish this ShootCmd at 50 Hz from now on."""
+        self.resend(
+            ShootCmd(mode=mode, speed=float(speed), hz=float(hz), num=num, burst_id=burst_id)
         )
 
+    def resend(self, command: ShootCmd) -> None:
+        """Publish command at 50 Hz from now on (stamped at each publish)."""
+        self.command = command
+        self.robot.publish('/shoot_cmd', command, rate_hz=50.0)
+
     def stop_commands(self) -> None:
-        self.command = None
+        self.robot.stop_publishing('/shoot_cmd')
+
+    @property
+    def switch(self) -> float | None:
+        msg = self.robot.latest('/gpio_state')
+        return None if msg is None else dict(zip(msg.name, msg.value, strict=True))['ball_switch']
 
     def state(self) -> ShooterState | None:
-        with self._lock:
-            return self.states[-1] if self.states else None
+        return self.robot.latest('/shooter_state')
 
     def in_state(self, state: int) -> bool:
         latest = self.state()
         return latest is not None and latest.state == state
 
     def states_since(self, index: int) -> list[ShooterState]:
-        with self._lock:
-            return self.states[index:]
+        return self.robot.history('/shooter_state')[index:]
 
     def mark(self) -> int:
-        with self._lock:
-            return len(self.states)
+        return len(self.robot.history('/shooter_state'))
 
     # -- sim ground truth ---------------------------------------------------------------------
 
@@ -198,8 +133,10 @@ class ShooterRig:
 
     def lookup(self, speed: float) -> float:
         """Wheel speed for a bullet speed from the config's table (linear in between)."""
-        cfg = self.shooter_config
-        return float(numpy.interp(speed, cfg['bullet_speeds'], cfg['wheel_speeds']))
+        params = self.robot_params
+        return float(
+            numpy.interp(speed, params['shooter.bullet_speeds'], params['shooter.wheel_speeds'])
+        )
 
     def trigger_positions_since(self, t0: float) -> list[float]:
         """Trigger joint positions on /actuator_states received since monotonic time t0."""
@@ -207,21 +144,15 @@ class ShooterRig:
             return [p['trigger'] for t, p, _ in self.samples if t >= t0 and 'trigger' in p]
 
     def close(self) -> None:
-        self.stop_commands()
-        self._stop.set()
-        self._thread.join(timeout=5.0)
-        self.host.destroy_node()
-        self.executor.shutdown()
-        self.bridge.destroy_node()
-        self.probe.destroy_node()
+        self.robot.close()
 
 
 @pytest.fixture
-def rig(ros_context):
+def rig():
     made = []
 
     def make(**shooter):
-        made.append(ShooterRig(ros_context, **shooter))
+        made.append(ShooterRig(**shooter))
         return made[-1]
 
     yield make
@@ -410,7 +341,7 @@ def test_when_the_command_returns_after_a_dropout_expect_the_burst_not_fired_aga
     command = r.command
     r.stop_commands()
     assert wait_until(lambda: r.in_state(ShooterState.PASSIVE), WAIT)
-    r.command = command  # the same PUSH, burst 3, comes back
+    r.resend(command)  # the same PUSH, burst 3, comes back
     assert wait_until(lambda: r.in_state(ShooterState.READY), WAIT), r.state()
     mark = r.mark()
     assert wait_until(lambda: r.mark() >= mark + 25, WAIT)
@@ -428,7 +359,7 @@ def test_when_the_command_returns_after_a_dropout_expect_the_burst_not_fired_aga
 )
 def test_when_the_command_is_invalid_expect_it_rejected_and_nothing_moving(rig, fields, reason):
     r = rig()
-    r.command = ShootCmd(**fields)
+    r.resend(ShootCmd(**fields))
     assert wait_until(lambda: r.state() is not None and reason in r.state().reason, WAIT), r.state()
     assert r.state().state == ShooterState.PASSIVE
     mark = r.mark()
