@@ -198,3 +198,38 @@ def test_when_the_linux_backend_lacks_gpiod_expect_start_up_to_fail_naming_it(
     monkeypatch.setitem(sys.modules, 'gpiod', None)  # as if not installed
     with pytest.raises(PluginInitError, match=r"plugin 'gpio'.*Python package 'gpiod'"):
         GpioHarness(ros_context, **{'gpio.backend': 'linux'})
+
+
+def test_when_the_simulated_trigger_turns_expect_the_ball_switch_to_follow(ros_context):
+    # The whole simulated robot (standard.yaml + standard_sim.yaml, gpio only): the sim's
+    # trigger motor is turned by hand, the bridge reports it on /actuator_states, and the
+    # ball switch (window [0.15, 0.55] rad of phase in a 0.785 rad slot) follows.
+    from support.robot import SimRobot
+
+    with SimRobot('standard', plugins=['gpio']) as robot:
+        robot.subscribe('/gpio_state', GpioState)
+
+        def switch():
+            msg = robot.latest('/gpio_state')
+            return (
+                None if msg is None else dict(zip(msg.name, msg.value, strict=True))['ball_switch']
+            )
+
+        def turn_to(angle):
+            # In small steps (0.04 rad = 1.44 rad of the 36:1 rotor, under half a rotor turn)
+            # so the bridge's encoder unwrapping follows, as it follows a turning motor.
+            with robot.world.lock:
+                start = robot.world.motor('trigger').model.angle
+            steps = max(1, math.ceil(abs(angle - start) / 0.04))
+            for i in range(1, steps + 1):
+                target = start + (angle - start) * i / steps
+                with robot.world.lock:
+                    robot.world.motor('trigger').model.reset(angle=target)
+                assert robot.wait_until(
+                    lambda target=target: abs(robot.joint('trigger')['position'] - target) < 0.01,
+                    WAIT,
+                )
+
+        for angle, closed in [(0.0, 0.0), (0.3, 1.0), (0.7, 0.0), (0.3 + SLOT, 1.0)]:
+            turn_to(angle)
+            assert robot.wait_until(lambda closed=closed: switch() == closed, WAIT), angle
