@@ -1,0 +1,31 @@
+"""Yaw/pitch gimbal plugin stabilised by its IMU (``rm_plugins/StandGimbal``)."""
+
+from rm_plugins.gimbal.config import AxisConfig, GimbalConfig, read_config
+from rm_plugins.gimbal.control import (
+    Aim,
+    AxisLoop,
+    AxisOutput,
+    PlanarPose,
+    Smoother,
+    aim_at,
+    clamp,
+    sight_rates,
+)
+from rm_plugins.gimbal.plugin import GimbalMode, Measurement, StandGimbal
+
+__all__ = [
+    'Aim',
+    'AxisConfig',
+    'AxisLoop',
+    'AxisOutput',
+    'GimbalConfig',
+    'GimbalMode',
+    'Measurement',
+    'PlanarPose',
+    'Smoother',
+    'StandGimbal',
+    'aim_at',
+    'clamp',
+    'read_config',
+    'sight_rates',
+]

@@ -1,0 +1,490 @@
+"""StandGimbal: a yaw/pitch gimbal stabilised in the world by its IMU.
+
+Inputs:
+    /gimbal_cmd (rm_msgs/GimbalCmd, watched): the mode, rates or target point.
+    /imu (sensor_msgs/Imu): orientation and rates of the gimbal (the IMU is on it).
+    /odom (nav_msgs/Odometry): the chassis pose, for targets given in the odom frame.
+    /actuator_states: the yaw and pitch joints (through the framework).
+Outputs:
+    /actuator_cmd: velocity targets of the yaw and pitch joints, every tick.
+    /gimbal_state (rm_msgs/GimbalState): state, reason, world angles, targets, joints.
+
+States (``GimbalMode``, numbered as ``GimbalCmd``), all chosen in ``_decide``:
+
+- PASSIVE: joints off (limp). Commanded, or no command within ``command_timeout`` (the
+  watchdog; limp is the safe state of DESIGN.md: a gimbal that lost its operator must not
+  keep driving), or a command rejected as invalid (NaN, unknown mode or frame), or the
+  IMU or a joint has no fresh data (no stabilisation is possible without them).
+- RATE: ``rate_yaw``/``rate_pitch`` are integrated into a target held in the *world*
+  frame, so the aim stays put while the chassis turns or spins.
+- TRACK: aim at ``target`` (a point in an odom/world frame or in base_link) and keep
+  aiming as the chassis moves; with ``bullet_speed > 0`` the pitch compensates the drop
+  (``rm_base.geometry.ballistics``). Without fresh odometry an odom target holds the aim.
+
+Control (see ``rm_plugins.gimbal.control``): an angle PID per axis on the IMU's world
+angle gives a world rate; the joint velocity target is that rate minus the rate of the
+joint's base (IMU rate minus joint velocity: the chassis spin for yaw), and the bridge's
+1 kHz velocity loop closes it on the motor encoder. Why not the classic angle PID -> gyro
+rate PID -> motor current in this plugin: the inner loop wants 1 kHz without jitter, and
+this loop runs in a Python thread behind a topic hop, stalled now and then by CPU steal
+for tens of ms. A velocity target survives such a stall (the motor keeps turning at a
+sane rate under its own 1 kHz loop); a stale current does not. The IMU gyro still enters
+every tick, as the base-rate feed-forward that makes the gimbal ignore the chassis' spin.
+
+Pitch is clamped to ``[pitch_min, pitch_max]`` twice: the world target is clamped to what
+those joint limits allow, and the joint velocity is bounded near a limit.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from dataclasses import dataclass
+from enum import IntEnum
+from typing import Any
+
+from nav_msgs.msg import Odometry
+from rclpy.qos import qos_profile_sensor_data
+from rm_base.errors import InputRejectedError
+from rm_base.geometry import rpy_from_quaternion, wrap_to_pi, yaw_from_quaternion
+from rm_base.plugin import JointTarget, PluginBase
+from rm_base.plugin.commands import stamp_ns_of
+from sensor_msgs.msg import Imu
+
+from rm_msgs.msg import GimbalCmd, GimbalState
+from rm_plugins.gimbal.config import GimbalConfig, read_config
+from rm_plugins.gimbal.control import (
+    AxisLoop,
+    PlanarPose,
+    Smoother,
+    aim_at,
+    clamp,
+    sight_rates,
+)
+
+_NS_PER_S = 1_000_000_000
+
+
+class GimbalMode(IntEnum):
+    """States of the gimbal plugin; values are GimbalCmd's modes."""
+
+    PASSIVE = GimbalCmd.PASSIVE
+    RATE = GimbalCmd.RATE
+    TRACK = GimbalCmd.TRACK
+
+
+class _Latest:
+    """The newest message of a topic with its stamp, handed from a callback to run()."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._value: tuple[Any, int] | None = None
+
+    def put(self, msg: Any, receive_ns: int) -> None:
+        stamp_ns = stamp_ns_of(msg) or receive_ns
+        with self._lock:
+            self._value = (msg, stamp_ns)
+
+    def get(self) -> tuple[Any, int] | None:
+        with self._lock:
+            return self._value
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """The gimbal now: IMU values brought forward to this tick with their rates.
+
+    Attributes:
+        yaw: barrel heading in the IMU's world frame [rad].
+        pitch: barrel pitch, positive down [rad].
+        yaw_rate: world yaw rate [rad/s].
+        pitch_rate: pitch rate about the barrel's y axis [rad/s].
+        yaw_joint, pitch_joint: joint angles [rad].
+        yaw_joint_velocity, pitch_joint_velocity: [rad/s].
+    """
+
+    yaw: float
+    pitch: float
+    yaw_rate: float
+    pitch_rate: float
+    yaw_joint: float
+    pitch_joint: float
+    yaw_joint_velocity: float
+    pitch_joint_velocity: float
+
+    @property
+    def base_yaw(self) -> float:
+        """Heading of the chassis (the yaw joint's base) in the IMU's world frame [rad]."""
+        return self.yaw - self.yaw_joint
+
+
+@dataclass(frozen=True)
+class _Odom:
+    """The chassis in the odom frame, brought forward to this tick.
+
+    Attributes:
+        pose: planar pose (x, y [m], yaw [rad]).
+        z: height of base_link [m].
+        vx, vy, wz: body twist [m/s, m/s, rad/s].
+    """
+
+    pose: PlanarPose
+    z: float
+    vx: float
+    vy: float
+    wz: float
+
+
+@dataclass(frozen=True)
+class _Aim:
+    """A TRACK decision: world targets (IMU world frame) and their rates.
+
+    Attributes:
+        yaw, pitch: targets [rad].
+        yaw_rate, pitch_rate: feed-forward [rad/s] from the chassis' own motion.
+        follows_base: the target is fixed to the chassis; its yaw turns with it, so the
+            chassis' yaw rate is added to yaw_rate.
+    """
+
+    yaw: float
+    pitch: float
+    yaw_rate: float = 0.0
+    pitch_rate: float = 0.0
+    follows_base: bool = False
+
+
+class StandGimbal(PluginBase):
+    """Yaw/pitch gimbal: PASSIVE, RATE (IMU-stabilised), TRACK (aim at a point).
+
+    Parameters: see ``rm_plugins.gimbal.config.read_config`` and the ``gimbal:`` section of
+    rm_bringup/config/standard.yaml.
+    """
+
+    State = GimbalMode
+
+    def on_init(self) -> None:
+        """Read the config, claim the joints, subscribe and create the state publisher."""
+        self.config: GimbalConfig = read_config(self.params)
+        cfg = self.config
+        self.claim_joints([cfg.yaw.joint, cfg.pitch.joint])
+        self.command = self.subscribe_command(cfg.command_topic, GimbalCmd)
+        clock = self.node.get_clock()
+        self._imu = _Latest()
+        self._odom = _Latest()
+        self.node.create_subscription(
+            Imu,
+            cfg.imu_topic,
+            lambda m: self._imu.put(m, clock.now().nanoseconds),
+            qos_profile_sensor_data,
+        )
+        self.node.create_subscription(
+            Odometry,
+            cfg.odom_topic,
+            lambda m: self._odom.put(m, clock.now().nanoseconds),
+            qos_profile_sensor_data,
+        )
+        self._gimbal_state_pub = self.node.create_publisher(GimbalState, cfg.state_topic, 10)
+        self._imu_topic = self.node.resolve_topic_name(cfg.imu_topic)
+        self._odom_topic = self.node.resolve_topic_name(cfg.odom_topic)
+        self._yaw_loop = AxisLoop(cfg.yaw.angle_pid, cfg.yaw.max_joint_velocity)
+        self._pitch_loop = AxisLoop(cfg.pitch.angle_pid, cfg.pitch.max_joint_velocity)
+        self._yaw_base_rate = Smoother(cfg.base_rate_tau)
+        self._pitch_base_rate = Smoother(cfg.base_rate_tau)
+        self._base_pitch = Smoother(cfg.base_rate_tau)
+        # Yaw of the odom frame in the IMU's world frame; 0 until odometry is seen.
+        self._odom_offset = Smoother(cfg.odom_alignment_tau, angle=True)
+        self._state_period_ns = round(_NS_PER_S / cfg.state_rate)
+        self._next_state_ns = 0
+        self._published_mode: GimbalMode | None = None
+        self.on_reset()
+
+    def on_reset(self) -> None:
+        """Forget targets, integrators and filters (enable, disable, command lost)."""
+        self._yaw_target: float | None = None
+        self._pitch_target: float | None = None
+        self._active_mode = GimbalMode.PASSIVE
+        self._yaw_loop.reset()
+        self._pitch_loop.reset()
+        for smoother in (
+            self._yaw_base_rate,
+            self._pitch_base_rate,
+            self._base_pitch,
+        ):
+            smoother.reset()
+
+    # -- tick -------------------------------------------------------------------------------
+
+    def update(self, now: Any, dt: float) -> None:
+        """Decide the state, run the loops, send both joints' targets, publish the state."""
+        now_ns = now.nanoseconds
+        if not dt > 0.0:
+            return
+        cmd = self.command.latest(now_ns)
+        measurement = self._measure(now_ns)
+        odom = self._odom_pose(now_ns)
+        if isinstance(measurement, Measurement) and not isinstance(odom, str):
+            # Follow the yaw of the odom frame in the IMU's world frame (drift, start-up).
+            self._odom_offset.update(wrap_to_pi(measurement.base_yaw - odom.pose.yaw), dt)
+        mode, reason, aim = self._decide(cmd, measurement, odom)
+        self.transition(mode, reason)
+        if mode is GimbalMode.PASSIVE or not isinstance(measurement, Measurement):
+            self._go_limp()
+        else:
+            self._control(mode, cmd, measurement, aim, dt)
+        self._publish_state(now, measurement)
+
+    def on_command_lost(self, now: Any, dt: float) -> None:
+        """No command: joints off (the framework is already in PASSIVE with the reason)."""
+        self._go_limp()
+        self._publish_state(now, self._measure(now.nanoseconds))
+
+    def _go_limp(self) -> None:
+        self.zero_output()
+        if self._active_mode is not GimbalMode.PASSIVE:
+            self.on_reset()
+
+    # -- the state machine ------------------------------------------------------------------
+
+    def _decide(
+        self,
+        cmd: GimbalCmd | None,
+        measurement: Measurement | str,
+        odom: _Odom | str,
+    ) -> tuple[GimbalMode, str, _Aim | None]:
+        """The one place that chooses the state: (state, reason, TRACK aim or None)."""
+        if cmd is None:
+            return GimbalMode.PASSIVE, 'no command', None
+        if cmd.mode == GimbalCmd.PASSIVE:
+            return GimbalMode.PASSIVE, 'commanded', None
+        if cmd.mode not in (GimbalCmd.RATE, GimbalCmd.TRACK):
+            return GimbalMode.PASSIVE, f'rejected command: unknown mode {cmd.mode}', None
+        if cmd.mode == GimbalCmd.RATE:
+            if not (math.isfinite(cmd.rate_yaw) and math.isfinite(cmd.rate_pitch)):
+                return GimbalMode.PASSIVE, 'rejected command: rate is not finite', None
+        if isinstance(measurement, str):
+            return GimbalMode.PASSIVE, measurement, None
+        if cmd.mode == GimbalCmd.RATE:
+            return GimbalMode.RATE, 'rates held in the world frame', None
+        return self._decide_track(cmd, measurement, odom)
+
+    def _decide_track(
+        self, cmd: GimbalCmd, m: Measurement, odom: _Odom | str
+    ) -> tuple[GimbalMode, str, _Aim | None]:
+        cfg = self.config
+        point = cmd.target.point
+        frame = cmd.target.header.frame_id
+        if not all(math.isfinite(v) for v in (point.x, point.y, point.z, cmd.bullet_speed)):
+            return GimbalMode.PASSIVE, 'rejected command: target or bullet speed not finite', None
+        px, py, pz = cfg.pivot
+        if frame in cfg.base_frames:
+            aim = aim_at(
+                (point.x - px, point.y - py, point.z - pz), cmd.bullet_speed, cfg.projectile
+            )
+            yaw_target = m.base_yaw + aim.bearing
+            # A point fixed to the chassis: its bearing turns with the chassis, no more.
+            rates = (0.0, 0.0)
+        elif frame in cfg.world_frames:
+            if isinstance(odom, str):
+                return GimbalMode.TRACK, f'holding the aim: {odom}', None
+            pivot_x, pivot_y = odom.pose.to_world(px, py)
+            offset = (point.x - pivot_x, point.y - pivot_y, point.z - odom.z - pz)
+            aim = aim_at(offset, cmd.bullet_speed, cfg.projectile)
+            yaw_target = aim.bearing + (self._odom_offset.value or 0.0)
+            # A point fixed in odom: the line of sight turns as the pivot moves.
+            vx, vy = odom.pose.velocity_of(px, py, odom.vx, odom.vy, odom.wz)
+            rates = sight_rates(offset, (-vx, -vy, 0.0))
+        else:
+            known = ', '.join((*cfg.world_frames, *cfg.base_frames))
+            return (
+                GimbalMode.PASSIVE,
+                f'rejected command: unknown target frame {frame!r} (known: {known})',
+                None,
+            )
+        if aim.distance < cfg.min_track_distance:
+            return (
+                GimbalMode.TRACK,
+                f'holding the aim: target within {cfg.min_track_distance} m of the yaw axis',
+                None,
+            )
+        reason = f'tracking a point in {frame}'
+        if not aim.in_range:
+            reason += ': out of range at the bullet speed, aiming along the line of sight'
+        return (
+            GimbalMode.TRACK,
+            reason,
+            _Aim(wrap_to_pi(yaw_target), aim.pitch, *rates, follows_base=frame in cfg.base_frames),
+        )
+
+    # -- control ----------------------------------------------------------------------------
+
+    def _control(
+        self, mode: GimbalMode, cmd: GimbalCmd, m: Measurement, aim: _Aim | None, dt: float
+    ) -> None:
+        cfg = self.config
+        if self._active_mode is GimbalMode.PASSIVE or self._yaw_target is None:
+            # From limp to active: start where the barrel points, with fresh loops.
+            self.on_reset()
+            self._yaw_target, self._pitch_target = m.yaw, m.pitch
+        self._active_mode = mode
+
+        yaw_base_rate = self._yaw_base_rate.update(m.yaw_rate - m.yaw_joint_velocity, dt)
+        pitch_base_rate = self._pitch_base_rate.update(m.pitch_rate - m.pitch_joint_velocity, dt)
+        base_pitch = self._base_pitch.update(m.pitch - m.pitch_joint, dt)
+
+        yaw_rate = cfg.yaw.angle_pid.output_limit
+        pitch_rate = cfg.pitch.angle_pid.output_limit
+        if mode is GimbalMode.RATE:
+            yaw_ff = clamp(cmd.rate_yaw, -yaw_rate, yaw_rate)
+            pitch_ff = clamp(cmd.rate_pitch, -pitch_rate, pitch_rate)
+            # Integrate, but never lead the barrel by more than max_target_lead: a gimbal
+            # held back (blocked, or its loop starved) must not wind the target up.
+            lead = cfg.max_target_lead
+            yaw_target = m.yaw + clamp(
+                wrap_to_pi(self._yaw_target + yaw_ff * dt - m.yaw), -lead, lead
+            )
+            pitch_target = m.pitch + clamp(
+                self._pitch_target + pitch_ff * dt - m.pitch, -lead, lead
+            )
+        elif aim is not None:
+            yaw_ff = clamp(
+                aim.yaw_rate + (yaw_base_rate if aim.follows_base else 0.0), -yaw_rate, yaw_rate
+            )
+            pitch_ff = clamp(aim.pitch_rate, -pitch_rate, pitch_rate)
+            yaw_target, pitch_target = aim.yaw, aim.pitch
+        else:  # TRACK, holding the aim
+            yaw_ff = pitch_ff = 0.0
+            yaw_target, pitch_target = self._yaw_target, self._pitch_target
+
+        # The joint limits, seen in the world: the base may be tilted.
+        low, high = cfg.pitch_min + base_pitch, cfg.pitch_max + base_pitch
+        if not low <= pitch_target <= high:
+            pitch_target = clamp(pitch_target, low, high)
+            pitch_ff = 0.0
+        self._yaw_target, self._pitch_target = wrap_to_pi(yaw_target), pitch_target
+
+        yaw = self._yaw_loop.update(
+            target=yaw_target,
+            measured=m.yaw,
+            rate_feedforward=yaw_ff,
+            base_rate=yaw_base_rate,
+            dt=dt,
+        )
+        pitch = self._pitch_loop.update(
+            target=pitch_target,
+            measured=m.pitch,
+            rate_feedforward=pitch_ff,
+            base_rate=pitch_base_rate,
+            dt=dt,
+            joint_angle=m.pitch_joint,
+            joint_limits=(cfg.pitch_min, cfg.pitch_max),
+            limit_gain=cfg.limit_gain,
+        )
+        self.send_joint_targets(
+            {
+                cfg.yaw.joint: JointTarget.with_velocity(yaw.joint_velocity),
+                cfg.pitch.joint: JointTarget.with_velocity(pitch.joint_velocity),
+            }
+        )
+
+    # -- inputs -----------------------------------------------------------------------------
+
+    def _measure(self, now_ns: int) -> Measurement | str:
+        """Return the measurement brought forward to now_ns, or why there is none."""
+        cfg = self.config
+        sample = self._imu.get()
+        if sample is None:
+            return f'no IMU data on {self._imu_topic}'
+        imu, stamp_ns = sample
+        age = (now_ns - stamp_ns) / _NS_PER_S
+        if abs(age) > cfg.imu_timeout:
+            return f'no IMU data on {self._imu_topic} within {cfg.imu_timeout:.3f} s'
+        if imu.orientation_covariance[0] == -1.0:
+            return f'IMU on {self._imu_topic} gives no orientation'
+        o, w = imu.orientation, imu.angular_velocity
+        try:
+            roll, pitch, yaw = rpy_from_quaternion((o.x, o.y, o.z, o.w))
+        except InputRejectedError as err:
+            return f'IMU on {self._imu_topic}: {err}'
+        if not (math.isfinite(w.x) and math.isfinite(w.y) and math.isfinite(w.z)):
+            return f'IMU on {self._imu_topic}: angular velocity not finite'
+        # Body rates -> Euler rates of R = Rz(yaw) Ry(pitch) Rx(roll): the world yaw rate is
+        # the z row of R applied to them, (-sin p, cos p sin r, cos p cos r); the pitch rate
+        # is cos r * wy - sin r * wz (wy for a level base).
+        sr, cr = math.sin(roll), math.cos(roll)
+        sp, cp = math.sin(pitch), math.cos(pitch)
+        yaw_rate = -sp * w.x + cp * sr * w.y + cp * cr * w.z
+        pitch_rate = cr * w.y - sr * w.z
+        ahead = max(age, 0.0)
+        joints = []
+        for name in (cfg.yaw.joint, cfg.pitch.joint):
+            state = self.joint_states.get(name)
+            if state is None:
+                return f'no state of joint {name}'
+            if not state.online:
+                return f'joint {name} is offline'
+            joint_age = (now_ns - state.stamp_ns) / _NS_PER_S
+            if abs(joint_age) > cfg.joint_timeout:
+                return f'no state of joint {name} within {cfg.joint_timeout:.3f} s'
+            if not (math.isfinite(state.position) and math.isfinite(state.velocity)):
+                return f'joint {name}: state not finite'
+            joints.append((state.position + state.velocity * max(joint_age, 0.0), state.velocity))
+        (yaw_joint, yaw_velocity), (pitch_joint, pitch_velocity) = joints
+        return Measurement(
+            yaw=wrap_to_pi(yaw + yaw_rate * ahead),
+            pitch=pitch + pitch_rate * ahead,
+            yaw_rate=yaw_rate,
+            pitch_rate=pitch_rate,
+            yaw_joint=yaw_joint,
+            pitch_joint=pitch_joint,
+            yaw_joint_velocity=yaw_velocity,
+            pitch_joint_velocity=pitch_velocity,
+        )
+
+    def _odom_pose(self, now_ns: int) -> _Odom | str:
+        """Return the chassis in odom brought forward to now_ns, or why there is none."""
+        sample = self._odom.get()
+        if sample is None:
+            return f'no odometry on {self._odom_topic}'
+        odom, stamp_ns = sample
+        age = (now_ns - stamp_ns) / _NS_PER_S
+        if abs(age) > self.config.odom_timeout:
+            return f'no odometry on {self._odom_topic} within {self.config.odom_timeout:.3f} s'
+        p, o = odom.pose.pose.position, odom.pose.pose.orientation
+        v, w = odom.twist.twist.linear, odom.twist.twist.angular
+        try:
+            yaw = yaw_from_quaternion((o.x, o.y, o.z, o.w))
+        except InputRejectedError as err:
+            return f'odometry on {self._odom_topic}: {err}'
+        values = (p.x, p.y, p.z, v.x, v.y, w.z)
+        if not all(math.isfinite(x) for x in values):
+            return f'odometry on {self._odom_topic} is not finite'
+        pose = PlanarPose(p.x, p.y, yaw).extrapolated(v.x, v.y, w.z, max(age, 0.0))
+        return _Odom(pose, p.z, v.x, v.y, w.z)
+
+    # -- output -----------------------------------------------------------------------------
+
+    def _publish_state(self, now: Any, measurement: Measurement | str) -> None:
+        now_ns = now.nanoseconds
+        mode = self.state
+        if now_ns < self._next_state_ns and mode is self._published_mode:
+            return
+        self._next_state_ns = now_ns + self._state_period_ns
+        self._published_mode = mode
+        offset = self._odom_offset.value or 0.0
+        msg = GimbalState()
+        msg.header.stamp = now.to_msg()
+        msg.header.frame_id = self.config.world_frames[0]
+        msg.state = int(mode)
+        msg.reason = self.reason
+        nan = math.nan
+        if isinstance(measurement, Measurement):
+            msg.yaw = wrap_to_pi(measurement.yaw - offset)
+            msg.pitch = measurement.pitch
+            msg.yaw_joint = measurement.yaw_joint
+            msg.pitch_joint = measurement.pitch_joint
+        else:
+            msg.yaw = msg.pitch = msg.yaw_joint = msg.pitch_joint = nan
+        active = mode is not GimbalMode.PASSIVE and self._yaw_target is not None
+        msg.yaw_target = wrap_to_pi(self._yaw_target - offset) if active else nan
+        msg.pitch_target = self._pitch_target if active else nan
+        self._gimbal_state_pub.publish(msg)
