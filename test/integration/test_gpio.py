@@ -16,6 +16,7 @@ from rclpy.experimental import EventsExecutor
 from rclpy.parameter import Parameter
 from rm_base.host import RobotHost
 from rm_base.plugin import PluginInitError
+from support.robot import SimRobot
 from support.ros import wait_until
 
 from rm_msgs.msg import ActuatorState, GpioCmd, GpioState
@@ -200,12 +201,10 @@ def test_when_the_linux_backend_lacks_gpiod_expect_start_up_to_fail_naming_it(
         GpioHarness(ros_context, **{'gpio.backend': 'linux'})
 
 
-def test_when_the_simulated_trigger_turns_expect_the_ball_switch_to_follow(ros_context):
+def test_when_the_simulated_trigger_turns_expect_the_ball_switch_to_follow():
     # The whole simulated robot (standard.yaml + standard_sim.yaml, gpio only): the sim's
     # trigger motor is turned by hand, the bridge reports it on /actuator_states, and the
     # ball switch (window [0.15, 0.55] rad of phase in a 0.785 rad slot) follows.
-    from support.robot import SimRobot
-
     with SimRobot('standard', plugins=['gpio']) as robot:
         robot.subscribe('/gpio_state', GpioState)
 
