@@ -59,6 +59,18 @@ def test_configured_gear_ratio_scales_the_default_torque_constant():
     assert a.feedback.effort == pytest.approx(20 * 0.3 / M3508_GEAR)
 
 
+def test_configured_gear_ratio_scales_the_default_speed_and_effort_limits():
+    # The same motor without its 19.2:1 gearbox: speed limit x19.2, effort limit /19.2.
+    stock, direct = make(), make(gear_ratio=1.0)
+    assert direct.max_velocity == pytest.approx(stock.max_velocity * M3508_GEAR)
+    assert direct.max_effort == pytest.approx(stock.max_effort / M3508_GEAR)
+
+
+def test_explicit_limits_win_over_the_scaled_defaults():
+    a = make(gear_ratio=1.0, max_velocity=900.0, max_effort=0.25)
+    assert (a.max_velocity, a.max_effort) == (900.0, 0.25)
+
+
 def test_gm6020_wraps_multi_turn_and_starts_near_zero():
     a = make('gm6020')
     # 8000 ticks = 6.1359 rad -> started within half a turn of zero: 6.1359 - 2pi = -0.14726

@@ -249,16 +249,23 @@ class Actuator:
         self.bus_name = config.bus
         self.direction = config.direction
         self.gear_ratio = config.gear_ratio if config.gear_ratio is not None else d.gear_ratio
+        # The type defaults are at the stock gearbox: behind another gear ratio the same
+        # motor gives torque x (ratio / stock) and speed x (stock / ratio) at the joint
+        # (e.g. an M3508 friction wheel without its 19.2:1 gearbox spins 19.2x faster).
+        torque_scale = self.gear_ratio / d.gear_ratio
         if config.torque_constant is not None:
             self.torque_constant = config.torque_constant
         elif d.torque_constant is not None:
-            # the default is at the stock gearbox; scale it with a configured gear ratio
-            self.torque_constant = d.torque_constant * self.gear_ratio / d.gear_ratio
+            self.torque_constant = d.torque_constant * torque_scale
         else:
             self.torque_constant = None
-        self.max_effort = config.max_effort if config.max_effort is not None else d.max_effort
+        self.max_effort = (
+            config.max_effort if config.max_effort is not None else d.max_effort * torque_scale
+        )
         self.max_velocity = (
-            config.max_velocity if config.max_velocity is not None else d.max_velocity
+            config.max_velocity
+            if config.max_velocity is not None
+            else d.max_velocity / torque_scale
         )
         self.temperature_limit = (
             config.temperature_limit
