@@ -271,6 +271,25 @@ def test_tracking_a_base_link_point_aims_relative_to_the_chassis(harness):
     assert h.state().pitch_target == pytest.approx(-0.4)
 
 
+def test_with_a_bullet_speed_the_pitch_target_compensates_the_drop(harness):
+    # No drag: the closed form. Target 8 m straight ahead, level with the pivot, 15 m/s:
+    #   tan(theta) = (v^2 - sqrt(v^4 - g^2 d^2)) / (g d)
+    #              = (225 - sqrt(50625 - 6154.9)) / 78.453 = 0.17996 -> theta = 0.1781 rad
+    # above the line of sight: REP 103 pitch target -0.1781 (barrel up).
+    h = harness(**{'gimbal.bullet_drag': 0.0, 'gimbal.barrel_length': 0.0})
+    h.command(GimbalCmd.TRACK, frame='base_link', point=(8.0, 0.0, 0.3), bullet_speed=15.0)
+    assert wait_until(lambda: in_state(h, GimbalCmd.TRACK, 'tracking a point in base_link'), WAIT)
+    assert wait_until(lambda: h.state().pitch_target == pytest.approx(-0.1781, abs=1e-4), WAIT)
+    # 5 m/s reaches at most v^2 / g = 2.55 m: out of range, aim along the line of sight.
+    h.command(GimbalCmd.TRACK, frame='base_link', point=(8.0, 0.0, 0.3), bullet_speed=5.0)
+    out_of_range = (
+        'tracking a point in base_link: out of range at the bullet speed, '
+        'aiming along the line of sight'
+    )
+    assert wait_until(lambda: in_state(h, GimbalCmd.TRACK, out_of_range), WAIT)
+    assert wait_until(lambda: h.state().pitch_target == pytest.approx(0.0, abs=1e-9), WAIT)
+
+
 def test_an_odom_target_without_odometry_holds_the_aim_and_says_why(harness):
     h = harness()
     h.command(GimbalCmd.TRACK, frame='odom', point=(3.0, 0.0, 0.3))

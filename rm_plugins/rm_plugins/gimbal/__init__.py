@@ -2,19 +2,16 @@
 
 from rm_plugins.gimbal.config import AxisConfig, GimbalConfig, read_config
 from rm_plugins.gimbal.control import (
-    Aim,
     AxisLoop,
     AxisOutput,
     PlanarPose,
     Smoother,
-    aim_at,
     clamp,
     sight_rates,
 )
 from rm_plugins.gimbal.plugin import GimbalMode, Measurement, StandGimbal
 
 __all__ = [
-    'Aim',
     'AxisConfig',
     'AxisLoop',
     'AxisOutput',
@@ -24,7 +21,6 @@ __all__ = [
     'PlanarPose',
     'Smoother',
     'StandGimbal',
-    'aim_at',
     'clamp',
     'read_config',
     'sight_rates',

@@ -42,6 +42,7 @@ class GimbalConfig:
         base_rate_tau: low-pass time constant of the chassis-rate estimate [s].
         odom_alignment_tau: low-pass time constant of the IMU-world <-> odom yaw offset [s].
         pivot: position of the yaw/pitch axes' crossing in base_link (x, y, z) [m].
+        barrel_length: pivot to muzzle [m]; with a bullet speed the shot starts there.
         world_frames: frame ids taken as the odometry (world) frame.
         base_frames: frame ids taken as the robot frame (base_link).
         min_track_distance: a TRACK target closer than this to the yaw axis
@@ -66,6 +67,7 @@ class GimbalConfig:
     base_rate_tau: float
     odom_alignment_tau: float
     pivot: tuple[float, float, float]
+    barrel_length: float
     world_frames: tuple[str, ...]
     base_frames: tuple[str, ...]
     min_track_distance: float
@@ -262,6 +264,13 @@ def read_config(p: PluginParams) -> GimbalConfig:
             description='low-pass of the IMU-world/odom yaw offset',
         ),
         pivot=pivot,
+        barrel_length=p.double(
+            'barrel_length',
+            0.0,
+            ge=0.0,
+            unit='m',
+            description='pivot to muzzle; bullets start at the muzzle',
+        ),
         world_frames=world_frames,
         base_frames=base_frames,
         min_track_distance=p.double(

@@ -1,4 +1,4 @@
-"""Gimbal maths the plugin orchestrates: the per-axis loop, aiming, pose extrapolation.
+"""Gimbal maths the plugin orchestrates: the per-axis loop, sight-line rates, planar poses.
 
 No ROS here. Angles in rad, REP 103: yaw positive to the left, pitch positive *down*.
 
@@ -21,7 +21,6 @@ from dataclasses import dataclass
 
 from rm_base.control import LowPassFilter, Pid, PidGains
 from rm_base.geometry import wrap_to_pi
-from rm_base.geometry.ballistics import ProjectileModel, solve_ballistic
 
 
 def clamp(value: float, low: float, high: float) -> float:
@@ -136,54 +135,6 @@ class AxisLoop:
             )
         velocity = clamp(velocity, -self._max_velocity, self._max_velocity)
         return AxisOutput(world_rate, velocity)
-
-
-@dataclass(frozen=True)
-class Aim:
-    """Where to point the barrel to hit a point.
-
-    Attributes:
-        bearing: heading of the point from the pivot [rad], in the frame of the offset.
-        distance: horizontal distance from the pivot [m].
-        height: height of the point above the pivot [m].
-        pitch: REP 103 pitch of the barrel (positive down) [rad]: the ballistic solution,
-            or the line of sight when no speed was given or the point is out of range.
-        in_range: False if a speed was given and no shot reaches the point.
-    """
-
-    bearing: float
-    distance: float
-    height: float
-    pitch: float
-    in_range: bool = True
-
-
-def aim_at(
-    offset: tuple[float, float, float],
-    bullet_speed: float,
-    projectile: ProjectileModel,
-) -> Aim:
-    """Aim at a point given by its offset from the pivot.
-
-    Args:
-        offset: (x, y, z) from the yaw/pitch axes' crossing to the point [m], in a frame
-            whose z is up.
-        bullet_speed: muzzle speed [m/s]; <= 0 aims along the line of sight.
-        projectile: drag and gravity.
-
-    Returns:
-        The bearing, the distance and the barrel pitch.
-    """
-    dx, dy, dz = offset
-    distance = math.hypot(dx, dy)
-    bearing = math.atan2(dy, dx)
-    line_of_sight = -math.atan2(dz, distance)
-    if bullet_speed <= 0.0:
-        return Aim(bearing, distance, dz, line_of_sight)
-    solution = solve_ballistic(distance, dz, bullet_speed, projectile)
-    if solution is None:
-        return Aim(bearing, distance, dz, line_of_sight, in_range=False)
-    return Aim(bearing, distance, dz, solution.pitch)
 
 
 def sight_rates(

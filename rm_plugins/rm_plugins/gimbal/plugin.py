@@ -15,11 +15,15 @@ States (``GimbalMode``, numbered as ``GimbalCmd``), all chosen in ``_decide``:
   watchdog; limp is the safe state of DESIGN.md: a gimbal that lost its operator must not
   keep driving), or a command rejected as invalid (NaN, unknown mode or frame), or the
   IMU or a joint has no fresh data (no stabilisation is possible without them).
-- RATE: ``rate_yaw``/``rate_pitch`` are integrated into a target held in the *world*
-  frame, so the aim stays put while the chassis turns or spins.
+- RATE: ``rate_yaw``/``rate_pitch`` (clamped to the axis' max_rate) are integrated into
+  a target held in the *world* frame, so the aim stays put while the chassis turns or
+  spins; the target never leads the barrel by more than ``max_target_lead``.
 - TRACK: aim at ``target`` (a point in an odom/world frame or in base_link) and keep
   aiming as the chassis moves; with ``bullet_speed > 0`` the pitch compensates the drop
-  (``rm_base.geometry.ballistics``). Without fresh odometry an odom target holds the aim.
+  (``rm_base.geometry.aim``, from the muzzle ``barrel_length`` along the barrel). Without
+  fresh odometry an odom target holds the aim. The IMU's world frame is tied to odom by
+  a slowly filtered yaw offset (chassis heading by IMU minus yaw joint, against the odom
+  heading), so the loops run on the IMU while targets come in odom.
 
 Control (see ``rm_plugins.gimbal.control``): an angle PID per axis on the IMU's world
 angle gives a world rate; the joint velocity target is that rate minus the rate of the
@@ -30,6 +34,7 @@ this loop runs in a Python thread behind a topic hop, stalled now and then by CP
 for tens of ms. A velocity target survives such a stall (the motor keeps turning at a
 sane rate under its own 1 kHz loop); a stale current does not. The IMU gyro still enters
 every tick, as the base-rate feed-forward that makes the gimbal ignore the chassis' spin.
+In TRACK the line of sight's own rate (from the odometry twist) is fed forward too.
 
 Pitch is clamped to ``[pitch_min, pitch_max]`` twice: the world target is clamped to what
 those joint limits allow, and the joint velocity is bounded near a limit.
@@ -47,20 +52,14 @@ from nav_msgs.msg import Odometry
 from rclpy.qos import qos_profile_sensor_data
 from rm_base.errors import InputRejectedError
 from rm_base.geometry import rpy_from_quaternion, wrap_to_pi, yaw_from_quaternion
+from rm_base.geometry.aim import AimSolution, aim_from_point
 from rm_base.plugin import JointTarget, PluginBase
 from rm_base.plugin.commands import stamp_ns_of
 from sensor_msgs.msg import Imu
 
 from rm_msgs.msg import GimbalCmd, GimbalState
 from rm_plugins.gimbal.config import GimbalConfig, read_config
-from rm_plugins.gimbal.control import (
-    AxisLoop,
-    PlanarPose,
-    Smoother,
-    aim_at,
-    clamp,
-    sight_rates,
-)
+from rm_plugins.gimbal.control import AxisLoop, PlanarPose, Smoother, clamp, sight_rates
 
 _NS_PER_S = 1_000_000_000
 
@@ -276,23 +275,14 @@ class StandGimbal(PluginBase):
         if not all(math.isfinite(v) for v in (point.x, point.y, point.z, cmd.bullet_speed)):
             return GimbalMode.PASSIVE, 'rejected command: target or bullet speed not finite', None
         px, py, pz = cfg.pivot
+        target = (point.x, point.y, point.z)
         if frame in cfg.base_frames:
-            aim = aim_at(
-                (point.x - px, point.y - py, point.z - pz), cmd.bullet_speed, cfg.projectile
-            )
-            yaw_target = m.base_yaw + aim.bearing
-            # A point fixed to the chassis: its bearing turns with the chassis, no more.
-            rates = (0.0, 0.0)
+            origin = cfg.pivot
         elif frame in cfg.world_frames:
             if isinstance(odom, str):
                 return GimbalMode.TRACK, f'holding the aim: {odom}', None
             pivot_x, pivot_y = odom.pose.to_world(px, py)
-            offset = (point.x - pivot_x, point.y - pivot_y, point.z - odom.z - pz)
-            aim = aim_at(offset, cmd.bullet_speed, cfg.projectile)
-            yaw_target = aim.bearing + (self._odom_offset.value or 0.0)
-            # A point fixed in odom: the line of sight turns as the pivot moves.
-            vx, vy = odom.pose.velocity_of(px, py, odom.vx, odom.vy, odom.wz)
-            rates = sight_rates(offset, (-vx, -vy, 0.0))
+            origin = (pivot_x, pivot_y, odom.z + pz)
         else:
             known = ', '.join((*cfg.world_frames, *cfg.base_frames))
             return (
@@ -300,20 +290,52 @@ class StandGimbal(PluginBase):
                 f'rejected command: unknown target frame {frame!r} (known: {known})',
                 None,
             )
-        if aim.distance < cfg.min_track_distance:
+        aim, in_range = self._solve(origin, target, cmd.bullet_speed)
+        if aim is None or aim.distance < cfg.min_track_distance:
             return (
                 GimbalMode.TRACK,
                 f'holding the aim: target within {cfg.min_track_distance} m of the yaw axis',
                 None,
             )
+        if frame in cfg.base_frames:
+            # A point fixed to the chassis turns with it: the chassis' rate is the feed-forward.
+            yaw_target, rates, follows_base = m.base_yaw + aim.yaw, (0.0, 0.0), True
+        else:
+            # A point fixed in odom: the line of sight turns as the pivot moves.
+            yaw_target = aim.yaw + (self._odom_offset.value or 0.0)
+            vx, vy = odom.pose.velocity_of(px, py, odom.vx, odom.vy, odom.wz)
+            offset = (target[0] - origin[0], target[1] - origin[1], target[2] - origin[2])
+            rates, follows_base = sight_rates(offset, (-vx, -vy, 0.0)), False
         reason = f'tracking a point in {frame}'
-        if not aim.in_range:
+        if not in_range:
             reason += ': out of range at the bullet speed, aiming along the line of sight'
         return (
             GimbalMode.TRACK,
             reason,
-            _Aim(wrap_to_pi(yaw_target), aim.pitch, *rates, follows_base=frame in cfg.base_frames),
+            _Aim(wrap_to_pi(yaw_target), aim.pitch, *rates, follows_base=follows_base),
         )
+
+    def _solve(
+        self, origin: tuple[float, float, float], target: tuple[float, float, float], speed: float
+    ) -> tuple[AimSolution | None, bool]:
+        """Aim from origin at target (rm_base.geometry.aim); return (aim, in range).
+
+        The aim is None when the target is straight above or below the pivot. Out of range
+        at the bullet speed, it is the line of sight.
+        """
+        line_of_sight = aim_from_point(origin, target)
+        if line_of_sight is None or speed <= 0.0:
+            return line_of_sight, True
+        ballistic = aim_from_point(
+            origin,
+            target,
+            bullet_speed=speed,
+            model=self.config.projectile,
+            barrel_length=self.config.barrel_length,
+        )
+        if ballistic is None:
+            return line_of_sight, False
+        return ballistic, True
 
     # -- control ----------------------------------------------------------------------------
 

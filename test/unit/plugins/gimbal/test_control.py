@@ -1,11 +1,10 @@
-"""Gimbal maths: the axis loop (angle PID -> world rate -> joint velocity), aim, poses."""
+"""Gimbal maths: the axis loop (angle PID -> world rate -> joint velocity), sight rates, poses."""
 
 import math
 
 import pytest
 from rm_base.control import PidGains
-from rm_base.geometry.ballistics import ProjectileModel
-from rm_plugins.gimbal import AxisLoop, PlanarPose, Smoother, aim_at, sight_rates
+from rm_plugins.gimbal import AxisLoop, PlanarPose, Smoother, sight_rates
 
 GAINS = PidGains(kp=10.0, output_limit=5.0, angle_mode=True)
 
@@ -72,32 +71,6 @@ def test_near_a_joint_limit_expect_the_velocity_bounded(joint_angle, wanted, exp
 def test_a_loop_needs_angle_mode_gains():
     with pytest.raises(ValueError, match='angle_mode'):
         AxisLoop(PidGains(kp=1.0), 1.0)
-
-
-def test_aim_without_bullet_speed_is_the_line_of_sight():
-    # 3 m ahead, 4 m left, 1 m up: bearing atan2(4, 3), distance 5, pitch -atan(1/5) (up).
-    aim = aim_at((3.0, 4.0, 1.0), 0.0, ProjectileModel())
-    assert aim.bearing == pytest.approx(math.atan2(4.0, 3.0))
-    assert aim.distance == pytest.approx(5.0)
-    assert aim.pitch == pytest.approx(-math.atan2(1.0, 5.0))
-    assert aim.in_range
-
-
-def test_aim_with_bullet_speed_raises_the_barrel_by_the_drop():
-    # Level target 8 m away, 15 m/s, no drag: tan(theta) = (v^2 - sqrt(v^4 - g^2 d^2)) / (g d)
-    # = (225 - sqrt(50625 - 6154.9)) / 78.45 = 0.1800 -> theta = 0.1781 rad up, pitch -0.1781.
-    g, v, d = 9.80665, 15.0, 8.0
-    theta = math.atan((v**2 - math.sqrt(v**4 - g**2 * d**2)) / (g * d))
-    aim = aim_at((d, 0.0, 0.0), v, ProjectileModel(drag=0.0, gravity=g))
-    assert aim.pitch == pytest.approx(-theta, abs=1e-9)
-    assert -aim.pitch == pytest.approx(0.1781, abs=1e-4)
-
-
-def test_aim_out_of_range_points_along_the_line_of_sight_and_says_so():
-    # 5 m/s reaches at most v^2 / g = 2.55 m on the level.
-    aim = aim_at((10.0, 0.0, 0.0), 5.0, ProjectileModel())
-    assert not aim.in_range
-    assert aim.pitch == 0.0
 
 
 def test_pose_extrapolation_turns_and_moves():
