@@ -63,6 +63,8 @@ class ChassisConfig:
         imu_mount: where the IMU on imu_topic is fixed.
         imu_topic: sensor_msgs/Imu topic.
         imu_timeout: an IMU sample older than this is not used [s].
+        imu_reference_timeout: after the IMU has been unusable this long, its next sample
+            fixes a new heading reference (the yaw stays continuous) [s].
         odom_frame: frame of the odometry pose.
         base_frame: child frame (the robot).
         publish_tf: broadcast odom -> base_frame on /tf (where tf2_ros is available).
@@ -86,6 +88,7 @@ class ChassisConfig:
     imu_mount: ImuMount
     imu_topic: str
     imu_timeout: float
+    imu_reference_timeout: float
     odom_frame: str
     base_frame: str
     publish_tf: bool
@@ -286,7 +289,7 @@ def read_config(p: PluginParams) -> ChassisConfig:
                           unit='rad'),
         modes=modes,
         linear_limits=_ramp(p, 'linear', 'm/s', (4.0, 6.0, 8.0, 0.3)),
-        angular_limits=_ramp(p, 'angular', 'rad/s', (15.0, 20.0, 30.0, 1.0)),
+        angular_limits=_ramp(p, 'angular', 'rad/s', (20.0, 30.0, 40.0, 1.0)),
         power_model=power_model,
         power_limit=p.double('power.default_limit', 60.0,
                              description='chassis power limit when /chassis_cmd gives none',
@@ -297,6 +300,11 @@ def read_config(p: PluginParams) -> ChassisConfig:
         imu_timeout=p.double('imu.timeout', 0.1,
                              description='IMU samples older than this are not used', unit='s',
                              gt=0.0),
+        imu_reference_timeout=p.double(
+            'imu.reference_timeout', 1.0,
+            description='after the IMU has been unusable this long its next sample is a new '
+            'heading reference; shorter gaps keep the reference (the yaw returns to the '
+            "IMU's)", unit='s', gt=0.0),
         odom_frame=p.string('odom.frame_id', 'odom', description='odometry frame'),
         base_frame=p.string('odom.child_frame_id', 'base_link', description='robot frame'),
         publish_tf=p.boolean('odom.publish_tf', True,

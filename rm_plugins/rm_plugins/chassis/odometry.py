@@ -1,13 +1,22 @@
 """Planar odometry of the chassis: wheel forward kinematics, yaw from an IMU when there is one.
 
-The pose of base_link in odom (x, y [m], yaw [rad]) starts at zero and is integrated each
-step with the midpoint heading. The twist comes from the wheels' forward kinematics
-(least squares, so one slipping wheel is outvoted by the others). The yaw comes from
+The pose of base_link in odom (x, y [m], yaw [rad]) starts at zero. Each step moves it by
+the forward kinematics (least squares, so one slipping wheel is outvoted by the others) of
+the wheels' *angle* changes since the previous step, along the midpoint heading. Angle
+changes, not speed times dt: the encoders count every radian whatever the timing, so a
+late or skipped step (CPU steal, a dropped feedback message) loses no distance, where
+integrating speeds over the plugin's own dt would. The twist comes from the wheel speeds.
+The yaw comes from
 
 - an absolute yaw (the IMU's, turned into the chassis' yaw by the caller) while one is
-  given: the first one after none fixes the offset between the IMU's heading reference
-  and odom, so the yaw stays continuous when the source changes; or
-- the wheels' yaw rate integrated, while none is given.
+  given: the first one fixes the offset between the IMU's heading reference and odom, so
+  the yaw starts continuous; or
+- the wheels' turn (their angle changes) while none is given.
+
+The offset is kept through gaps in the absolute yaw, so after a short gap the yaw returns
+to the IMU's (the better heading: the wheels slip) instead of keeping the wheels' error.
+After a long gap (the IMU may have restarted with a new reference) the caller calls
+``release_absolute_yaw`` and the next one fixes a new offset.
 
 The yaw is kept unwrapped (continuous) so a spinning robot's heading can be compared over
 many turns; ``Odometry.pose`` gives it as is. No ROS here.
@@ -52,6 +61,8 @@ class Odometry:
         self._twist = Twist2D()
         self._yaw_offset: float | None = None
         self._source = YawSource.WHEELS
+        self._angles: tuple[float, ...] | None = None
+        self.jumps = 0
 
     @property
     def pose(self) -> Pose2D:
@@ -69,7 +80,11 @@ class Odometry:
         return self._source
 
     def reset(self, pose: Sequence[float] = (0.0, 0.0, 0.0)) -> None:
-        """Restart at pose (x [m], y [m], yaw [rad]); the next absolute yaw sets a new offset."""
+        """Restart at pose (x [m], y [m], yaw [rad]).
+
+        The next update only takes the wheel angles as the new reference, and the next
+        absolute yaw sets a new offset.
+        """
         x, y, yaw = (float(v) for v in pose)
         if not all(math.isfinite(v) for v in (x, y, yaw)):
             raise InputRejectedError(f'pose must be 3 finite values, got {pose!r}')
@@ -77,36 +92,56 @@ class Odometry:
         self._twist = Twist2D()
         self._yaw_offset = None
         self._source = YawSource.WHEELS
+        self._angles = None
+
+    def release_absolute_yaw(self) -> None:
+        """Let the next absolute yaw fix a new offset (the yaw stays continuous then)."""
+        self._yaw_offset = None
 
     def update(
-        self, wheel_speeds: Sequence[float], dt: float, absolute_yaw: float | None = None
+        self,
+        wheel_angles: Sequence[float],
+        wheel_speeds: Sequence[float],
+        absolute_yaw: float | None = None,
+        *,
+        max_angle_step: float = math.inf,
     ) -> Pose2D:
-        """Advance the pose by dt with the wheel speeds measured now.
+        """Move the pose by the wheel angle changes since the previous update.
 
         Args:
-            wheel_speeds: one speed per wheel [rad/s], in wheel order.
-            dt: time since the previous update [s], finite and >= 0 (0 only updates the
-                twist).
+            wheel_angles: one angle per wheel [rad], continuous (multi-turn), wheel order.
+            wheel_speeds: one speed per wheel [rad/s], wheel order (for the twist).
             absolute_yaw: chassis yaw from an external reference (IMU) [rad], any offset;
-                None to integrate the wheels' yaw rate.
+                None for the wheels' turn.
+            max_angle_step: a wheel angle change larger than this [rad] is not motion but
+                a jump of the encoder reference (a bridge restart): the angles become the
+                new reference, the position and the wheels' yaw stay, and ``jumps``
+                counts it.
 
         Returns:
-            The new pose.
+            The new pose (unchanged on the first update: it only sets the reference).
 
         Raises:
-            InputRejectedError: a speed, dt or absolute_yaw is not finite, dt < 0, or the
-                number of speeds is wrong. The pose is left as it was.
+            InputRejectedError: a value is not finite or a count is wrong. The pose is
+                left as it was.
         """
-        if not 0.0 <= dt < math.inf:
-            raise InputRejectedError(f'dt must be finite and >= 0 s, got {dt!r}')
         if absolute_yaw is not None and not math.isfinite(absolute_yaw):
             raise InputRejectedError(f'absolute yaw must be finite, got {absolute_yaw!r}')
         twist = self._kinematics.forward(wheel_speeds)
+        angles = tuple(float(a) for a in wheel_angles)
+        previous = self._angles if self._angles is not None else angles
+        if len(angles) != len(previous):
+            raise InputRejectedError(f'expected {len(previous)} wheel angles, got {len(angles)}')
+        deltas = [a - b for a, b in zip(angles, previous, strict=True)]
+        step = self._kinematics.forward(deltas)
+        self._angles = angles
+        if max(abs(d) for d in deltas) > max_angle_step:
+            self.jumps += 1
+            step = Twist2D()  # not motion; an absolute yaw still applies
         x, y, yaw = self._pose
         if absolute_yaw is None:
-            self._yaw_offset = None
             self._source = YawSource.WHEELS
-            new_yaw = yaw + twist.wz * dt
+            new_yaw = yaw + step.wz
         else:
             if self._yaw_offset is None:
                 # First absolute yaw after none: tie its reference to the current odom yaw.
@@ -114,7 +149,7 @@ class Odometry:
             self._source = YawSource.IMU
             # Shortest way from the current (unwrapped) yaw, so the yaw stays continuous.
             new_yaw = yaw + wrap_to_pi(absolute_yaw - self._yaw_offset - yaw)
-        vx, vy, _ = body_to_world_twist((twist.vx, twist.vy, 0.0), 0.5 * (yaw + new_yaw))
-        self._pose = Pose2D(x + vx * dt, y + vy * dt, new_yaw)
+        dx, dy, _ = body_to_world_twist((step.vx, step.vy, 0.0), 0.5 * (yaw + new_yaw))
+        self._pose = Pose2D(x + dx, y + dy, new_yaw)
         self._twist = twist
         return self._pose

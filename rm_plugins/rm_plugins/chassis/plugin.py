@@ -63,13 +63,16 @@ from rm_plugins.chassis.commands import (
 from rm_plugins.chassis.config import ChassisConfig, ImuMount, read_config
 from rm_plugins.chassis.motion import MotionPlanner
 from rm_plugins.chassis.odometry import Odometry
-from rm_plugins.chassis.wheels import WheelSpeedController
+from rm_plugins.chassis.wheels import SpeedPredictor, WheelSpeedController
 
 _NS_PER_S = 1_000_000_000
 _LOG_PERIOD_NS = _NS_PER_S  # at most one line per second per kind of rejected input
-# Largest time difference between an IMU sample and the yaw joint sample over which the
-# joint angle is extrapolated to the IMU's time [s].
+# Largest time over which the yaw joint angle is extrapolated to now with its velocity [s].
 _MAX_EXTRAPOLATION_S = 0.05
+
+# Largest time between an IMU sample and the yaw joint sample combined into a chassis yaw [s]
+# (a few feedback periods).
+_MAX_IMU_JOINT_SKEW_S = 0.02
 
 _MOTION_MODES = {
     ChassisMode.RAW: ChassisMotionMode.RAW,
@@ -145,6 +148,7 @@ class StandChassis(PluginBase):
         )
         self._drive = WheelSpeedController(len(cfg.wheel_joints), cfg.wheel_gains, cfg.power_model)
         self._odometry = Odometry(cfg.wheels)
+        self._predictor = SpeedPredictor()
         self._imu = _LatestImu()
         if cfg.imu_mount is not ImuMount.NONE:
             clock = self.node.get_clock()
@@ -160,6 +164,7 @@ class StandChassis(PluginBase):
         self._publish_period_ns = round(_NS_PER_S / cfg.publish_rate)
         self._next_publish_ns = 0
         self._last_odom_ns: int | None = None
+        self._imu_used_ns: int | None = None
         self._throttles = {kind: _Throttle() for kind in ('chassis_cmd', 'vel_cmd', 'imu')}
         self._report = _Report(len(cfg.wheel_joints))
         self.on_reset()
@@ -182,8 +187,11 @@ class StandChassis(PluginBase):
     def update(self, now: Any, dt: float) -> None:
         """One tick: feedback and odometry, the state, then the wheels and the reports."""
         now_ns = now.nanoseconds
-        speeds, wheel_problem = self._wheel_speeds(now_ns)
-        self._update_odometry(now_ns, speeds)
+        wheels, wheel_problem = self._wheel_states(now_ns)
+        self._update_odometry(now_ns, wheels)
+        speeds = None if wheels is None else [w.velocity for w in wheels]
+        if wheels is not None:
+            self._predictor.update(max(w.stamp_ns for w in wheels), speeds)
         decision = self._decide(now_ns, wheel_problem)
         if decision.request is None or speeds is None:
             self._passive(decision.state, decision.reason, speeds)
@@ -195,9 +203,9 @@ class StandChassis(PluginBase):
         """Zero output while /chassis_cmd is missing; odometry and reports go on."""
         # The framework has gone to PASSIVE with the watchdog's reason and reset us.
         now_ns = now.nanoseconds
-        speeds, _ = self._wheel_speeds(now_ns)
-        self._update_odometry(now_ns, speeds)
-        self._passive(None, '', speeds)
+        wheels, _ = self._wheel_states(now_ns)
+        self._update_odometry(now_ns, wheels)
+        self._passive(None, '', None if wheels is None else [w.velocity for w in wheels])
         self._maybe_publish(now_ns)
 
     # -- commands -----------------------------------------------------------------------
@@ -272,14 +280,14 @@ class StandChassis(PluginBase):
             return None
         return state
 
-    def _wheel_speeds(self, now_ns: int) -> tuple[list[float] | None, str | None]:
-        speeds = []
+    def _wheel_states(self, now_ns: int) -> tuple[list[Any] | None, str | None]:
+        states = []
         for joint in self.config.wheel_joints:
             state = self._fresh(joint, now_ns)
             if state is None:
                 return None, f"wheel '{joint}' has no fresh feedback (offline or stale)"
-            speeds.append(state.velocity)
-        return speeds, None
+            states.append(state)
+        return states, None
 
     def _yaw_joint_state(self, now_ns: int) -> Any:
         return self._fresh(self.config.yaw_joint, now_ns)
@@ -317,8 +325,11 @@ class StandChassis(PluginBase):
         if joint is None:
             return None
         # The joint angle at the IMU's sample time: at 8 rad/s of spin 5 ms is 0.04 rad.
-        lag_s = max(-_MAX_EXTRAPOLATION_S,
-                    min(_MAX_EXTRAPOLATION_S, (stamp_ns - joint.stamp_ns) / _NS_PER_S))
+        # Samples further apart (a stall on either side) are not combined: a bad pair would
+        # become a lasting offset when the odometry (re)takes the IMU as its reference.
+        lag_s = (stamp_ns - joint.stamp_ns) / _NS_PER_S
+        if abs(lag_s) > _MAX_IMU_JOINT_SKEW_S:
+            return None
         return yaw - (joint.position - self.config.yaw_zero + joint.velocity * lag_s)
 
     def _gimbal_world_yaw_rate(self, now_ns: int, phi_rate: float) -> float:
@@ -335,13 +346,34 @@ class StandChassis(PluginBase):
             )
         return self._odometry.twist.wz + phi_rate
 
-    def _update_odometry(self, now_ns: int, speeds: Sequence[float] | None) -> None:
-        last, self._last_odom_ns = self._last_odom_ns, now_ns
-        if speeds is None or last is None:
-            return  # no wheel speeds: hold the pose
-        dt = max(0.0, (now_ns - last) / _NS_PER_S)
+    def _update_odometry(self, now_ns: int, wheels: Sequence[Any] | None) -> None:
+        """Move the odometry by the wheel angles since the last update (IMU yaw if fresh)."""
+        if wheels is None:
+            return  # no wheel feedback: hold the pose; the angles count on meanwhile
+        stamp_ns = max(w.stamp_ns for w in wheels)
+        last, self._last_odom_ns = self._last_odom_ns, stamp_ns
+        # More than the wheels could have turned between the two feedback stamps (twice
+        # the top speed, plus a margin for jitter) is an encoder jump, not motion.
+        elapsed = max(0.0, (stamp_ns - last) / _NS_PER_S) if last is not None else 0.0
+        max_step = 2.0 * self.config.max_wheel_speed * elapsed + 1.0
         yaw = None if self.config.imu_mount is ImuMount.NONE else self._imu_chassis_yaw(now_ns)
-        self._odometry.update(speeds, dt, yaw)
+        if yaw is not None:
+            self._imu_used_ns = now_ns
+        elif (self._imu_used_ns is not None and now_ns - self._imu_used_ns
+              > self.config.imu_reference_timeout * _NS_PER_S):
+            # Gone for long: it may come back with another reference (a restart).
+            self._odometry.release_absolute_yaw()
+            self._imu_used_ns = None
+        jumps = self._odometry.jumps
+        self._odometry.update(
+            [w.position for w in wheels], [w.velocity for w in wheels], yaw,
+            max_angle_step=max_step,
+        )
+        if self._odometry.jumps != jumps:
+            self.logger.warning(
+                f'wheel positions jumped by more than {max_step:.1f} rad in {elapsed:.3f} s '
+                '(bridge restarted?): odometry keeps its pose and takes them as the reference'
+            )
 
     # -- actuation ----------------------------------------------------------------------
 
@@ -381,7 +413,10 @@ class StandChassis(PluginBase):
             self._held_heading = None
             joint = self._yaw_joint_state(now_ns)
             frame = 'gimbal'
-            phi = wrap_to_pi(joint.position - self.config.yaw_zero)
+            # The angle now, not when it was measured: in GYRO it changes at the spin rate,
+            # and the feedback is up to a publish period (plus transport) old.
+            age_s = min(_MAX_EXTRAPOLATION_S, max(0.0, (now_ns - joint.stamp_ns) / _NS_PER_S))
+            phi = wrap_to_pi(joint.position - self.config.yaw_zero + joint.velocity * age_s)
             phi_rate = joint.velocity
             gimbal_rate = self._gimbal_world_yaw_rate(now_ns, phi_rate)
         else:
@@ -397,7 +432,9 @@ class StandChassis(PluginBase):
             yaw_joint=phi, yaw_joint_rate=phi_rate, gimbal_yaw_rate=gimbal_rate,
         )
         limit = self.config.power_limit if request.power_limit is None else request.power_limit
-        wheels = self._drive.update(motion.wheel_targets, speeds, dt, limit)
+        # Power at the speeds the wheels will have at the end of the coming period.
+        ahead = self._predictor.predict(now_ns + round(_NS_PER_S / self.rate))
+        wheels = self._drive.update(motion.wheel_targets, speeds, dt, limit, ahead or None)
         self.send_joint_targets({
             joint: JointTarget.with_effort(effort)
             for joint, effort in zip(self.config.wheel_joints, wheels.efforts, strict=True)
