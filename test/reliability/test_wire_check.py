@@ -1,0 +1,231 @@
+"""The unsafe-frame checker itself: it passes safe traffic and flags every unsafe kind.
+
+Frames are built by hand with the protocol encoders, at wire times chosen here; the
+checker must not depend on the bridge's actuator code to find a bad frame.
+"""
+
+import math
+from types import SimpleNamespace
+
+import can
+import pytest
+from rm_base.hardware.protocols import damiao, dji, mit
+
+from reliability.wire import WireChecker, check_actuator_states, max_efforts
+
+MS = 1e-3
+DM4310 = damiao.dm_limits('DM4310')
+
+CONFIG = {
+    'buses': {'can0': {'interface': 'virtual', 'channel': 'wire-test'}},
+    'joints': {
+        # M3508: 0.3 N·m/A at the output, 20 A / 16384 raw -> 1 N·m = 2731 raw
+        'wheel': {'type': 'm3508', 'bus': 'can0', 'id': 1, 'max_effort': 1.0},
+        'yaw': {'type': 'gm6020', 'bus': 'can0', 'id': 1},  # 1.2 N·m, voltage mode, 0x1FF
+        'arm': {'type': 'dm4310', 'bus': 'can0', 'id': 3, 'master_id': 0x13},  # 10 N·m
+    },
+    'safety': {'feedback_timeout_s': 0.1, 'command_timeout_s': 0.1},
+}
+ONE_NM = 2731  # raw for 1 N·m on the wheel: 1 / 0.3 A/(N·m)... / (20/16384 A/raw)
+
+
+def frame(can_id, data, t):
+    return can.Message(timestamp=t, arbitration_id=can_id, data=data, is_extended_id=False)
+
+
+def wheel_fb(t, temperature=30, rpm=0):
+    return frame(0x201, dji.encode_feedback(0, rpm, 0, temperature), t)
+
+
+def yaw_fb(t, rpm=0):
+    return frame(0x205, dji.encode_feedback(0, rpm, 0, 30), t)
+
+
+def arm_fb(t, position=0.0, state=damiao.DmState.ENABLED):
+    data = damiao.encode_feedback(
+        3,
+        state,
+        position=position,
+        velocity=0.0,
+        torque=0.0,
+        t_mos=30,
+        t_rotor=30,
+        limits=DM4310,
+    )
+    return frame(0x13, data, t)
+
+
+def wheel_cmd(raw, t):
+    return frame(0x200, dji.pack_command([raw]), t)
+
+
+def arm_cmd(t, **fields):
+    cmd = mit.MitCommand(
+        **{'position': 0.0, 'velocity': 0.0, 'kp': 0.0, 'kd': 0.0, 'torque': 0.0, **fields}
+    )
+    return frame(0x03, mit.pack_mit_command(cmd, DM4310), t)
+
+
+def feed(checker, *frames):
+    return checker.feed_all(('can0', f) for f in frames)
+
+
+def rules(violations):
+    return [(v.joint, v.rule) for v in violations]
+
+
+def test_safe_traffic_is_not_flagged():
+    checker = WireChecker(CONFIG)
+    for k in range(200):
+        t = k * MS
+        assert (
+            feed(
+                checker,
+                wheel_fb(t),
+                yaw_fb(t),
+                arm_fb(t),
+                wheel_cmd(ONE_NM, t),
+                frame(0x1FF, dji.pack_command([1000]), t),  # yaw: 0.96 V at rest = 0.4 N·m
+                arm_cmd(t, position=0.5, kp=5.0, kd=0.3),  # 2.5 N·m, limit 10
+            )
+            == []
+        )
+    assert checker.stats('wheel').nonzero_frames == 200
+    assert checker.summary()['unsafe_frames'] == 0
+
+
+def test_a_dji_slot_above_max_effort_is_flagged():
+    checker = WireChecker(CONFIG)
+    found = feed(checker, wheel_fb(0.0), wheel_cmd(ONE_NM + 2, 0.0))  # 1 raw is the step
+    assert rules(found) == [('wheel', 'effort')]
+    assert 'beyond max_effort 1.0' in found[0].detail
+
+
+def test_a_non_zero_slot_without_a_joint_is_flagged():
+    checker = WireChecker(CONFIG)
+    found = feed(checker, wheel_fb(0.0), frame(0x200, dji.pack_command([0, 0, 5]), 0.0))
+    assert rules(found) == [('', 'unknown_slot')]
+
+
+def test_gm6020_voltage_is_judged_with_the_back_emf_of_its_own_feedback():
+    checker = WireChecker(CONFIG)
+    # at 100 rpm the back-EMF is 0.716 V·s/rad x 10.47 rad/s = 7.5 V = 7812 raw; 1.2 N·m
+    # more is 1.2 / 0.741 A x 1.8 Ω = 2.9 V: 7812 + 3035 raw is the limit, 12000 beyond it
+    assert feed(checker, yaw_fb(0.0, rpm=100), frame(0x1FF, dji.pack_command([10800]), 0.0)) == []
+    found = feed(checker, yaw_fb(MS, rpm=100), frame(0x1FF, dji.pack_command([12000]), MS))
+    assert rules(found) == [('yaw', 'effort')]
+    # at rest the same 10800 raw would be 10.4 V = 4.3 N·m
+    found = feed(
+        checker, yaw_fb(2 * MS), yaw_fb(3 * MS), frame(0x1FF, dji.pack_command([10800]), 3 * MS)
+    )
+    assert rules(found) == [('yaw', 'effort')]
+
+
+def test_an_mit_command_asking_more_than_max_effort_is_flagged():
+    checker = WireChecker(CONFIG)
+    # kp 50 N·m/rad x 0.5 rad = 25 N·m (DM4310 max 10 N·m)
+    found = feed(checker, arm_fb(0.0), arm_cmd(0.0, position=0.5, kp=50.0))
+    assert rules(found) == [('arm', 'effort')]
+    # the same gains near the target ask little
+    assert feed(checker, arm_fb(MS, position=0.49), arm_cmd(MS, position=0.5, kp=50.0)) == []
+
+
+def test_mit_limp_and_system_frames_are_zero():
+    checker = WireChecker(CONFIG)
+    # never any feedback: only zero (limp) frames and ENABLE/DISABLE may go out
+    assert (
+        feed(
+            checker,
+            frame(0x03, mit.system_frame(mit.SystemCommand.ENABLE), 0.0),
+            arm_cmd(0.0),
+            frame(0x03, mit.system_frame(mit.SystemCommand.DISABLE), MS),
+        )
+        == []
+    )
+    assert checker.system_frames == 2
+    found = feed(checker, arm_cmd(2 * MS, torque=1.0))
+    assert rules(found) == [('arm', 'offline')]
+
+
+def test_non_zero_after_the_feedback_timeout_plus_grace_is_flagged_and_latency_measured():
+    checker = WireChecker(CONFIG, grace_s=0.002)
+    feed(checker, wheel_fb(0.0), wheel_cmd(ONE_NM, 0.0))
+    # offline from 100 ms on: 101 ms is within the 2 ms grace, 103 ms is not
+    assert feed(checker, wheel_cmd(ONE_NM, 0.101)) == []
+    found = feed(checker, wheel_cmd(ONE_NM, 0.103))
+    assert rules(found) == [('wheel', 'offline')]
+    assert '3.0 ms after' in found[0].detail
+    feed(checker, wheel_cmd(0, 0.104))
+    assert checker.stats('wheel').zero_latencies == [pytest.approx(0.004)]
+    # back online: driving is fine again
+    assert feed(checker, wheel_fb(0.2), wheel_cmd(ONE_NM, 0.2)) == []
+
+
+def test_non_zero_while_over_temperature_is_flagged_until_below_the_hysteresis():
+    checker = WireChecker(CONFIG, grace_s=0.002)
+    feed(checker, wheel_fb(0.0, temperature=80), wheel_cmd(ONE_NM, 0.001))  # within grace
+    found = feed(checker, wheel_fb(0.005, temperature=76), wheel_cmd(ONE_NM, 0.005))
+    assert rules(found) == [('wheel', 'over_temperature')]  # 76 °C: above 80 - 5
+    assert feed(checker, wheel_fb(0.01, temperature=74), wheel_cmd(ONE_NM, 0.01)) == []
+
+
+def test_a_damiao_fault_state_requires_zero():
+    checker = WireChecker(CONFIG)
+    feed(checker, arm_fb(0.0, state=damiao.DmState.MOS_OVER_TEMPERATURE))
+    found = feed(checker, arm_cmd(0.01, position=0.1, kp=5.0))
+    assert rules(found) == [('arm', 'device_fault')]
+
+
+def command(names, mode=1, effort=0.5, stamp=None):
+    n = len(names)
+    header = SimpleNamespace(stamp=SimpleNamespace(sec=0, nanosec=0))
+    if stamp is not None:
+        header.stamp = SimpleNamespace(sec=int(stamp), nanosec=round((stamp % 1) * 1e9))
+    return SimpleNamespace(
+        header=header,
+        name=list(names),
+        mode=[mode] * n,
+        position=[0.0] * n,
+        velocity=[0.0] * n,
+        effort=[effort] * n,
+        kp=[0.0] * n,
+        kd=[0.0] * n,
+    )
+
+
+def test_without_a_fresh_valid_command_non_zero_is_flagged():
+    checker = WireChecker(CONFIG, track_commands=True, grace_s=0.002)
+    feed(checker, wheel_fb(0.0))
+    checker.note_command(command(['wheel']), 0.0)
+    assert feed(checker, wheel_fb(0.05), wheel_cmd(ONE_NM, 0.05)) == []
+    # invalid and stale commands do not refresh it
+    checker.note_command(command(['wheel'], effort=math.nan), 0.06)
+    checker.note_command(command(['wheel'], mode=9), 0.06)
+    checker.note_command(command(['wheel'], stamp=1.0), 1000.0)  # 999 s old
+    found = feed(checker, wheel_fb(0.103), wheel_cmd(ONE_NM, 0.103))
+    assert rules(found) == [('wheel', 'no_command')]
+    # MODE_OFF ends the command at once (plus grace)
+    checker.note_command(command(['wheel']), 0.2)
+    checker.note_command(command(['wheel'], mode=0), 0.21)
+    assert feed(checker, wheel_fb(0.211), wheel_cmd(ONE_NM, 0.211)) == []
+    assert rules(feed(checker, wheel_fb(0.22), wheel_cmd(ONE_NM, 0.22))) == [
+        ('wheel', 'no_command')
+    ]
+
+
+def test_a_command_frame_of_the_wrong_length_is_malformed():
+    checker = WireChecker(CONFIG)
+    assert rules(feed(checker, frame(0x200, b'\x00\x01', 0.0))) == [('', 'malformed')]
+
+
+def test_actuator_states_with_nan_or_beyond_the_limit_are_reported():
+    limits = max_efforts(CONFIG)
+    assert limits == {'wheel': 1.0, 'yaw': 1.2, 'arm': 10.0}
+    msg = SimpleNamespace(
+        name=['wheel', 'yaw', 'arm'], mode=[1, 0, 4], command=[math.nan, 0.5, 10.5]
+    )
+    assert check_actuator_states(msg, limits) == [
+        'wheel: command nan',
+        'yaw: MODE_OFF with command +0.5000',
+        'arm: command +10.5000 beyond 10.0',
+    ]

@@ -1,0 +1,549 @@
+"""The unsafe-frame checker: reads every CAN frame on the wire and flags unsafe commands.
+
+:class:`WireChecker` is fed the frames of every bus in wire order (from an rm_sim tap, a
+python-can log, a socketcan sniffer) and, optionally, the /actuator_cmd messages the
+bridge was sent. It decodes every command frame the robot config implies, independently
+of the bridge's actuator code:
+
+* DJI group frames (0x200, 0x1FF, 0x2FF, 0x1FE, 0x2FE): each slot's raw value, turned
+  into the joint effort it asks for (current kinds: raw x A/raw x N·m/A; GM6020 voltage:
+  ``(V - Ke·ω) / R · Kt`` with ω from the motor's own feedback on the wire);
+* MIT frames (Damiao, Cheetah): the torque the motor will apply,
+  ``kp·(p − q) + kd·(v − dq) + τ`` with q, dq from its latest feedback on the wire.
+
+A command frame is unsafe (a :class:`Violation`) when
+
+* ``effort``: it asks a joint for more than the joint's configured ``max_effort`` (plus
+  one quantisation step and ``effort_tolerance``), or a DJI raw beyond the kind's limit;
+* ``unknown_slot``: a DJI slot with no configured joint is not zero;
+* ``offline``: it is not zero although the joint sent no feedback for longer than
+  ``safety.feedback_timeout_s`` (never any feedback counts too);
+* ``over_temperature`` / ``device_fault``: it is not zero although the joint's latest
+  feedback says it is too hot (with the bridge's hysteresis) or in a fault state;
+* ``no_command``: it is not zero although the joint has had no fresh, valid command
+  (ActuatorCmd with finite values, a known mode other than MODE_OFF, a stamp within the
+  command timeout) for longer than ``safety.command_timeout_s`` — only when commands are
+  fed (:meth:`WireChecker.note_command`);
+* ``malformed``: a command frame that does not decode (wrong length).
+
+The timing rules allow ``grace_s`` after the moment the joint had to be zero (the bridge
+acts on its next tick, and under CPU load its receive thread stamps feedback late); the
+latency of every "had to go to zero" episode is measured, so a test can assert it tightly.
+NaN cannot be encoded in a DJI or MIT frame; :func:`check_actuator_states` checks the
+reported commands on /actuator_states for NaN and the same limits.
+
+Frames must carry wire time in ``msg.timestamp`` [s] (rm_sim stamps them; so does
+python-can on a real bus). Memory is bounded: only the first ``keep`` violations are
+kept, the rest are counted.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Iterable, Mapping
+from typing import Any
+
+import can
+from rm_base.hardware import ACTUATOR_TYPES, HardwareConfig, Mode
+from rm_base.hardware.actuators import Actuator, DjiActuator, MitActuator
+from rm_base.hardware.actuators.dji import Gm6020Voltage
+from rm_base.hardware.actuators.mit import Cheetah
+from rm_base.hardware.errors import ProtocolError
+from rm_base.hardware.protocols import cheetah, damiao, dji, mit
+
+_NS_PER_S = 1_000_000_000
+_NEVER = -math.inf
+
+
+@dataclasses.dataclass(frozen=True)
+class Violation:
+    """One unsafe command frame.
+
+    Attributes:
+        time: wire time of the frame [s].
+        bus: bus name.
+        can_id: arbitration id of the frame.
+        joint: the joint the offending value is for ('' for an unknown slot).
+        rule: ``effort``, ``unknown_slot``, ``offline``, ``over_temperature``,
+            ``device_fault``, ``no_command`` or ``malformed``.
+        detail: what was on the wire and what was allowed.
+    """
+
+    time: float
+    bus: str
+    can_id: int
+    joint: str
+    rule: str
+    detail: str
+
+    def __str__(self) -> str:
+        return (
+            f'{self.time:.4f} {self.bus} 0x{self.can_id:03X} {self.joint or "-"}: '
+            f'{self.rule}: {self.detail}'
+        )
+
+
+@dataclasses.dataclass
+class JointStats:
+    """What the checker saw of one joint.
+
+    Attributes:
+        command_frames: command frames (or slots) decoded for it.
+        nonzero_frames: of those, the ones asking for output.
+        max_effort_seen: largest |effort| asked on the wire [N·m].
+        zero_latencies: per episode in which the joint had to be zeroed (offline,
+            over-temperature, fault, no command), seconds from the moment it had to be
+            zero to the first zero frame.
+        feedback_frames: feedback frames decoded (garbage that does not decode excluded).
+    """
+
+    command_frames: int = 0
+    nonzero_frames: int = 0
+    max_effort_seen: float = 0.0
+    zero_latencies: list[float] = dataclasses.field(default_factory=list)
+    feedback_frames: int = 0
+
+
+class _Joint:
+    """The checker's view of one joint: limits from the config, feedback from the wire."""
+
+    def __init__(self, actuator: Actuator, hysteresis_c: float) -> None:
+        self.name = actuator.name
+        self.shadow = actuator  # only its decoder and resolved limits are used
+        self.max_effort = actuator.max_effort
+        self.temperature_limit = actuator.temperature_limit
+        self.temperature_resume = actuator.temperature_limit - hysteresis_c
+        self.feedback_times: list[float] = []  # the last two decoded feedback times [s]
+        self.device_velocities: list[float] = []  # matching rotor/motor velocities
+        self.positions: list[float] = []  # MIT: matching motor-side positions [rad]
+        self.overheated_since: float | None = None
+        self.fault_since: float | None = None
+        self.command_until = _NEVER  # fresh command valid until [s]
+        # the current "must be zero" episode: since when, and whether zero was reached
+        self.episode_since: float | None = None
+        self.episode_zeroed = False
+        self.stats = JointStats()
+        self.timeline: list[tuple[float, float, bool]] = []
+
+    def last_feedback(self) -> float:
+        return self.feedback_times[-1] if self.feedback_times else _NEVER
+
+
+class WireChecker:
+    """Flags unsafe command frames; see the module docstring.
+
+    Args:
+        config: the bridge's hardware config (dict schema of rm_base.hardware.config, or
+            a parsed HardwareConfig): joints, limits and safety timeouts.
+        grace_s: time allowed after a joint had to be zero before a non-zero frame is a
+            violation [s].
+        effort_tolerance: extra effort allowed over max_effort [N·m], on top of one
+            quantisation step of the frame's encoding.
+        track_commands: apply the ``no_command`` rule (feed commands with note_command).
+        keep: violations kept (the rest are only counted).
+        record: keep every joint's ``(time, effort, non-zero)`` per command frame in
+            ``timeline(joint)`` (tests; unbounded, so not in a soak).
+    """
+
+    def __init__(
+        self,
+        config: Mapping[str, Any] | HardwareConfig,
+        *,
+        grace_s: float = 0.002,
+        effort_tolerance: float = 0.0,
+        track_commands: bool = False,
+        keep: int = 100,
+        record: bool = False,
+    ) -> None:
+        if not isinstance(config, HardwareConfig):
+            config = HardwareConfig.from_dict(config)
+        self.config = config
+        self.grace_s = grace_s
+        self.effort_tolerance = effort_tolerance
+        self.track_commands = track_commands
+        self._keep = keep
+        self._record = record
+        safety = config.safety
+        self.feedback_timeout_s = safety.feedback_timeout_s
+        self.command_timeout_s = safety.command_timeout_s
+        self.joints: dict[str, _Joint] = {}
+        # (bus, frame id) -> slot -> joint, for the DJI group frames
+        self._dji_frames: dict[tuple[str, int], list[_Joint | None]] = {}
+        self._mit_frames: dict[tuple[str, int], _Joint] = {}
+        self._feedback: dict[tuple[str, int], list[_Joint]] = {}
+        for jc in config.joints:
+            actuator = ACTUATOR_TYPES[jc.type](jc, safety)
+            joint = _Joint(actuator, safety.temperature_hysteresis_c)
+            self.joints[jc.name] = joint
+            if isinstance(actuator, DjiActuator):
+                key = (jc.bus, actuator.command_frame_id)
+                self._dji_frames.setdefault(key, [None] * dji.SLOTS_PER_FRAME)
+                self._dji_frames[key][actuator.slot] = joint
+            elif isinstance(actuator, MitActuator):
+                self._mit_frames[(jc.bus, actuator.command_id)] = joint
+            for fid in actuator.feedback_ids():
+                self._feedback.setdefault((jc.bus, fid), []).append(joint)
+        self._bus_of_channel = {str(b.channel): b.name for b in config.buses}
+        self.violations: list[Violation] = []
+        self.violation_count = 0
+        self.frames = 0
+        self.command_frames = 0
+        self.system_frames = 0
+        self.unmatched_frames = 0
+        self.foreign_frames = 0
+
+    # --- input -------------------------------------------------------------------------
+    def bus_of_channel(self, channel: str) -> str:
+        """The bus name of a python-can channel name (frames from a tap carry the channel)."""
+        return self._bus_of_channel.get(str(channel), str(channel))
+
+    def feed(self, bus: str, msg: can.Message, *, from_bridge: bool = True) -> list[Violation]:
+        """Check one frame seen on ``bus`` at ``msg.timestamp`` [s]; return new violations.
+
+        Args:
+            bus: bus name.
+            msg: the frame.
+            from_bridge: False for a frame known to come from another node (a test's
+                injected frame): it still counts as feedback if it has a feedback id (the
+                bridge cannot tell either), but a command id is not judged as the bridge's.
+        """
+        self.frames += 1
+        if msg.is_error_frame or msg.is_remote_frame or msg.is_extended_id:
+            return []
+        t = float(msg.timestamp)
+        key = (bus, msg.arbitration_id)
+        data = bytes(msg.data)
+        found: list[Violation] = []
+        handled = False
+        for joint in self._feedback.get(key, ()):
+            handled = True
+            self._on_feedback(joint, msg, t)
+        if not from_bridge:
+            self.foreign_frames += 1
+            return []
+        group = self._dji_frames.get(key)
+        if group is not None:
+            handled = True
+            self._check_dji(bus, msg.arbitration_id, group, data, t, found)
+        mit_joint = self._mit_frames.get(key)
+        if mit_joint is not None:
+            handled = True
+            self._check_mit(bus, msg.arbitration_id, mit_joint, data, t, found)
+        if not handled:
+            self.unmatched_frames += 1
+        for v in found:
+            self.violation_count += 1
+            if len(self.violations) < self._keep:
+                self.violations.append(v)
+        return found
+
+    def feed_all(self, frames: Iterable[tuple[str, can.Message]]) -> list[Violation]:
+        """Check ``(bus, frame)`` pairs in order; return the new violations."""
+        out: list[Violation] = []
+        for bus, msg in frames:
+            out += self.feed(bus, msg)
+        return out
+
+    def note_command(self, msg: Any, t: float) -> None:
+        """An rm_msgs/ActuatorCmd (or look-alike) the bridge received at wire time ``t`` [s].
+
+        Only a message the bridge must apply counts: equal array lengths, known joints,
+        no joint twice, known modes, finite values, gains >= 0, and a header stamp that is
+        zero or within the command timeout of ``t``. MODE_OFF ends a joint's command.
+        """
+        names = list(msg.name)
+        columns = [list(getattr(msg, f)) for f in ('mode', 'position', 'velocity', 'effort')]
+        columns += [list(msg.kp), list(msg.kd)]
+        if any(len(c) != len(names) for c in columns) or len(set(names)) != len(names):
+            return
+        if any(n not in self.joints for n in names):
+            return
+        stamp = getattr(getattr(msg, 'header', None), 'stamp', None)
+        if stamp is not None and (stamp.sec or stamp.nanosec):
+            age = t - (stamp.sec + stamp.nanosec / _NS_PER_S)
+            if abs(age) > self.command_timeout_s:
+                return
+        modes, values = columns[0], columns[1:]
+        for i in range(len(names)):
+            if modes[i] not in tuple(Mode):
+                return
+            if not all(math.isfinite(float(c[i])) for c in values):
+                return
+            if values[3][i] < 0.0 or values[4][i] < 0.0:
+                return
+        for i, name in enumerate(names):
+            joint = self.joints[name]
+            if modes[i] == Mode.OFF:
+                joint.command_until = min(joint.command_until, t)
+            else:
+                joint.command_until = t + self.command_timeout_s
+
+    # --- results -----------------------------------------------------------------------
+    def timeline(self, joint: str) -> list[tuple[float, float, bool]]:
+        """``(time [s], effort [N·m], non-zero)`` of every command to ``joint`` (``record``)."""
+        return self.joints[joint].timeline
+
+    def last_feedback(self, joint: str) -> float:
+        """Wire time of the joint's latest decoded feedback frame [s] (-inf: none)."""
+        return self.joints[joint].last_feedback()
+
+    def stats(self, joint: str) -> JointStats:
+        """What was seen of one joint."""
+        return self.joints[joint].stats
+
+    def summary(self) -> dict[str, Any]:
+        """Counters for a report."""
+        latencies = [x for j in self.joints.values() for x in j.stats.zero_latencies]
+        return {
+            'frames': self.frames,
+            'command_frames': self.command_frames,
+            'system_frames': self.system_frames,
+            'unmatched_frames': self.unmatched_frames,
+            'unsafe_frames': self.violation_count,
+            'zero_episodes': len(latencies),
+            'max_zero_latency_ms': round(1e3 * max(latencies), 1) if latencies else None,
+            'max_effort_ratio': round(
+                max(
+                    (j.stats.max_effort_seen / j.max_effort for j in self.joints.values()),
+                    default=0.0,
+                ),
+                3,
+            ),
+        }
+
+    # --- feedback ------------------------------------------------------------------------
+    def _on_feedback(self, joint: _Joint, msg: can.Message, t: float) -> None:
+        shadow = joint.shadow
+        before = shadow.frames_decoded
+        try:
+            claimed = shadow.handle_frame(msg, round(t * _NS_PER_S))
+        except ProtocolError:
+            return
+        if not claimed or shadow.frames_decoded == before:
+            return  # not this joint's (MIT id nibble) or did not decode
+        fb = shadow.feedback
+        joint.stats.feedback_frames += 1
+        joint.feedback_times = [*joint.feedback_times[-1:], t]
+        joint.device_velocities = [*joint.device_velocities[-1:], fb.device_velocity]
+        if isinstance(shadow, MitActuator):
+            # what the motor itself reports (motor side, wrapped): its law uses these
+            q, dq = _mit_reading(shadow, bytes(msg.data))
+            joint.positions = [*joint.positions[-1:], q]
+            joint.device_velocities[-1] = dq
+        temperature = fb.temperature
+        if temperature is not None:
+            if temperature >= joint.temperature_limit:
+                if joint.overheated_since is None:
+                    joint.overheated_since = t
+            elif temperature < joint.temperature_resume:
+                joint.overheated_since = None
+        if fb.error_code and shadow._is_fault(fb.error_code):
+            if joint.fault_since is None:
+                joint.fault_since = t
+        else:
+            joint.fault_since = None
+
+    # --- commands ------------------------------------------------------------------------
+    def _must_be_zero_since(self, joint: _Joint, t: float) -> tuple[float, str] | None:
+        """When (and why) the joint had to be zero at ``t``, or None if it may be driven."""
+        reasons: list[tuple[float, str]] = []
+        last = joint.last_feedback()
+        if t - last > self.feedback_timeout_s:
+            reasons.append((last + self.feedback_timeout_s, 'offline'))
+        if joint.overheated_since is not None:
+            reasons.append((joint.overheated_since, 'over_temperature'))
+        if joint.fault_since is not None:
+            reasons.append((joint.fault_since, 'device_fault'))
+        if self.track_commands and t > joint.command_until:
+            reasons.append((joint.command_until, 'no_command'))
+        if not reasons:
+            return None
+        return min(reasons)
+
+    def _judge(
+        self,
+        joint: _Joint,
+        bus: str,
+        can_id: int,
+        t: float,
+        effort: float,
+        nonzero: bool,
+        limit_detail: str | None,
+        found: list[Violation],
+    ) -> None:
+        stats = joint.stats
+        stats.command_frames += 1
+        stats.max_effort_seen = max(stats.max_effort_seen, abs(effort))
+        if self._record:
+            joint.timeline.append((t, effort, nonzero))
+        if nonzero:
+            stats.nonzero_frames += 1
+        if limit_detail is not None:
+            found.append(Violation(t, bus, can_id, joint.name, 'effort', limit_detail))
+        must = self._must_be_zero_since(joint, t)
+        if must is None:
+            joint.episode_since = None
+            return
+        since, rule = must
+        if joint.episode_since is None:
+            joint.episode_since, joint.episode_zeroed = since, False
+        if not nonzero:
+            if not joint.episode_zeroed and math.isfinite(joint.episode_since):
+                stats.zero_latencies.append(max(0.0, t - joint.episode_since))
+            joint.episode_zeroed = True
+            return
+        late = t - since
+        if late > self.grace_s:
+            when = f'{late * 1e3:.1f} ms' if math.isfinite(late) else 'ever since start'
+            found.append(
+                Violation(
+                    t,
+                    bus,
+                    can_id,
+                    joint.name,
+                    rule,
+                    f'effort {effort:+.4f} N·m asked {when} after the joint had to be zero '
+                    f'({rule}; grace {self.grace_s * 1e3:.1f} ms)',
+                )
+            )
+
+    def _check_dji(
+        self,
+        bus: str,
+        can_id: int,
+        group: list[_Joint | None],
+        data: bytes,
+        t: float,
+        found: list[Violation],
+    ) -> None:
+        self.command_frames += 1
+        try:
+            raws = dji.unpack_command(data)
+        except ProtocolError as err:
+            found.append(Violation(t, bus, can_id, '', 'malformed', str(err)))
+            return
+        for slot, raw in enumerate(raws):
+            joint = group[slot]
+            if joint is None:
+                if raw != 0:
+                    found.append(
+                        Violation(t, bus, can_id, '', 'unknown_slot', f'slot {slot} raw {raw}')
+                    )
+                continue
+            shadow = joint.shadow
+            assert isinstance(shadow, DjiActuator)
+            spec = shadow.spec
+            kt = shadow.torque_constant
+            detail = None
+            if abs(raw) > spec.raw_limit:
+                detail = f'raw {raw} beyond the {spec.kind.value} limit ±{spec.raw_limit}'
+            if isinstance(shadow, Gm6020Voltage):
+                effort, step = self._gm6020_effort(joint, shadow, raw)
+            else:
+                effort = raw * spec.si_per_raw * kt
+                step = spec.si_per_raw * kt
+            allowed = joint.max_effort + step + self.effort_tolerance
+            if detail is None and abs(effort) > allowed:
+                detail = f'raw {raw} = {effort:+.4f} N·m beyond max_effort {joint.max_effort} N·m'
+            self._judge(joint, bus, can_id, t, effort, raw != 0, detail, found)
+
+    @staticmethod
+    def _gm6020_effort(joint: _Joint, shadow: Gm6020Voltage, raw: int) -> tuple[float, float]:
+        """Effort a GM6020 voltage command asks for; the smaller over the last two ω.
+
+        The bridge computed the voltage with the newest feedback it had processed, which
+        may be one frame older than the newest on the wire.
+        """
+        volts = raw * shadow.spec.si_per_raw
+        kt, r, ke = shadow.torque_constant, shadow.resistance, shadow.back_emf_constant
+        candidates = [(volts - ke * w) / r * kt for w in (joint.device_velocities or [0.0])]
+        effort = min(candidates, key=abs)
+        return effort, shadow.spec.si_per_raw / r * kt
+
+    def _check_mit(
+        self, bus: str, can_id: int, joint: _Joint, data: bytes, t: float, found: list[Violation]
+    ) -> None:
+        shadow = joint.shadow
+        assert isinstance(shadow, MitActuator)
+        try:
+            if mit.parse_system_frame(data) is not None:
+                self.system_frames += 1
+                return
+            cmd = mit.unpack_mit_command(data, shadow.limits)
+        except ProtocolError as err:
+            self.command_frames += 1
+            found.append(Violation(t, bus, can_id, joint.name, 'malformed', str(err)))
+            return
+        self.command_frames += 1
+        limits = shadow.limits
+        t_step = 2.0 * limits.t_max / ((1 << mit.TORQUE_BITS) - 1)
+        nonzero = cmd.kp > 0.0 or cmd.kd > 0.0 or abs(cmd.torque) > t_step
+        g = shadow.gear_ratio
+        # the torque the motor applies, at the latest (or the one before) feedback
+        states = list(zip(joint.positions, joint.device_velocities, strict=False)) or [(0.0, 0.0)]
+        torques = [
+            cmd.kp * (cmd.position - q) + cmd.kd * (cmd.velocity - dq) + cmd.torque
+            for q, dq in states
+        ]
+        torque = min(torques, key=abs)
+        effort = torque * g
+        # quantisation of p, v, kp, kd and tau, at this command's size
+        p_step = 2.0 * limits.p_max / ((1 << mit.POSITION_BITS) - 1)
+        v_step = 2.0 * limits.v_max / ((1 << mit.VELOCITY_BITS) - 1)
+        kp_step = (limits.kp_max - limits.kp_min) / ((1 << mit.KP_BITS) - 1)
+        kd_step = (limits.kd_max - limits.kd_min) / ((1 << mit.KD_BITS) - 1)
+        q, dq = states[-1]
+        step = g * (
+            t_step
+            + cmd.kp * p_step
+            + cmd.kd * v_step
+            + kp_step * abs(cmd.position - q)
+            + kd_step * abs(cmd.velocity - dq)
+        )
+        detail = None
+        if abs(effort) > joint.max_effort + step + self.effort_tolerance:
+            detail = (
+                f'MIT kp {cmd.kp:.3f} kd {cmd.kd:.3f} p {cmd.position:+.3f} v {cmd.velocity:+.3f} '
+                f'tau {cmd.torque:+.3f} = {effort:+.4f} N·m beyond max_effort {joint.max_effort}'
+            )
+        self._judge(joint, bus, can_id, t, effort if nonzero else 0.0, nonzero, detail, found)
+
+
+def _mit_reading(shadow: MitActuator, data: bytes) -> tuple[float, float]:
+    """Position [rad] and velocity [rad/s] as the MIT motor reports them (motor side)."""
+    if isinstance(shadow, Cheetah):
+        reply = cheetah.decode_reply(data, shadow.limits)
+        return reply.position, reply.velocity
+    fb = damiao.decode_feedback(data, shadow.limits)
+    return fb.position, fb.velocity
+
+
+def check_actuator_states(msg: Any, limits: Mapping[str, float]) -> list[str]:
+    """Problems in one rm_msgs/ActuatorState: NaN/inf commands, beyond the limits, or a
+    held joint (MODE_OFF) with a non-zero command.
+
+    Args:
+        msg: the message.
+        limits: joint -> max_effort [N·m].
+    """
+    problems = []
+    modes = list(msg.mode)
+    for i, name in enumerate(msg.name):
+        command = float(msg.command[i])
+        if not math.isfinite(command):
+            problems.append(f'{name}: command {command}')
+            continue
+        limit = limits.get(name)
+        if limit is not None and abs(command) > limit * (1 + 1e-6) + 1e-3:
+            problems.append(f'{name}: command {command:+.4f} beyond {limit}')
+        if modes and modes[i] == Mode.OFF and command != 0.0:
+            problems.append(f'{name}: MODE_OFF with command {command:+.4f}')
+    return problems
+
+
+def max_efforts(config: Mapping[str, Any] | HardwareConfig) -> dict[str, float]:
+    """joint -> resolved max_effort [N·m] (type defaults filled in) of a hardware config."""
+    if not isinstance(config, HardwareConfig):
+        config = HardwareConfig.from_dict(config)
+    return {jc.name: ACTUATOR_TYPES[jc.type](jc, config.safety).max_effort for jc in config.joints}
