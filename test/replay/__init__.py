@@ -1,0 +1,1 @@
+"""Bag-replay tests: scenario bags played into the simulated robot (see harness.py)."""
