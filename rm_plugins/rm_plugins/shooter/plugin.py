@@ -150,6 +150,18 @@ class StandShooter(PluginBase):
         self.state_pub = self.node.create_publisher(ShooterState, STATE_TOPIC, STATE_QOS_DEPTH)
         self._state_period_ns = round(_NS_PER_S / cfg.state_rate)
         self._detector = JamDetector(cfg.jam)
+        # A joint state this old is no state: the bridge stopped publishing (it may come
+        # back with the trigger's position counted from a new zero).
+        self._joint_timeout_ns = round(
+            self.params.double(
+                'joint_timeout',
+                0.1,
+                description='older joint state -> PASSIVE',
+                unit='s',
+                gt=0.0,
+            )
+            * _NS_PER_S
+        )
         # Kept across resets: a command that returns after a dropout must not fire its burst
         # again, and a fault holds until a new burst or mode.
         self._shots_fired = 0
@@ -275,7 +287,7 @@ class StandShooter(PluginBase):
     ) -> None:
         """Decide the state for this tick and send the joint targets (all transitions)."""
         cfg = self.config
-        passive_reason = self._passive_reason(command, joints)
+        passive_reason = self._passive_reason(command, joints, now_ns)
         if passive_reason is not None:
             self._go_passive(passive_reason)
             return
@@ -307,7 +319,7 @@ class StandShooter(PluginBase):
         self.send_joint_targets(targets)
 
     def _passive_reason(
-        self, command: ShootCommand | None, joints: dict[str, JointState]
+        self, command: ShootCommand | None, joints: dict[str, JointState], now_ns: int
     ) -> str | None:
         if command is None:
             return self._rejection or 'no valid command on /shoot_cmd'
@@ -315,9 +327,15 @@ class StandShooter(PluginBase):
             return 'commanded PASSIVE'
         if self._fault:
             return self._fault_reason
-        missing = [j for j in self._joints if j not in joints or not joints[j].online]
+        missing = [
+            j
+            for j in self._joints
+            if j not in joints
+            or not joints[j].online
+            or now_ns - joints[j].stamp_ns > self._joint_timeout_ns
+        ]
         if missing:
-            return f'no state from joint(s) {", ".join(missing)} (offline or never seen)'
+            return f'no state from joint(s) {", ".join(missing)} (offline, stale or never seen)'
         return None
 
     def _go_passive(self, reason: str) -> None:

@@ -1,0 +1,114 @@
+"""The bridge goes away and comes back while rm_robot keeps running (whole robot, in-process).
+
+SimRobot (test/support/robot.py) runs can_bridge on rm_sim and rm_robot in this process.
+Here the bridge node is shut down and a new one (new simulated world: every motor starts
+again at angle 0, as real motors' single-turn encoders restart near zero with a new
+bridge) is started with the same parameters, while the plugins keep ticking. The host must
+notice the joint states going stale, put its plugins in their safe state, and resume
+once the new bridge reports — without ever driving a motor to where the old bridge's
+positions would have put it.
+
+The process version (SIGKILL of a real can_bridge process, observed from outside) is
+test_process_faults.py.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+import time
+
+import pytest
+from rm_base.bridge import CanBridgeNode
+from support.robot import SimRobot, _parameter
+from support.ros import wait_until
+
+from rm_msgs.msg import ShootCmd, ShooterState
+
+pytestmark = [pytest.mark.ros, pytest.mark.slow]
+
+WAIT = 10.0  # [s] longest wait for a condition
+SLOT = 2.0 * math.pi / 8  # shooter.slots = 8
+
+# As test/integration/test_shooter.py: a friction wheel's inertia on its rotor, the
+# rotor's own top speed, and the trigger disc with balls.
+BRIDGE = {
+    'joints.friction_l.sim.load_inertia': 4.5e-5,
+    'joints.friction_r.sim.load_inertia': 4.5e-5,
+    'joints.friction_l.max_velocity': 1000.0,
+    'joints.friction_r.max_velocity': 1000.0,
+    'joints.trigger.sim.load_inertia': 2e-4,
+}
+
+
+def restart_bridge(robot: SimRobot) -> None:
+    """Replace the robot's bridge with a fresh one (zero frames sent, world rebuilt)."""
+    robot._stop.set()  # pause the executor thread while nodes change
+    robot._spinner.join(timeout=5.0)
+    old = robot.bridge
+    robot.executor.remove_node(old)
+    old.destroy_node()
+    robot.bridge = CanBridgeNode(
+        context=robot.context,
+        parameter_overrides=[_parameter(k, v) for k, v in robot.bridge_parameters.items()],
+    )
+    robot.executor.add_node(robot.bridge)
+    robot._stop.clear()
+    robot._spinner = threading.Thread(target=robot._spin, name='sim-robot', daemon=True)
+    robot._spinner.start()
+
+
+@pytest.fixture
+def shooter_robot():
+    robot = SimRobot(
+        'standard',
+        plugins=['gpio', 'shooter'],
+        overrides={'can_bridge': BRIDGE, 'rm_robot': {'shooter.command_timeout': 0.5}},
+    )
+    robot.subscribe('/shooter_state', ShooterState, keep_history=True)
+    yield robot
+    robot.close()
+
+
+def trigger_angle(robot: SimRobot) -> float:
+    world = robot.world
+    with world.lock:
+        return world.motor('trigger').model.angle
+
+
+def shooter(robot: SimRobot) -> ShooterState | None:
+    return robot.latest('/shooter_state')
+
+
+def test_when_the_bridge_restarts_expect_the_shooter_safe_meanwhile_and_no_shot_on_its_own(
+    shooter_robot,
+):
+    robot = shooter_robot
+    robot.publish('/shoot_cmd', ShootCmd(mode=ShootCmd.READY, speed=15.0), rate_hz=50.0)
+    assert wait_until(lambda: (s := shooter(robot)) and s.state == ShooterState.READY, WAIT)
+    burst = ShootCmd(mode=ShootCmd.PUSH, speed=15.0, hz=10.0, num=4, burst_id=1)
+    robot.publish('/shoot_cmd', burst, rate_hz=50.0)  # held: the same burst_id throughout
+    assert wait_until(
+        lambda: (s := shooter(robot)) and s.shots_fired >= 4 and s.state == ShooterState.READY,
+        WAIT,
+    ), shooter(robot)
+    # the trigger holds about four slots (3.1 rad) past where it started
+    assert trigger_angle(robot) > 3 * SLOT
+
+    mark = len(robot.history('/shooter_state'))
+    restart_bridge(robot)
+    restarted = time.monotonic()
+    assert abs(trigger_angle(robot)) < 1e-9  # a new world: the trigger starts at 0
+    # Back: the shooter feeds a ball again (at most about a slot) and waits READY; it must
+    # not step the trigger on towards the old bridge's 3 rad.
+    assert wait_until(
+        lambda: (s := shooter(robot)) and s.state == ShooterState.READY and s.header.stamp, WAIT
+    )
+    while time.monotonic() < restarted + 1.5:  # long enough for a 3 rad move at 12 rad/s
+        assert trigger_angle(robot) < 1.5 * SLOT, 'the trigger moved on without a command'
+        time.sleep(0.01)
+    # in between the joint states were stale: the shooter was safe (PASSIVE) and said why
+    states = robot.history('/shooter_state')[mark:]
+    passive = [s for s in states if s.state == ShooterState.PASSIVE]
+    assert passive, [(s.state, s.reason) for s in states[:5]]
+    assert any('trigger' in s.reason for s in passive), {s.reason for s in passive}
