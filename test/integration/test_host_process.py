@@ -87,11 +87,12 @@ def test_sigint_disables_every_plugin_with_zero_output_and_exits_cleanly(
     proc = start_rm_robot(extra_plugins, params_file)
     try:
         # Running: the plugin loaded by name follows our command.
+        # The state (latched, another topic) may arrive after the first command: wait for both.
         assert wait_until(
-            lambda: cmds and list(cmds[-1].velocity) == [0.5, 0.5], 20.0,
+            lambda: cmds and list(cmds[-1].velocity) == [0.5, 0.5]
+            and any(s.state_name == 'TRACKING' for s in states), 20.0,
             spin=command_and_spin, period=0.02,
         ), proc.stderr.read() if proc.poll() is not None else 'rm_robot did not follow'
-        assert any(s.state_name == 'TRACKING' for s in states)
 
         # Commands keep coming while rm_robot shuts down: any OFF now is the shutdown's.
         before = len(cmds)
