@@ -6,7 +6,7 @@
 ROBOT ?= standard
 PYTEST_ARGS ?=
 
-.PHONY: all setup test run lint lock clean
+.PHONY: all setup test run lint lock clean bench
 
 all: test
 
@@ -23,6 +23,9 @@ run: setup
 
 lint: setup
 	@scripts/with_env.sh ruff check .
+
+bench: setup
+	@scripts/with_env.sh python bench/run.py $(BENCH_ARGS)
 
 ## lock: regenerate requirements/lock.txt from a fresh venv built from requirements.in
 lock:

@@ -1,0 +1,156 @@
+"""Measurement 5: the obvious alternative, the 1 kHz loop on an rclpy timer.
+
+Same actuators (the standard robot's hardware), same work per tick (``Scheduler.tick``:
+update all, pack all, send), same feedback (1 kHz per motor from the feeder of
+:mod:`bench.rigs`), back to back in one run:
+
+* **scheduler thread**: ``CanHardware.start()``, the production design (a thread
+  sleeping to absolute deadlines on ``perf_counter_ns``);
+* **rclpy timer, SingleThreadedExecutor**: ``CanHardware.open()`` (receive threads only)
+  and a 1 ms timer on the steady clock whose callback runs ``CanHardware.tick()``, spun by
+  ``SingleThreadedExecutor.spin_once`` on a thread of its own;
+* **rclpy timer, EventsExecutor**: the same on ``rclpy.experimental.EventsExecutor``
+  (for reference: the executor bringup uses for its callbacks).
+
+Period error of the timer: at callback entry ``period - timer.time_until_next_call()``
+(rcl has already moved the timer's next call time one period on), i.e. how late the
+callback runs against rcl's own grid. rcl skips missed periods; missed deadlines are the
+ticks short of ``elapsed / period``. CPU: the loop thread's own CPU time (scheduler
+thread, or the executor thread).
+"""
+
+from __future__ import annotations
+
+import array
+import os
+import sys
+import threading
+import time
+from dataclasses import dataclass
+from typing import Any
+
+from bench.machine import Window, thread_cpu_percent, thread_cpu_snapshot
+from bench.rigs import FeedbackFeeder, Rig, standard_hardware
+from bench.scheduler_timing import TickRecorder, tick_summary
+
+VARIANTS = ('scheduler_thread', 'rclpy_single_threaded', 'rclpy_events')
+
+
+@dataclass(frozen=True)
+class BaselinePlan:
+    """Durations [s] of one baseline run."""
+
+    seconds: float = 5.0
+    warmup_s: float = 0.5
+
+
+QUICK_PLAN = BaselinePlan(seconds=0.3, warmup_s=0.1)
+
+
+def _measure_scheduler(rig: Rig, plan: BaselinePlan) -> dict[str, Any]:
+    rig.hw.start()
+    rig.feeder.start()
+    time.sleep(plan.warmup_s)
+    recorder = TickRecorder(rig.hw.scheduler)
+    window = Window()
+    threads0 = thread_cpu_snapshot()
+    recorder.start()
+    time.sleep(plan.seconds)
+    sched = recorder.stop()
+    threads1 = thread_cpu_snapshot()
+    facts = window.close()
+    per_thread = thread_cpu_percent(threads0, threads1, facts.elapsed_s)
+    return {
+        'scheduler': sched,
+        'loop_cpu_pct': per_thread.get('can-scheduler', 0.0),
+        'window': facts.as_dict(),
+    }
+
+
+def _measure_timer(rig: Rig, plan: BaselinePlan, events: bool) -> dict[str, Any]:
+    import rclpy
+    from rclpy.clock import Clock, ClockType
+    from rclpy.context import Context
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.experimental import EventsExecutor
+
+    rig.hw.open()
+    rig.feeder.start()
+    context = Context()
+    rclpy.init(context=context, domain_id=int(os.environ['ROS_DOMAIN_ID']))
+    node = rclpy.create_node('bench_timer_loop', context=context)
+    executor = (EventsExecutor if events else SingleThreadedExecutor)(context=context)
+    executor.add_node(node)
+    period_ns = rig.hw.scheduler.period_ns
+    errors = array.array('q')
+    recording = threading.Event()
+    ticks = [0]
+    tick = rig.hw.tick
+    timer = None
+
+    def on_timer() -> None:
+        until = timer.time_until_next_call()
+        if recording.is_set():
+            errors.append(period_ns - until)
+            ticks[0] += 1
+        tick()
+
+    timer = node.create_timer(
+        period_ns / 1e9, on_timer, clock=Clock(clock_type=ClockType.STEADY_TIME)
+    )
+    stop = threading.Event()
+
+    def spin() -> None:
+        while not stop.is_set() and context.ok():
+            executor.spin_once(timeout_sec=0.05)
+
+    thread = threading.Thread(target=spin, name='bench-executor', daemon=True)
+    thread.start()
+    try:
+        time.sleep(plan.warmup_s)
+        window = Window()
+        threads0 = thread_cpu_snapshot()
+        t0 = time.perf_counter_ns()
+        recording.set()
+        time.sleep(plan.seconds)
+        recording.clear()
+        elapsed_ns = time.perf_counter_ns() - t0
+        threads1 = thread_cpu_snapshot()
+        facts = window.close()
+    finally:
+        stop.set()
+        thread.join(timeout=5.0)
+        executor.shutdown()
+        node.destroy_node()
+        context.try_shutdown()
+    n = ticks[0]
+    skipped = max(0, round(elapsed_ns / period_ns) - n)
+    per_thread = thread_cpu_percent(threads0, threads1, facts.elapsed_s)
+    return {
+        'scheduler': tick_summary(errors, ticks=n, skipped=skipped),
+        'loop_cpu_pct': per_thread.get('bench-executor', 0.0),
+        'window': facts.as_dict(),
+    }
+
+
+def run_once(plan: BaselinePlan) -> dict[str, Any]:
+    """The three variants back to back, each on a fresh rig."""
+    sys.setswitchinterval(0.001)  # as in bringup
+    out: dict[str, Any] = {}
+    for variant in VARIANTS:
+        rig = Rig(standard_hardware())
+        rig.feeder = FeedbackFeeder(rig, 9000.0)  # 9 motors x 1 kHz, started once open
+        try:
+            if variant == 'scheduler_thread':
+                out[variant] = _measure_scheduler(rig, plan)
+            else:
+                out[variant] = _measure_timer(rig, plan, events=variant == 'rclpy_events')
+        finally:
+            rig.feeder.stop()
+            rig.close()
+    a, b = out['scheduler_thread'], out['rclpy_single_threaded']
+    p99_a, p99_b = a['scheduler']['error_us']['p99'], b['scheduler']['error_us']['p99']
+    out['ratio_p99'] = p99_b / p99_a if p99_a > 0 else float('nan')
+    cpu_a, cpu_b = a['loop_cpu_pct'], b['loop_cpu_pct']
+    out['ratio_cpu'] = cpu_b / cpu_a if cpu_a > 0 else float('nan')
+    return out

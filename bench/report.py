@@ -1,0 +1,580 @@
+"""The result table: one row per figure, min / median / max over runs, PASS/MISS.
+
+Every row is declared in :data:`ROWS` (the smoke test checks that each one is printed).
+A row's value is extracted from each run's raw result; the verdict compares the *median*
+over runs with the target. Timing rows carry the CPU steal and the 1-minute load average
+of their own measuring windows (median over runs; steal also its max).
+"""
+
+from __future__ import annotations
+
+import math
+import operator
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from bench.stats import spread
+
+Extract = Callable[[dict[str, Any]], float | None]
+Windows = Callable[[dict[str, Any]], list[dict[str, Any]]]
+
+SECTIONS = {
+    'scheduler': '1. Scheduler at 1 kHz (standard robot on rm_sim, commands streaming at 100 Hz)',
+    'latency': '2. Command -> first CAN frame with the new target (cross-process, CLOCK_MONOTONIC)',
+    'cpu': '3. CPU, % of one core (one process: bridge + host + sim, split by thread)',
+    'throughput': '4. Feedback decode + dispatch (bridge code, rigs without physics)',
+    'baseline': '5. Same 1 kHz loop on an rclpy timer (standard robot actuators, same run)',
+}
+
+
+@dataclass(frozen=True)
+class Row:
+    """One line of the table.
+
+    Attributes:
+        key: stable id (JSON, smoke test).
+        section: key of :data:`SECTIONS`.
+        label: what is shown.
+        source: which raw result the row reads: ``robot``, ``throughput`` or ``baseline``.
+        extract: run result -> value (None if absent).
+        target: (comparison, bound) or None for information rows.
+        windows: run result -> the measuring windows behind the value (steal, load).
+    """
+
+    key: str
+    section: str
+    label: str
+    source: str
+    extract: Extract
+    target: tuple[str, float] | None = None
+    windows: Windows | None = None
+
+
+def _get(*path: Any) -> Extract:
+    def extract(run: dict[str, Any]) -> float | None:
+        node: Any = run
+        for key in path:
+            if isinstance(node, dict) and key in node:
+                node = node[key]
+            elif isinstance(node, list) and isinstance(key, int) and key < len(node):
+                node = node[key]
+            else:
+                return None
+        return float(node) if isinstance(node, int | float) else None
+
+    return extract
+
+
+def _phase(phase: str) -> Windows:
+    return lambda run: [run[phase]['window']] if phase in run else []
+
+
+def _sweep(motors: int) -> Extract:
+    def extract(run: dict[str, Any]) -> float | None:
+        for point in run.get('sweep', {}).get('points', []):
+            if point['motors'] == motors:
+                return point['cpu']['bridge_pct']
+        return None
+
+    return extract
+
+
+def _sweep_windows(run: dict[str, Any]) -> list[dict[str, Any]]:
+    return [p['window'] for p in run.get('sweep', {}).get('points', [])]
+
+
+def _knee_windows(run: dict[str, Any]) -> list[dict[str, Any]]:
+    return [p['window'] for p in run.get('knee', {}).get('points', [])]
+
+
+def _at20k_window(run: dict[str, Any]) -> list[dict[str, Any]]:
+    point = run.get('knee', {}).get('at_20k')
+    return [point['window']] if point else []
+
+
+def _variant(name: str) -> Windows:
+    return lambda run: [run[name]['window']] if name in run else []
+
+
+def _detected(run: dict[str, Any]) -> float | None:
+    lat = run.get('latency')
+    if not lat:
+        return None
+    steps = sum(v['steps'] for v in lat.values())
+    return 100.0 * sum(v['detected'] for v in lat.values()) / steps if steps else None
+
+
+def _latency_windows(run: dict[str, Any]) -> list[dict[str, Any]]:
+    return [run['load']['window']] if 'load' in run else []
+
+
+_LOAD = _phase('load')
+_IDLE = _phase('idle')
+_ALL = _variant('scheduler_thread')
+_STE = _variant('rclpy_single_threaded')
+_EVT = _variant('rclpy_events')
+
+ROWS: tuple[Row, ...] = (
+    # 1. scheduler
+    Row(
+        'sched.p50',
+        'scheduler',
+        'period error p50 [µs]',
+        'robot',
+        _get('load', 'scheduler', 'error_us', 'p50'),
+        None,
+        _LOAD,
+    ),
+    Row(
+        'sched.p99',
+        'scheduler',
+        'period error p99 [µs]',
+        'robot',
+        _get('load', 'scheduler', 'error_us', 'p99'),
+        ('<', 200.0),
+        _LOAD,
+    ),
+    Row(
+        'sched.max',
+        'scheduler',
+        'period error max [µs]',
+        'robot',
+        _get('load', 'scheduler', 'error_us', 'max'),
+        None,
+        _LOAD,
+    ),
+    Row(
+        'sched.missed',
+        'scheduler',
+        'missed deadlines [%]',
+        'robot',
+        _get('load', 'scheduler', 'missed_pct'),
+        ('<', 0.1),
+        _LOAD,
+    ),
+    Row(
+        'sched.idle.p99',
+        'scheduler',
+        'idle robot: period error p99 [µs]',
+        'robot',
+        _get('idle', 'scheduler', 'error_us', 'p99'),
+        None,
+        _IDLE,
+    ),
+    Row(
+        'sched.idle.missed',
+        'scheduler',
+        'idle robot: missed deadlines [%]',
+        'robot',
+        _get('idle', 'scheduler', 'missed_pct'),
+        None,
+        _IDLE,
+    ),
+    # 2. latency
+    Row(
+        'lat.wheel.p50',
+        'latency',
+        '/vel_cmd -> wheel_fl current p50 [ms]',
+        'robot',
+        _get('latency', 'wheel_fl', 'total_ms', 'p50'),
+        None,
+        _latency_windows,
+    ),
+    Row(
+        'lat.wheel.p99',
+        'latency',
+        '/vel_cmd -> wheel_fl current p99 [ms]',
+        'robot',
+        _get('latency', 'wheel_fl', 'total_ms', 'p99'),
+        ('<', 3.0),
+        _latency_windows,
+    ),
+    Row(
+        'lat.yaw.p50',
+        'latency',
+        '/gimbal_cmd -> yaw voltage p50 [ms]',
+        'robot',
+        _get('latency', 'yaw', 'total_ms', 'p50'),
+        None,
+        _latency_windows,
+    ),
+    Row(
+        'lat.yaw.p99',
+        'latency',
+        '/gimbal_cmd -> yaw voltage p99 [ms]',
+        'robot',
+        _get('latency', 'yaw', 'total_ms', 'p99'),
+        ('<', 3.0),
+        _latency_windows,
+    ),
+    Row(
+        'lat.wheel.bridge',
+        'latency',
+        '  wheel: publish -> bridge applies, p50 [ms]',
+        'robot',
+        _get('latency', 'wheel_fl', 'to_bridge_ms', 'p50'),
+        None,
+        _latency_windows,
+    ),
+    Row(
+        'lat.yaw.bridge',
+        'latency',
+        '  yaw: publish -> bridge applies, p50 [ms]',
+        'robot',
+        _get('latency', 'yaw', 'to_bridge_ms', 'p50'),
+        None,
+        _latency_windows,
+    ),
+    Row(
+        'lat.wire.p99',
+        'latency',
+        '  wheel: bridge applies -> wire, p99 [ms]',
+        'robot',
+        _get('latency', 'wheel_fl', 'to_wire_ms', 'p99'),
+        None,
+        _latency_windows,
+    ),
+    Row('lat.detected', 'latency', 'steps seen on the wire [%]', 'robot', _detected),
+    # 3. cpu
+    Row(
+        'cpu.load.host_bridge',
+        'cpu',
+        'host + bridge, streaming',
+        'robot',
+        _get('load', 'groups', 'host_bridge'),
+        ('<', 50.0),
+        _LOAD,
+    ),
+    Row(
+        'cpu.idle.host_bridge',
+        'cpu',
+        'host + bridge, idle',
+        'robot',
+        _get('idle', 'groups', 'host_bridge'),
+        ('<', 50.0),
+        _IDLE,
+    ),
+    Row(
+        'cpu.load.host',
+        'cpu',
+        '  host: plugin threads + IMU reader',
+        'robot',
+        _get('load', 'groups', 'host'),
+        None,
+        _LOAD,
+    ),
+    Row(
+        'cpu.load.bridge',
+        'cpu',
+        '  bridge: scheduler + receive + publisher',
+        'robot',
+        _get('load', 'groups', 'bridge'),
+        None,
+        _LOAD,
+    ),
+    Row(
+        'cpu.load.scheduler',
+        'cpu',
+        '    of which the 1 kHz scheduler thread',
+        'robot',
+        _get('load', 'threads', 'can-scheduler'),
+        None,
+        _LOAD,
+    ),
+    Row(
+        'cpu.load.ros',
+        'cpu',
+        '  ROS: executor (main thread) + DDS, shared',
+        'robot',
+        _get('load', 'groups', 'ros_shared'),
+        None,
+        _LOAD,
+    ),
+    Row(
+        'cpu.load.sim',
+        'cpu',
+        'sim: physics thread, streaming',
+        'robot',
+        _get('load', 'groups', 'sim'),
+        None,
+        _LOAD,
+    ),
+    Row(
+        'cpu.load.process',
+        'cpu',
+        'whole process (getrusage), streaming',
+        'robot',
+        _get('load', 'process_pct'),
+        None,
+        _LOAD,
+    ),
+    # 4. throughput
+    Row(
+        'tp.cost',
+        'throughput',
+        'decode + dispatch cost [µs/frame]',
+        'throughput',
+        _get('cost', 'us_per_frame'),
+    ),
+    Row(
+        'tp.cost_rate',
+        'throughput',
+        'decode + dispatch, frames per CPU-second',
+        'throughput',
+        _get('cost', 'frames_per_cpu_s'),
+    ),
+    Row(
+        'tp.knee',
+        'throughput',
+        'sustained rate with the 1 kHz loop running (knee) [frames/s]',
+        'throughput',
+        _get('knee', 'knee_hz'),
+        ('>=', 20_000.0),
+        _knee_windows,
+    ),
+    Row(
+        'tp.rx20k',
+        'throughput',
+        '  at 20k/s: receive threads [µs/frame]',
+        'throughput',
+        _get('knee', 'at_20k', 'us_per_frame_receive'),
+        None,
+        _at20k_window,
+    ),
+    Row(
+        'tp.sched20k',
+        'throughput',
+        '  at 20k/s: scheduler period error p99 [µs]',
+        'throughput',
+        _get('knee', 'at_20k', 'scheduler', 'error_us', 'p99'),
+        None,
+        _at20k_window,
+    ),
+    Row(
+        'tp.slope',
+        'throughput',
+        'bridge CPU per motor (1 kHz feedback each) [%/motor]',
+        'throughput',
+        _get('sweep', 'slope_pct_per_motor'),
+        None,
+        _sweep_windows,
+    ),
+    Row(
+        'tp.m4',
+        'throughput',
+        '  bridge CPU, 4 motors / 1 bus [%]',
+        'throughput',
+        _sweep(4),
+        None,
+        _sweep_windows,
+    ),
+    Row(
+        'tp.m9',
+        'throughput',
+        '  bridge CPU, 9 motors / 2 buses (standard) [%]',
+        'throughput',
+        _sweep(9),
+        None,
+        _sweep_windows,
+    ),
+    Row(
+        'tp.m16',
+        'throughput',
+        '  bridge CPU, 16 motors / 2 buses [%]',
+        'throughput',
+        _sweep(16),
+        None,
+        _sweep_windows,
+    ),
+    Row(
+        'tp.m32',
+        'throughput',
+        '  bridge CPU, 32 motors / 4 buses [%]',
+        'throughput',
+        _sweep(32),
+        None,
+        _sweep_windows,
+    ),
+    # 5. baseline
+    Row(
+        'bl.thread.p99',
+        'baseline',
+        'scheduler thread: period error p99 [µs]',
+        'baseline',
+        _get('scheduler_thread', 'scheduler', 'error_us', 'p99'),
+        None,
+        _ALL,
+    ),
+    Row(
+        'bl.ste.p99',
+        'baseline',
+        'rclpy timer, SingleThreadedExecutor: p99 [µs]',
+        'baseline',
+        _get('rclpy_single_threaded', 'scheduler', 'error_us', 'p99'),
+        None,
+        _STE,
+    ),
+    Row(
+        'bl.ratio_p99',
+        'baseline',
+        '  ratio timer / thread, p99',
+        'baseline',
+        _get('ratio_p99'),
+        None,
+        _STE,
+    ),
+    Row(
+        'bl.thread.missed',
+        'baseline',
+        'scheduler thread: missed deadlines [%]',
+        'baseline',
+        _get('scheduler_thread', 'scheduler', 'missed_pct'),
+        None,
+        _ALL,
+    ),
+    Row(
+        'bl.ste.missed',
+        'baseline',
+        'rclpy timer, SingleThreadedExecutor: missed [%]',
+        'baseline',
+        _get('rclpy_single_threaded', 'scheduler', 'missed_pct'),
+        None,
+        _STE,
+    ),
+    Row(
+        'bl.thread.cpu',
+        'baseline',
+        'scheduler thread: CPU [%]',
+        'baseline',
+        _get('scheduler_thread', 'loop_cpu_pct'),
+        None,
+        _ALL,
+    ),
+    Row(
+        'bl.ste.cpu',
+        'baseline',
+        'rclpy timer, SingleThreadedExecutor: CPU [%]',
+        'baseline',
+        _get('rclpy_single_threaded', 'loop_cpu_pct'),
+        None,
+        _STE,
+    ),
+    Row(
+        'bl.ratio_cpu',
+        'baseline',
+        '  ratio timer / thread, CPU',
+        'baseline',
+        _get('ratio_cpu'),
+        None,
+        _STE,
+    ),
+    Row(
+        'bl.evt.p99',
+        'baseline',
+        '(ref) rclpy timer, EventsExecutor: p99 [µs]',
+        'baseline',
+        _get('rclpy_events', 'scheduler', 'error_us', 'p99'),
+        None,
+        _EVT,
+    ),
+    Row(
+        'bl.evt.cpu',
+        'baseline',
+        '(ref) rclpy timer, EventsExecutor: CPU [%]',
+        'baseline',
+        _get('rclpy_events', 'loop_cpu_pct'),
+        None,
+        _EVT,
+    ),
+)
+
+_OPS = {'<': operator.lt, '<=': operator.le, '>': operator.gt, '>=': operator.ge}
+
+
+def evaluate(rows: tuple[Row, ...], raw: dict[str, list[dict[str, Any]]]) -> list[dict[str, Any]]:
+    """Each row's min / median / max over runs, verdict, steal and load."""
+    out = []
+    for row in rows:
+        runs = raw.get(row.source, [])
+        values = [row.extract(run) for run in runs]
+        stats = spread(values)
+        windows = [w for run in runs for w in (row.windows(run) if row.windows else [])]
+        steal = spread(w['steal_pct'] for w in windows)
+        load = spread(w['load1_start'] for w in windows)
+        verdict = '—'
+        if row.target is not None:
+            if stats is None:
+                verdict = 'n/a'
+            else:
+                op, bound = row.target
+                verdict = 'PASS' if _OPS[op](stats[1], bound) else 'MISS'
+        out.append(
+            {
+                'key': row.key,
+                'section': row.section,
+                'label': row.label,
+                'runs': sum(v is not None for v in values),
+                'min': stats[0] if stats else None,
+                'median': stats[1] if stats else None,
+                'max': stats[2] if stats else None,
+                'values': values,
+                'target': f'{row.target[0]} {_fmt(row.target[1])}' if row.target else '',
+                'verdict': verdict,
+                'steal_pct_median': steal[1] if steal else None,
+                'steal_pct_max': steal[2] if steal else None,
+                'load1_median': load[1] if load else None,
+            }
+        )
+    return out
+
+
+def _fmt(x: float | None) -> str:
+    if x is None or (isinstance(x, float) and math.isnan(x)):
+        return 'n/a'
+    ax = abs(x)
+    if ax >= 10_000:
+        return f'{x:,.0f}'
+    if ax >= 100:
+        return f'{x:.0f}'
+    if ax >= 10:
+        return f'{x:.1f}'
+    return f'{x:.2f}'
+
+
+def format_table(evaluated: list[dict[str, Any]]) -> str:
+    """A fixed-width table (also valid Markdown), grouped by section."""
+    header = ('metric', 'min', 'median', 'max', 'target', 'result', 'steal % med (max)', 'load1')
+    label_width = max(len(r['label']) for r in evaluated)
+    widths = (label_width, 8, 8, 8, 9, 6, 17, 5)
+    align = ('<', '>', '>', '>', '>', '<', '>', '>')
+
+    def line(cells: tuple[str, ...]) -> str:
+        parts = (f'{c:{a}{w}}' for c, a, w in zip(cells, align, widths, strict=True))
+        return '| ' + ' | '.join(parts) + ' |'
+
+    rule = '|' + '|'.join('-' * (w + 2) for w in widths) + '|'
+    lines: list[str] = []
+    section = None
+    for r in evaluated:
+        if r['section'] != section:
+            section = r['section']
+            if lines:
+                lines.append('')
+            lines += [f'**{SECTIONS[section]}**', '', line(header), rule]
+        steal = ''
+        if r['steal_pct_median'] is not None:
+            steal = f'{r["steal_pct_median"]:.1f} ({r["steal_pct_max"]:.1f})'
+        load = f'{r["load1_median"]:.2f}' if r['load1_median'] is not None else ''
+        cells = (
+            r['label'],
+            _fmt(r['min']),
+            _fmt(r['median']),
+            _fmt(r['max']),
+            r['target'],
+            r['verdict'],
+            steal,
+            load,
+        )
+        lines.append(line(cells))
+    return '\n'.join(lines)

@@ -1,0 +1,205 @@
+"""Measurements 1-3 on the whole standard robot: phases of one robot process.
+
+One run = a fresh robot process (:mod:`bench.robot_proc`: bridge + host + rm_sim, as
+``bringup --robot standard --sim``) and a fresh commander process
+(:mod:`bench.commander`), then:
+
+1. ``idle``: no commands (plugins PASSIVE, joints held at zero, the 1 kHz loop and the
+   simulator still run): CPU and scheduler timing;
+2. ``load``: the commander streams /chassis_cmd GYRO, /vel_cmd, /gimbal_cmd RATE and
+   /shoot_cmd READY at 100 Hz; once the wheels, the yaw and the friction wheels are
+   driven: CPU and scheduler timing;
+3. ``latency``: command steps (see :mod:`bench.latency`) with the tap on.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import queue
+import subprocess
+import sys
+import threading
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from bench.latency import PROBES, analyse
+from bench.robot_proc import PREFIX
+
+ROOT = Path(__file__).resolve().parents[1]
+ACTIVE_JOINTS = ('wheel_fl', 'yaw', 'friction_l')
+
+
+class BenchError(RuntimeError):
+    """A child process failed or did not answer."""
+
+
+class Child:
+    """A child process speaking the one-line protocol of robot_proc / commander."""
+
+    def __init__(self, module: str, args: list[str], log_path: Path) -> None:
+        env = dict(os.environ)
+        env['PYTHONPATH'] = os.pathsep.join(p for p in (str(ROOT), env.get('PYTHONPATH')) if p)
+        env['PYTHONUNBUFFERED'] = '1'
+        self.name = module
+        self._log = open(log_path, 'a', encoding='utf-8')
+        self.proc = subprocess.Popen(
+            [sys.executable, '-m', module, *args],
+            cwd=ROOT,
+            env=env,
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            stderr=self._log,
+            text=True,
+            bufsize=1,
+        )
+        self._replies: queue.Queue[dict[str, Any] | None] = queue.Queue()
+        self._reader = threading.Thread(target=self._read, name=f'bench-read-{module}', daemon=True)
+        self._reader.start()
+
+    def _read(self) -> None:
+        assert self.proc.stdout is not None
+        for line in self.proc.stdout:
+            if line.startswith(PREFIX):
+                self._replies.put(json.loads(line[len(PREFIX) :]))
+            else:
+                self._log.write(line)
+        self._replies.put(None)
+
+    def wait(self, timeout: float) -> dict[str, Any]:
+        try:
+            msg = self._replies.get(timeout=timeout)
+        except queue.Empty:
+            raise BenchError(f'{self.name}: no answer within {timeout:.0f} s') from None
+        if msg is None:
+            raise BenchError(f'{self.name} exited (code {self.proc.poll()}); see its log')
+        if 'error' in msg:
+            raise BenchError(f'{self.name}: {msg["error"]}')
+        return msg
+
+    def request(self, line: str, timeout: float) -> dict[str, Any]:
+        assert self.proc.stdin is not None
+        try:
+            self.proc.stdin.write(line + '\n')
+            self.proc.stdin.flush()
+        except (BrokenPipeError, OSError) as err:
+            raise BenchError(f'{self.name} is gone: {err}') from err
+        return self.wait(timeout)
+
+    def close(self, timeout: float = 20.0) -> None:
+        if self.proc.poll() is None:
+            try:
+                assert self.proc.stdin is not None
+                self.proc.stdin.write('quit\n')
+                self.proc.stdin.close()
+            except (BrokenPipeError, OSError):
+                pass
+            try:
+                self.proc.wait(timeout)
+            except subprocess.TimeoutExpired:
+                self.proc.terminate()
+                try:
+                    self.proc.wait(5.0)
+                except subprocess.TimeoutExpired:
+                    self.proc.kill()
+                    self.proc.wait()
+        self._reader.join(timeout=5.0)
+        self._log.close()
+
+
+@dataclass(frozen=True)
+class RobotPlan:
+    """Durations of one robot run [s] and the latency pattern."""
+
+    idle_s: float = 5.0
+    load_s: float = 10.0
+    steps: int = 40
+    hold_s: float = 0.15
+    rest_s: float = 0.3
+    command_rate_hz: float = 100.0
+    plugins: str = ''
+    switch_interval_us: float | None = None
+
+
+QUICK_PLAN = RobotPlan(idle_s=0.5, load_s=0.7, steps=3, hold_s=0.12, rest_s=0.25)
+
+
+def _domain_conflict(measure: dict[str, Any]) -> list[str]:
+    expected = {
+        '/chassis_cmd': {'bench_commander'},
+        '/gimbal_cmd': {'bench_commander'},
+        '/actuator_cmd': {'rm_robot'},
+    }
+    notes = []
+    for topic, nodes in measure.get('publishers', {}).items():
+        foreign = set(nodes) - expected.get(topic, set())
+        if foreign:
+            notes.append(f'foreign publisher(s) {sorted(foreign)} on {topic}: ROS domain shared')
+    return notes
+
+
+def _robot_args(plan: RobotPlan) -> list[str]:
+    args = ['--plugins', plan.plugins] if plan.plugins else []
+    if plan.switch_interval_us:
+        args += ['--switch-interval-us', str(plan.switch_interval_us)]
+    return args
+
+
+def run_once(plan: RobotPlan, log_dir: Path, tag: str) -> dict[str, Any]:
+    """One robot run (see the module docstring); returns the raw phase results."""
+    result: dict[str, Any] = {'notes': []}
+    robot = Child('bench.robot_proc', _robot_args(plan), log_dir / f'robot_{tag}.log')
+    commander = Child('bench.commander', [], log_dir / f'commander_{tag}.log')
+    try:
+        t0 = time.monotonic()
+        result['switch_interval_s'] = robot.wait(90.0)['switch_interval_s']
+        ready = robot.request('ready 30', 40.0)
+        result['startup_s'] = round(time.monotonic() - t0, 2)
+        offline = [j for j, ok in ready['online'].items() if not ok]
+        if offline:
+            result['notes'].append(f'joints without feedback at start: {offline}')
+        result['plugins'] = ready['plugins']
+        commander.wait(60.0)
+
+        result['idle'] = robot.request(f'measure idle {plan.idle_s}', plan.idle_s + 30.0)
+
+        commander.request(f'stream {plan.command_rate_hz}', 30.0)
+        active = robot.request('wait_active 20 ' + ' '.join(ACTIVE_JOINTS), 30.0)
+        if not active['active']:
+            result['notes'].append(f'not every joint driven under load: {active["holds"]}')
+        result['load'] = robot.request(f'measure load {plan.load_s}', plan.load_s + 30.0)
+        commander.request('stop', 10.0)
+
+        tap = robot.request('tap_on ' + ' '.join(PROBES), 10.0)
+        duration = plan.steps * (plan.hold_s + plan.rest_s + 0.01) + plan.rest_s
+        steps = commander.request(
+            f'steps {plan.steps} {plan.hold_s} {plan.rest_s} {plan.command_rate_hz}',
+            duration + 60.0,
+        )
+        frames = robot.request('tap_off', 30.0)
+        result['latency'] = analyse({**tap, **steps, **frames})
+        for phase in ('idle', 'load'):
+            result['notes'] += _domain_conflict(result[phase])
+    finally:
+        commander.close()
+        robot.close()
+    return result
+
+
+def profile(plan: RobotPlan, log_dir: Path, seconds: float) -> dict[str, Any]:
+    """Profile every robot thread for ``seconds`` while the load pattern streams."""
+    robot = Child('bench.robot_proc', _robot_args(plan), log_dir / 'robot_profile.log')
+    commander = Child('bench.commander', [], log_dir / 'commander_profile.log')
+    try:
+        robot.wait(90.0)
+        robot.request('ready 30', 40.0)
+        commander.wait(60.0)
+        commander.request(f'stream {plan.command_rate_hz}', 30.0)
+        robot.request('wait_active 20 ' + ' '.join(ACTIVE_JOINTS), 30.0)
+        time.sleep(1.0)
+        return robot.request(f'profile {seconds} {log_dir}', seconds + 60.0)['profiles']
+    finally:
+        commander.close()
+        robot.close()

@@ -1,0 +1,330 @@
+"""Child process of the bench: the whole standard robot in one process, instrumented.
+
+Exactly what ``bringup --robot standard --sim`` runs (can_bridge + rm_robot on one
+EventsExecutor spun by the main thread, the 1 kHz CAN scheduler, receive, publisher and
+plugin threads, rm_sim's physics thread), plus measuring hooks that cost nothing until a
+phase uses them. The parent (:mod:`bench.robot`) drives it with one command per stdin line
+and reads one ``@@BENCH {json}`` line per command from stdout:
+
+* ``ready <timeout>``: wait until every joint reports feedback;
+* ``wait_active <timeout> <joint>...``: wait until those joints are driven (not held);
+* ``measure <name> <seconds>``: CPU per thread, scheduler period errors, frame rates,
+  steal and load over a window;
+* ``tap_on <joint>...`` / ``tap_off``: record, on CLOCK_MONOTONIC, every command frame of
+  those (DJI) joints on the wire (a second rm_sim bus on the channel) and every joint
+  target the bridge applies;
+* ``profile <seconds> <dir>``: cProfile every robot thread (:mod:`bench.profiling`);
+* ``quit``: shut down as bringup does (zero output first).
+
+Run as ``python -m bench.robot_proc [--plugins a,b]`` from the repository root.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import pathlib
+import resource
+import shutil
+import sys
+import tempfile
+import threading
+import time
+from typing import Any
+
+PREFIX = '@@BENCH '
+
+
+def reply(obj: dict[str, Any]) -> None:
+    sys.stdout.write(PREFIX + json.dumps(obj) + '\n')
+    sys.stdout.flush()
+
+
+def make_tap_class():
+    from rm_base.sim import SimBus
+
+    class TapBus(SimBus):
+        """A second rm_sim bus on a channel that keeps (t_ns, id, data) of some frames.
+
+        The channel hands it every frame synchronously inside the sender's ``send``, so
+        the stamp is the moment the bridge put the frame on the (simulated) wire.
+        """
+
+        def __init__(self, channel: str, world: Any, ids: set[int]) -> None:
+            self.records: list[tuple[int, int, str]] = []
+            self._ids = frozenset(ids)
+            super().__init__(channel=channel, world=world)
+
+        def _deliver(self, msg: Any) -> None:
+            if msg.arbitration_id in self._ids:
+                self.records.append((time.monotonic_ns(), msg.arbitration_id, msg.data.hex()))
+
+    return TapBus
+
+
+class Robot:
+    """The robot and its measuring hooks (see the module docstring)."""
+
+    def __init__(self, plugins: list[str] | None) -> None:
+        import rclpy
+        from rclpy.experimental import EventsExecutor
+        from rclpy.signals import SignalHandlerOptions
+        from rm_base.bridge import CanBridgeNode
+        from rm_base.host.node import RobotHost
+        from rm_base.ros_env import prepare_ros_process
+        from rm_bringup.bringup import parameter_files
+
+        from bench.scheduler_timing import TickRecorder
+
+        prepare_ros_process()
+        self._tmp = tempfile.mkdtemp(prefix='rm_bench_')
+        files = parameter_files('standard', None, True)
+        # a private pty for the simulated IMU (the config's path has the domain id only)
+        overlay = pathlib.Path(self._tmp) / 'bench_overlay.yaml'
+        imu = os.path.join(self._tmp, 'imu')
+        host_params: dict[str, Any] = {'imu': {'port': imu}}
+        if plugins:
+            host_params['plugins'] = plugins
+        overlay.write_text(
+            json.dumps(
+                {
+                    'can_bridge': {'ros__parameters': {'sim.imu.path': imu}},
+                    'rm_robot': {'ros__parameters': host_params},
+                }
+            )
+        )
+        args = ['bench_robot', '--ros-args']
+        for path in [*files, overlay]:
+            args += ['--params-file', str(path)]
+        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+        self.rclpy = rclpy
+        self.bridge = CanBridgeNode()
+        self.host = RobotHost()
+        self.executor = EventsExecutor()
+        self.executor.add_node(self.bridge)
+        self.executor.add_node(self.host)
+        self.hw = self.bridge.hardware
+        self.recorder = TickRecorder(self.hw.scheduler)
+        self.stop = threading.Event()
+        self._taps: list[Any] = []
+        self._applied: list[tuple[int, str, float, float]] = []
+        self.profiles: Any = None
+
+    # -- main thread ------------------------------------------------------------------
+    def spin(self) -> None:
+        while not self.stop.is_set() and self.rclpy.ok():
+            self.executor.spin_once(timeout_sec=0.05)
+            profiles = self.profiles
+            if profiles is not None:
+                profiles.check()
+
+    def shutdown(self) -> None:
+        for tap in self._taps:
+            tap.shutdown()
+        self.host.shutdown()
+        self.bridge.shutdown()
+        self.executor.shutdown()
+        self.host.destroy_node()
+        self.bridge.destroy_node()
+        self.rclpy.try_shutdown()
+        shutil.rmtree(self._tmp, ignore_errors=True)
+
+    # -- commands (control thread) ------------------------------------------------------
+    def ready(self, timeout: float) -> dict[str, Any]:
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline:
+            if all(s.online for s in self.hw.states()):
+                break
+            time.sleep(0.05)
+        return {
+            'online': {s.name: s.online for s in self.hw.states()},
+            'plugins': self.host.plugin_names,
+            'joints': self.hw.joint_names,
+        }
+
+    def wait_active(self, timeout: float, joints: list[str]) -> dict[str, Any]:
+        deadline = time.monotonic() + timeout
+        t0 = time.monotonic()
+        while time.monotonic() < deadline:
+            if all(self.hw.actuators[j].hold_reason.value == 'none' for j in joints):
+                break
+            time.sleep(0.02)
+        holds = {j: self.hw.actuators[j].hold_reason.value for j in joints}
+        return {
+            'active': all(h == 'none' for h in holds.values()),
+            'holds': holds,
+            'waited_s': round(time.monotonic() - t0, 3),
+        }
+
+    def _frame_counts(self) -> dict[str, tuple[int, int]]:
+        return {
+            name: (bus.stats().frames_received, bus.stats().frames_sent)
+            for name, bus in self.hw.buses.items()
+        }
+
+    def _publishers(self, topic: str) -> list[str]:
+        return sorted(i.node_name for i in self.bridge.get_publishers_info_by_topic(topic))
+
+    def measure(self, name: str, seconds: float) -> dict[str, Any]:
+        from bench.cpu import group_percent
+        from bench.machine import Window, thread_cpu_percent, thread_cpu_snapshot
+
+        frames0 = self._frame_counts()
+        overruns0 = {n: self.host.runner(n).overruns for n in self.host.plugin_names}
+        ru0 = resource.getrusage(resource.RUSAGE_SELF)
+        window = Window()
+        threads0 = thread_cpu_snapshot()
+        self.recorder.start()
+        time.sleep(seconds)
+        sched = self.recorder.stop()
+        threads1 = thread_cpu_snapshot()
+        facts = window.close()
+        ru1 = resource.getrusage(resource.RUSAGE_SELF)
+        frames1 = self._frame_counts()
+        elapsed = facts.elapsed_s
+        per_thread = thread_cpu_percent(threads0, threads1, elapsed)
+        process_pct = (
+            100.0 * ((ru1.ru_utime - ru0.ru_utime) + (ru1.ru_stime - ru0.ru_stime)) / elapsed
+        )
+        return {
+            'phase': name,
+            'window': facts.as_dict(),
+            'threads': {k: round(v, 3) for k, v in sorted(per_thread.items())},
+            'groups': {k: round(v, 3) for k, v in group_percent(per_thread).items()},
+            'process_pct': round(process_pct, 3),
+            'scheduler': sched,
+            'frames_per_s': {
+                bus: {
+                    'received': (frames1[bus][0] - frames0[bus][0]) / elapsed,
+                    'sent': (frames1[bus][1] - frames0[bus][1]) / elapsed,
+                }
+                for bus in frames1
+            },
+            'plugin_overruns': {
+                n: self.host.runner(n).overruns - overruns0[n] for n in self.host.plugin_names
+            },
+            'holds': {a.name: a.hold_reason.value for a in self.hw.actuators.values()},
+            'publishers': {
+                topic: self._publishers(topic)
+                for topic in ('/chassis_cmd', '/gimbal_cmd', '/actuator_cmd')
+            },
+        }
+
+    def tap_on(self, joints: list[str]) -> dict[str, Any]:
+        tap_class = make_tap_class()
+        slots: dict[str, Any] = {}
+        ids: dict[str, set[int]] = {}
+        for name in joints:
+            actuator = self.hw.actuators[name]
+            frame_id = actuator.command_frame_id  # DJI joints: their group's frame
+            channel = str(self.hw.buses[actuator.bus_name].config.channel)
+            ids.setdefault(channel, set()).add(frame_id)
+            slots[name] = {'channel': channel, 'id': frame_id, 'slot': actuator.slot}
+        world = self.bridge.sim_world
+        self._taps = [tap_class(channel, world, frame_ids) for channel, frame_ids in ids.items()]
+        self._applied = []
+        applied = self._applied
+        original = type(self.hw).set_command.__get__(self.hw)
+
+        def set_command(name: str, mode: int, **kwargs: Any) -> None:
+            applied.append(
+                (time.monotonic_ns(), name, kwargs.get('velocity', 0.0), kwargs.get('effort', 0.0))
+            )
+            original(name, mode, **kwargs)
+
+        self.hw.set_command = set_command
+        return {'slots': slots}
+
+    def tap_off(self) -> dict[str, Any]:
+        self.hw.__dict__.pop('set_command', None)
+        frames: dict[str, list[tuple[int, int, str]]] = {}
+        for tap in self._taps:
+            frames[tap.channel_id] = tap.records
+            tap.shutdown()
+        self._taps = []
+        return {'frames': frames, 'applied': self._applied}
+
+    def profile(self, seconds: float, out_dir: str) -> dict[str, Any]:
+        from bench.profiling import ThreadProfiles
+
+        profiles = ThreadProfiles()
+        targets = [(self.hw.scheduler, 'tick'), (self.bridge, 'publish_states')]
+        targets += [(bus, 'dispatch') for bus in self.hw.buses.values()]
+        targets += [(self.host.plugin(n), 'run') for n in self.host.plugin_names]
+        targets += [(self.bridge.sim_world, '_tick')]
+        for obj, attribute in targets:
+            profiles.wrap(obj, attribute)
+        profiles.active = True
+        self.profiles = profiles
+        time.sleep(seconds)
+        profiles.active = False
+        time.sleep(0.5)  # every thread passes its check and stops its profile
+        self.profiles = None
+        for obj, attribute in targets:
+            obj.__dict__.pop(attribute, None)
+        return {'profiles': profiles.report(pathlib.Path(out_dir))}
+
+
+def control_loop(robot: Robot) -> None:
+    for line in sys.stdin:
+        words = line.split()
+        if not words:
+            continue
+        cmd, args = words[0], words[1:]
+        try:
+            if cmd == 'ready':
+                reply(robot.ready(float(args[0])))
+            elif cmd == 'wait_active':
+                reply(robot.wait_active(float(args[0]), args[1:]))
+            elif cmd == 'measure':
+                reply(robot.measure(args[0], float(args[1])))
+            elif cmd == 'profile':
+                reply(robot.profile(float(args[0]), args[1]))
+            elif cmd == 'tap_on':
+                reply(robot.tap_on(args))
+            elif cmd == 'tap_off':
+                reply(robot.tap_off())
+            elif cmd == 'quit':
+                break
+            else:
+                reply({'error': f'unknown command {cmd!r}'})
+        except Exception as err:
+            reply({'error': f'{type(err).__name__}: {err}'})
+    robot.stop.set()
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog='bench.robot_proc')
+    parser.add_argument('--plugins', default='', help='comma-separated plugin subset')
+    parser.add_argument(
+        '--switch-interval-us',
+        type=float,
+        default=None,
+        help="override the GIL switch interval after start-up (rm_robot's is 1000 us)",
+    )
+    args = parser.parse_args(argv)
+    plugins = [p for p in args.plugins.split(',') if p] or None
+    try:
+        robot = Robot(plugins)
+    except Exception as err:
+        reply({'error': f'robot did not start: {type(err).__name__}: {err}'})
+        return 1
+    if args.switch_interval_us:
+        sys.setswitchinterval(args.switch_interval_us / 1e6)
+    reply({'started': True, 'pid': os.getpid(), 'switch_interval_s': sys.getswitchinterval()})
+    control = threading.Thread(
+        target=control_loop, args=(robot,), name='bench-control', daemon=True
+    )
+    control.start()
+    try:
+        robot.spin()
+    except KeyboardInterrupt:
+        pass
+    finally:
+        robot.shutdown()
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

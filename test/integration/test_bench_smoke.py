@@ -1,0 +1,60 @@
+"""The benchmark runner does not rot: ``bench/run.py --quick`` prints every table row.
+
+Numbers are not checked here (benchmarks are not tests, and this shared 2-core machine
+could not hold any timing bound): only that each measurement ran and that the table and
+the JSON result carry every declared row. The runner's ROS processes use this test
+session's private ROS domain.
+"""
+
+import importlib
+import json
+import os
+import pathlib
+import sys
+
+import pytest
+from support.ros import start_process
+
+pytestmark = [pytest.mark.ros, pytest.mark.slow]
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+TIMEOUT = 180.0  # [s] the quick run takes ~15 s on a quiet machine; generous under load
+
+
+def _rows():
+    # bench/ is a package at the repository root, which is not on the test path
+    sys.path.insert(0, str(ROOT))
+    try:
+        module = importlib.import_module('bench.report')
+    finally:
+        sys.path.remove(str(ROOT))
+    return module.ROWS, module.SECTIONS
+
+
+def test_when_run_quick_expect_every_row_in_the_table_and_the_json(tmp_path):
+    rows, sections = _rows()
+    proc = start_process(
+        [
+            sys.executable,
+            str(ROOT / 'bench' / 'run.py'),
+            '--quick',
+            '--out',
+            str(tmp_path),
+            '--domain-id',
+            os.environ['ROS_DOMAIN_ID'],
+        ],
+        cwd=ROOT,
+    )
+    stdout, stderr = proc.communicate(timeout=TIMEOUT)
+    assert proc.returncode == 0, stdout[-3000:] + stderr[-3000:]
+    for title in sections.values():
+        assert title in stdout
+    table_lines = [line for line in stdout.splitlines() if line.startswith('| ')]
+    for row in rows:
+        assert any(line.startswith(f'| {row.label} ') for line in table_lines), row.label
+    results = list(tmp_path.glob('bench-*.json'))
+    assert len(results) == 1
+    data = json.loads(results[0].read_text())
+    assert [r['key'] for r in data['rows']] == [row.key for row in rows]
+    # every measurement produced its raw result (not only a printed 'n/a')
+    assert all(len(data['raw'][name]) == 1 for name in ('robot', 'throughput', 'baseline'))
