@@ -248,3 +248,27 @@ def _temperature(rig, joint, t):
     msg = next(m for m in rig.frames(fid) if m.timestamp == t)
     temperature = dji.decode_feedback(msg.data).temperature_c
     return math.inf if temperature is None else temperature
+
+
+@pytest.mark.parametrize(
+    'target',
+    [
+        pytest.param({'position': 1e6, 'kp': 1e9, 'kd': 1e9}, id='kp-kd-1e9'),
+        pytest.param({'position': 1e6, 'kp': 600.0, 'kd': 0.5}, id='kp-above-range'),
+        pytest.param({'position': 1e6, 'kp': 5.0, 'kd': 50.0}, id='kd-above-range'),
+        # in range, but the law's kd term needs a position shift beyond ±p_max to hold 3 N·m
+        pytest.param({'velocity': 25.0, 'kp': 0.5, 'kd': 5.0}, id='shift-beyond-p-max'),
+    ],
+)
+def test_when_an_mit_target_is_out_of_the_motor_ranges_expect_the_torque_still_limited(
+    rig, target
+):
+    # The motor saturates kp/kd (DM4310: 500, 5) and p/v/tau at its ranges; the bridge's
+    # effort clamp must hold with what the motor really gets, or the frame asks far more
+    # than max_effort (3 N·m here; thousands of N·m before the fix).
+    rig.step(100, DRIVE)
+    rig.step(300, {**DRIVE, 'arm': {'mode': MODE_MIT, **target}})
+    efforts = [abs(e) for t, e, _ in rig.checker.timeline('arm') if t > rig.t - 0.25]
+    assert max(efforts) <= 3.0 * 1.05, max(efforts)
+    assert max(efforts) > 0.5  # and it is driven: limited, not switched off
+    assert_no_unsafe_frame(rig)

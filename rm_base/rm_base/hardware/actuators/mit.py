@@ -7,8 +7,10 @@ joint gets an all-zero-gain, zero-torque frame: limp.
 
 Because the motor evaluates ``kp·(p − q) + kd·(v − dq) + τ`` itself, the effort limit is
 enforced by moving the targets: when the host's estimate of that law (from the latest
-feedback) exceeds ``max_effort``, the position target (or, with kp = 0, the velocity
-target) is shifted so the estimate equals the limit.
+feedback, with kp/kd saturated at the motor's ranges as the frame will carry them) exceeds
+``max_effort``, the position target (or, with kp = 0, the velocity target) is shifted so
+the estimate equals the limit. Should the shifted target lie outside the frame's ranges
+(so the motor would not hold the limit), a pure-torque frame at the limit goes instead.
 
 Family options (``joints.<name>.<key>``):
 
@@ -67,6 +69,10 @@ def limits_from_config(name: str, base: MitLimits, overrides: Any) -> MitLimits:
         raise HardwareConfigError(f'joints.{name}.limits: {err}') from err
 
 
+def _sat(x: float, limit: float) -> float:
+    return limit if x > limit else -limit if x < -limit else x
+
+
 class MitActuator(Actuator):
     """Shared MIT frame handling for Damiao and Cheetah; subclasses decode replies."""
 
@@ -119,22 +125,43 @@ class MitActuator(Actuator):
         if command.mode is not Mode.MIT:
             self._fields = MitCommand(0.0, 0.0, 0.0, 0.0, d * effort / g)
             return effort
-        kp, kd = command.kp, command.kd
+        lim, g2 = self.limits, g * g
+        # The gains the motor will really use: the frame saturates them at its ranges. The
+        # clamp below must be computed with those, or it shifts the target for gains the
+        # motor never sees (kp 1e9 -> 500: thousands of N·m asked).
+        kp = min(max(command.kp, lim.kp_min * g2), lim.kp_max * g2)
+        kd = min(max(command.kd, lim.kd_min * g2), lim.kd_max * g2)
         p, v, ff = command.position, command.velocity, command.effort
-        estimate = kp * (p - feedback.position) + kd * (v - feedback.velocity) + ff
-        excess = estimate - effort  # effort is the clamped estimate
+        q, dq = feedback.position, feedback.velocity
+        estimate = kp * (p - q) + kd * (v - dq) + ff
+        target = max(-self.max_effort, min(self.max_effort, estimate))
+        excess = estimate - target
         if excess != 0.0:
             if kp > 0.0:
                 p -= excess / kp
             elif kd > 0.0:
                 v -= excess / kd
             else:
-                ff = effort
+                ff = target
         # joint -> motor shaft, then back into the motor's wrapped position range
-        span_turns = self._position_unwrapper.turns * 2.0 * self.limits.p_max
-        p_dev = g * (d * (p - self._turn_shift) + self.zero_offset) - span_turns
-        self._fields = MitCommand(p_dev, d * v * g, kp / (g * g), kd / (g * g), d * ff / g)
-        return effort
+        span_turns = self._position_unwrapper.turns * 2.0 * lim.p_max
+        to_dev = g * (d * (p - self._turn_shift) + self.zero_offset) - span_turns
+        q_dev = g * (d * (q - self._turn_shift) + self.zero_offset) - span_turns
+        fields = MitCommand(to_dev, d * v * g, kp / g2, kd / g2, d * ff / g)
+        # What the motor applies once the frame saturates p, v and tau at their ranges; a
+        # shifted target outside them (a large kd·velocity error with a small kp) would
+        # not hold the limit: then send the limit as a pure torque instead.
+        torque_dev = (
+            fields.kp * (_sat(fields.position, lim.p_max) - q_dev)
+            + fields.kd * (_sat(fields.velocity, lim.v_max) - d * dq * g)
+            + _sat(fields.torque, lim.t_max)
+        )
+        applied = d * g * torque_dev
+        if abs(applied) > self.max_effort * (1.0 + 1e-9) + 1e-12:
+            fields = MitCommand(0.0, 0.0, 0.0, 0.0, d * target / g)
+            applied = target
+        self._fields = fields
+        return applied
 
     def _set_zero_output(self) -> None:
         self._fields = _ZERO
