@@ -244,7 +244,7 @@ def read_config(p: PluginParams) -> GimbalConfig:
         ),
         joint_timeout=p.double(
             'joint_timeout',
-            0.1,
+            0.2,
             gt=0.0,
             unit='s',
             description='a joint state older than this is not used',
