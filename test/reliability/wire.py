@@ -438,7 +438,12 @@ class WireChecker:
             detail = None
             if abs(raw) > spec.raw_limit:
                 detail = f'raw {raw} beyond the {spec.kind.value} limit ±{spec.raw_limit}'
-            if isinstance(shadow, Gm6020Voltage):
+            if raw == 0:
+                # Zero drive. (For a GM6020 in voltage mode 0 V is a dynamic brake: the
+                # back-EMF drives -Ke·ω/R through the windings, capped by the driver. It is
+                # the bridge's hold output, and the only one that needs no fresh speed.)
+                effort, step = 0.0, 0.0
+            elif isinstance(shadow, Gm6020Voltage):
                 effort, step = self._gm6020_effort(joint, shadow, raw)
             else:
                 effort = raw * spec.si_per_raw * kt
