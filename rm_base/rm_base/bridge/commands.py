@@ -5,7 +5,12 @@ message is *well-formed* when its seven arrays have one entry per name, no name 
 every name is a joint of this bridge, every mode is an ``ActuatorCmd.MODE_*``, every value
 is finite (unused fields too) and the MIT gains are >= 0.
 
-Only a well-formed message is applied, all of its joints in the same callback; one bad
+A message is also *fresh* when its ``header.stamp`` is zero (a sender that does not stamp)
+or within ``safety.command_timeout_s`` of the bridge's clock (:func:`check_stamp`): a
+command delayed or replayed from long ago (or from a sender whose clock is far ahead) would
+otherwise be applied as new, and drive a motor for another command timeout.
+
+Only a well-formed, fresh message is applied, all of its joints in the same callback; one bad
 entry rejects the whole message. A plugin's message is one coordinated set of targets
 (four mecanum wheels, a yaw/pitch pair): applying three of four wheels would turn a
 straight drive into a spin, while holding the previous complete set is safe because the
@@ -61,6 +66,28 @@ class JointTarget(NamedTuple):
     effort: float
     kp: float
     kd: float
+
+
+def check_stamp(msg: object, now_ns: int, timeout_s: float) -> None:
+    """Reject a message stamped more than ``timeout_s`` before (or after) ``now_ns``.
+
+    Args:
+        msg: the message; a missing header or a zero stamp passes.
+        now_ns: the bridge's clock [ns] (the ROS clock the senders stamp with).
+        timeout_s: safety.command_timeout_s [s].
+
+    Raises:
+        ActuatorCmdRejectedError: ``Rejection.STALE``.
+    """
+    stamp = getattr(getattr(msg, 'header', None), 'stamp', None)
+    if stamp is None or not (stamp.sec or stamp.nanosec):
+        return
+    age_s = (now_ns - (stamp.sec * 1_000_000_000 + stamp.nanosec)) / 1e9
+    if abs(age_s) > timeout_s:
+        when = f'{age_s:.3f} s old' if age_s > 0 else f'{-age_s:.3f} s in the future'
+        raise ActuatorCmdRejectedError(
+            Rejection.STALE, f'stamp is {when} (command timeout {timeout_s:g} s)'
+        )
 
 
 def parse_actuator_cmd(msg: ActuatorCmdLike, joints: Container[str]) -> list[JointTarget]:

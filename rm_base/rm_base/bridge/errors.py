@@ -34,6 +34,7 @@ class Rejection(enum.Enum):
     UNKNOWN_MODE = 'unknown_mode'  # a mode outside ActuatorCmd.MODE_*
     NON_FINITE = 'non_finite'  # NaN or inf in any value
     NEGATIVE_GAIN = 'negative_gain'  # kp or kd < 0
+    STALE = 'stale'  # header stamp older than the command timeout (or as far in the future)
     HARDWARE = 'hardware'  # refused by the hardware layer (should not happen)
 
 

@@ -18,7 +18,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 from std_srvs.srv import SetBool
 
-from rm_base.bridge.commands import parse_actuator_cmd
+from rm_base.bridge.commands import check_stamp, parse_actuator_cmd
 from rm_base.bridge.diagnostics import CommandStats, DiagnosticsReporter
 from rm_base.bridge.errors import ActuatorCmdRejectedError, BridgeConfigError, Rejection
 from rm_base.bridge.frames import FrameTap
@@ -85,8 +85,9 @@ class CanBridgeNode(Node):
       :class:`~rm_base.hardware.CanHardware`, whose own scheduler thread runs the 1 kHz
       loop (update all, pack all, send) and enforces every safety rule.
     - Subscribes ``actuator_cmd`` (rm_msgs/ActuatorCmd, reliable): each well-formed
-      message is applied whole; a malformed one is rejected whole, counted per reason and
-      logged at most once a second per call site (:mod:`rm_base.bridge.commands`).
+      message is applied whole; a malformed or stale one (stamp older than the command
+      timeout) is rejected whole, counted per reason and logged at most once a second per
+      call site (:mod:`rm_base.bridge.commands`).
     - Publishes ``joint_states`` (sensor_msgs/JointState, output shaft, SI) and
       ``actuator_states`` (rm_msgs/ActuatorState) at ``publish_rate``, ``/diagnostics``
       at ``diagnostics_rate`` (:mod:`rm_base.bridge.diagnostics`), and with
@@ -150,6 +151,7 @@ class CanBridgeNode(Node):
             bus_factory = self._frame_tap.factory
         self.hardware = hw = CanHardware(hardware, bus_factory=bus_factory)
         self._joints = frozenset(hw.joint_names)
+        self._command_timeout_s = settings.hardware_config.safety.command_timeout_s
         self._diagnostics = DiagnosticsReporter(
             NODE_NAME,
             {j.name: f'{j.bus} {j.type} id {j.id}' for j in settings.hardware_config.joints},
@@ -333,6 +335,7 @@ class CanBridgeNode(Node):
     def _on_actuator_cmd(self, msg: ActuatorCmd) -> None:
         assert self.hardware is not None
         try:
+            check_stamp(msg, self.get_clock().now().nanoseconds, self._command_timeout_s)
             targets = parse_actuator_cmd(msg, self._joints)
             for t in targets:
                 try:
