@@ -62,7 +62,6 @@ class Odometry:
         self._yaw_offset: float | None = None
         self._source = YawSource.WHEELS
         self._angles: tuple[float, ...] | None = None
-        self.jumps = 0
 
     @property
     def pose(self) -> Pose2D:
@@ -94,6 +93,15 @@ class Odometry:
         self._source = YawSource.WHEELS
         self._angles = None
 
+    def restart_wheel_reference(self) -> None:
+        """Take the next wheel angles as the reference without moving.
+
+        For when the angles may have jumped: the encoders' multi-turn count restarts with
+        the bridge, so motion across a long gap in the feedback cannot be told from a
+        restart.
+        """
+        self._angles = None
+
     def release_absolute_yaw(self) -> None:
         """Let the next absolute yaw fix a new offset (the yaw stays continuous then)."""
         self._yaw_offset = None
@@ -103,8 +111,6 @@ class Odometry:
         wheel_angles: Sequence[float],
         wheel_speeds: Sequence[float],
         absolute_yaw: float | None = None,
-        *,
-        max_angle_step: float = math.inf,
     ) -> Pose2D:
         """Move the pose by the wheel angle changes since the previous update.
 
@@ -113,10 +119,6 @@ class Odometry:
             wheel_speeds: one speed per wheel [rad/s], wheel order (for the twist).
             absolute_yaw: chassis yaw from an external reference (IMU) [rad], any offset;
                 None for the wheels' turn.
-            max_angle_step: a wheel angle change larger than this [rad] is not motion but
-                a jump of the encoder reference (a bridge restart): the angles become the
-                new reference, the position and the wheels' yaw stay, and ``jumps``
-                counts it.
 
         Returns:
             The new pose (unchanged on the first update: it only sets the reference).
@@ -135,9 +137,6 @@ class Odometry:
         deltas = [a - b for a, b in zip(angles, previous, strict=True)]
         step = self._kinematics.forward(deltas)
         self._angles = angles
-        if max(abs(d) for d in deltas) > max_angle_step:
-            self.jumps += 1
-            step = Twist2D()  # not motion; an absolute yaw still applies
         x, y, yaw = self._pose
         if absolute_yaw is None:
             self._source = YawSource.WHEELS

@@ -70,6 +70,10 @@ _LOG_PERIOD_NS = _NS_PER_S  # at most one line per second per kind of rejected i
 # Largest time over which the yaw joint angle is extrapolated to now with its velocity [s].
 _MAX_EXTRAPOLATION_S = 0.05
 
+# Wheel feedback gap [s] after which the odometry takes the wheel angles as a new
+# reference (a bridge restart resets the multi-turn count; it takes longer than this).
+_ODOM_GAP_S = 0.5
+
 # Largest time between an IMU sample and the yaw joint sample combined into a chassis yaw [s]
 # (a few feedback periods).
 _MAX_IMU_JOINT_SKEW_S = 0.02
@@ -93,6 +97,7 @@ class _Decision(NamedTuple):
     state: ChassisMode
     reason: str
     request: ChassisRequest | None
+    yaw_joint: Any = None  # the yaw joint's JointState when following the gimbal
 
 
 class _Throttle:
@@ -258,8 +263,11 @@ class StandChassis(PluginBase):
             return _Decision(ChassisMode.PASSIVE, 'commanded PASSIVE', None)
         if wheel_problem is not None:
             return _Decision(ChassisMode.PASSIVE, wheel_problem, None)
+        yaw_joint = None
         if request.mode is not ChassisMode.RAW and request.source is FollowSource.GIMBAL:
-            if self._yaw_joint_state(now_ns) is None:
+            # Read once: the view may change under us (a newer message, maybe offline).
+            yaw_joint = self._yaw_joint_state(now_ns)
+            if yaw_joint is None:
                 return _Decision(
                     ChassisMode.PASSIVE,
                     f"{request.mode.name} needs the gimbal heading, but yaw joint "
@@ -269,7 +277,7 @@ class StandChassis(PluginBase):
         reason = f'commanded {request.mode.name}'
         if request.mode is not ChassisMode.RAW and request.source is FollowSource.BASE_LINK:
             reason += ' (follow source base_link)'
-        return _Decision(request.mode, reason, request)
+        return _Decision(request.mode, reason, request, yaw_joint)
 
     # -- feedback -----------------------------------------------------------------------
 
@@ -352,10 +360,14 @@ class StandChassis(PluginBase):
             return  # no wheel feedback: hold the pose; the angles count on meanwhile
         stamp_ns = max(w.stamp_ns for w in wheels)
         last, self._last_odom_ns = self._last_odom_ns, stamp_ns
-        # More than the wheels could have turned between the two feedback stamps (twice
-        # the top speed, plus a margin for jitter) is an encoder jump, not motion.
-        elapsed = max(0.0, (stamp_ns - last) / _NS_PER_S) if last is not None else 0.0
-        max_step = 2.0 * self.config.max_wheel_speed * elapsed + 1.0
+        if last is not None and stamp_ns - last > _ODOM_GAP_S * _NS_PER_S:
+            # The bridge may have restarted (its multi-turn count with it): motion across
+            # such a gap cannot be told from a jump. Shorter gaps (stalls) lose nothing.
+            self._odometry.restart_wheel_reference()
+            self.logger.warning(
+                f'no wheel feedback for {(stamp_ns - last) / _NS_PER_S:.2f} s: odometry '
+                'keeps its pose and takes the wheel angles as a new reference'
+            )
         yaw = None if self.config.imu_mount is ImuMount.NONE else self._imu_chassis_yaw(now_ns)
         if yaw is not None:
             self._imu_used_ns = now_ns
@@ -364,16 +376,7 @@ class StandChassis(PluginBase):
             # Gone for long: it may come back with another reference (a restart).
             self._odometry.release_absolute_yaw()
             self._imu_used_ns = None
-        jumps = self._odometry.jumps
-        self._odometry.update(
-            [w.position for w in wheels], [w.velocity for w in wheels], yaw,
-            max_angle_step=max_step,
-        )
-        if self._odometry.jumps != jumps:
-            self.logger.warning(
-                f'wheel positions jumped by more than {max_step:.1f} rad in {elapsed:.3f} s '
-                '(bridge restarted?): odometry keeps its pose and takes them as the reference'
-            )
+        self._odometry.update([w.position for w in wheels], [w.velocity for w in wheels], yaw)
 
     # -- actuation ----------------------------------------------------------------------
 
@@ -411,7 +414,7 @@ class StandChassis(PluginBase):
             phi = phi_rate = gimbal_rate = 0.0
         elif request.source is FollowSource.GIMBAL:
             self._held_heading = None
-            joint = self._yaw_joint_state(now_ns)
+            joint = decision.yaw_joint
             frame = 'gimbal'
             # The angle now, not when it was measured: in GYRO it changes at the spin rate,
             # and the feedback is up to a publish period (plus transport) old.

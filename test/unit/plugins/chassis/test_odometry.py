@@ -123,28 +123,17 @@ def test_when_the_imu_reference_is_released_expect_a_new_one_and_continuity():
     assert odom.pose.yaw == pytest.approx(0.2)
 
 
-def test_when_the_encoders_jump_expect_a_new_reference_and_the_pose_kept():
+def test_when_the_wheel_reference_restarts_expect_the_pose_kept():
     odom, encoders = started()
-    for _ in range(10):  # 0.1 m in steps of 0.1 rad per wheel, within the 0.5 rad allowed
-        encoders.drive(odom, 0.01, vx=1.0, max_angle_step=0.5)
-    assert odom.jumps == 0
-    # A bridge restart: the positions start again near 0 (a 0.5..0.9 rad step back).
-    odom.update([0.5, 0.2, 0.1, 0.3], wheels(), max_angle_step=0.5)
-    assert odom.jumps == 1
+    encoders.drive(odom, 0.1, vx=1.0)  # 0.1 m
+    # The bridge restarted: the angles start again near 0.
+    odom.restart_wheel_reference()
+    odom.update([0.5, 0.2, 0.1, 0.3], wheels(), absolute_yaw=None)
     assert odom.pose.x == pytest.approx(0.1)
     # Motion from the new reference counts again: 0.03 m more.
     step = 0.03 / R
-    odom.update([0.5 + step, 0.2 + step, 0.1 + step, 0.3 + step], wheels(), max_angle_step=0.5)
+    odom.update([0.5 + step, 0.2 + step, 0.1 + step, 0.3 + step], wheels())
     assert odom.pose.x == pytest.approx(0.13)
-
-
-def test_when_the_encoders_jump_with_an_imu_expect_the_imu_yaw_still_applied():
-    odom, encoders = started()
-    encoders.drive(odom, 0.01, absolute_yaw=1.0)  # IMU offset: 1 rad
-    odom.update([9.0, 0.0, 0.0, 0.0], wheels(), absolute_yaw=1.1, max_angle_step=0.5)
-    assert odom.jumps == 1
-    assert odom.pose.x == 0.0
-    assert odom.pose.yaw == pytest.approx(0.1)
 
 
 def test_when_a_wheel_angle_is_nan_expect_rejected_and_the_pose_kept():
