@@ -251,7 +251,7 @@ def read_config(p: PluginParams) -> ChassisConfig:
     )
     modes = ChassisModeParams(
         follow, twist, gyro,
-        latency_s=p.double('latency', 0.01,
+        latency_s=p.double('latency', 0.0,
                            description='command-to-wheel latency the gimbal-frame rotation '
                            'looks ahead by', unit='s', ge=0.0, le=0.5),
     )
