@@ -19,6 +19,7 @@ import errno
 import math
 import os
 import termios
+import threading
 import tty
 from collections.abc import Mapping, Sequence
 from typing import Any
@@ -123,6 +124,7 @@ class SimImu:
         self.path = expand_path(path)
         self._schedule = RateSchedule(rate_hz, first_ns=round(_NS_PER_S / rate_hz))
         self._closed = False
+        self._io_lock = threading.Lock()  # write vs close (the fds must not be reused)
 
         if os.path.lexists(self.path) and not os.path.islink(self.path):
             raise SimConfigError(f'{name}: {self.path} exists and is not a symlink')
@@ -191,15 +193,33 @@ class SimImu:
 
     # -- output ----------------------------------------------------------------------------
 
+    def poll(self, now_ns: int) -> bytes | None:
+        """The frame due at ``now_ns``, or None; the caller writes it (:meth:`write`)."""
+        if self._closed or not self._schedule.due(now_ns):
+            return None
+        return self.frame(now_ns)
+
     def tick(self, now_ns: int) -> bool:
         """Write a frame if one is due at ``now_ns``; return whether one was due."""
-        if self._closed or not self._schedule.due(now_ns):
+        frame = self.poll(now_ns)
+        if frame is None:
             return False
-        self.write(self.frame(now_ns))
+        self.write(frame)
         return True
 
     def write(self, data: bytes) -> None:
-        """Write bytes to the terminal; if its buffer is full, flush stale input and retry."""
+        """Write bytes to the terminal; if its buffer is full, flush stale input and retry.
+
+        Safe against a concurrent :meth:`close` (the world writes outside its lock): a
+        frame for a closed terminal is dropped.
+        """
+        with self._io_lock:
+            if self._closed:
+                self.frames_dropped += 1
+                return
+            self._write(data)
+
+    def _write(self, data: bytes) -> None:
         for attempt in range(2):
             try:
                 written = os.write(self._master, data)
@@ -222,13 +242,14 @@ class SimImu:
 
     def close(self) -> None:
         """Close the terminal and remove the symlink (idempotent)."""
-        if self._closed:
-            return
-        self._closed = True
-        with contextlib.suppress(OSError):
-            if os.path.islink(self.path) and os.readlink(self.path) == self.device_path:
-                os.unlink(self.path)
-        self._close_fds()
+        with self._io_lock:
+            if self._closed:
+                return
+            self._closed = True
+            with contextlib.suppress(OSError):
+                if os.path.islink(self.path) and os.readlink(self.path) == self.device_path:
+                    os.unlink(self.path)
+            self._close_fds()
 
     def _close_fds(self) -> None:
         for fd in (self._master, self._slave):

@@ -339,6 +339,7 @@ class SimWorld:
         self._devices: dict[str, SimDevice] = {}
         self._device_channel: dict[str, SimChannel] = {}
         self._imus: dict[str, SimImu] = {}
+        self._imu_frames: list[tuple[SimImu, bytes]] = []
         self._thread: threading.Thread | None = None
         self._stop = threading.Event()
         self._bus_refs = 0
@@ -594,6 +595,8 @@ class SimWorld:
                 raise SimStateError('the real-time physics thread owns the clock; stop() it first')
             for _ in range(n):
                 self._tick()
+            imu_frames = self._take_imu_frames()
+        self._write_imu_frames(imu_frames)
 
     def advance(self, seconds: float) -> None:
         """Advance the world by ``seconds`` [s], rounded to whole ticks.
@@ -625,7 +628,21 @@ class SimWorld:
         for channel in self._channels.values():
             channel._emit(now)
         for imu in self._imus.values():
-            imu.tick(now)
+            frame = imu.poll(now)
+            if frame is not None:
+                self._imu_frames.append((imu, frame))
+
+    # The IMU frames of a tick are built under the lock (they read the body) but written
+    # to their terminals after it is released: a terminal write is a system call that can
+    # take milliseconds on a loaded machine, and every bus send waits for this lock.
+    def _take_imu_frames(self) -> list[tuple[SimImu, bytes]]:
+        frames, self._imu_frames = self._imu_frames, []
+        return frames
+
+    @staticmethod
+    def _write_imu_frames(frames: list[tuple[SimImu, bytes]]) -> None:
+        for imu, frame in frames:
+            imu.write(frame)
 
     # -- real time ---------------------------------------------------------------------------
 
@@ -667,6 +684,8 @@ class SimWorld:
             try:
                 with self.lock:
                     self._tick()
+                    imu_frames = self._take_imu_frames()
+                self._write_imu_frames(imu_frames)
             except Exception as error:
                 self.error = error
                 if not self._on_error(error):

@@ -2,6 +2,7 @@
 
 import math
 import os
+import threading
 import time
 
 import numpy as np
@@ -130,6 +131,44 @@ def test_when_nobody_reads_expect_writes_never_block(imu_path):
         imu = world.imu()
         assert imu.frames_written + imu.frames_dropped == 2000
         assert imu.frames_written > 0
+
+
+def test_when_a_terminal_write_is_slow_expect_the_world_lock_free(imu_path):
+    # Every bus send waits for the world lock; a terminal write (a system call that took
+    # milliseconds on a loaded machine, bench/) must not hold it.
+    config = robot({'path': imu_path, 'rate_hz': 1000, 'baudrate': 2_000_000})
+    with SimWorld.from_config(config) as world:
+        imu = world.imu()
+        writing, release = threading.Event(), threading.Event()
+        write = imu.write
+
+        def slow_write(data):
+            writing.set()
+            release.wait(5.0)
+            write(data)
+
+        imu.write = slow_write
+        # at 1 kHz the first frame is due at the end of the first tick
+        stepper = threading.Thread(target=world.step, args=(1,))
+        stepper.start()
+        try:
+            assert writing.wait(5.0)
+            free = world.lock.acquire(timeout=2.0)
+            if free:
+                world.lock.release()
+        finally:
+            release.set()
+            stepper.join(5.0)
+        assert free
+        assert imu.frames_written == 1
+
+
+def test_when_closed_expect_late_frames_dropped(imu_path):
+    with SimWorld.from_config(robot({'path': imu_path})) as world:
+        imu = world.imu()
+        frame = imu.frame(0)
+    imu.write(frame)
+    assert (imu.frames_written, imu.frames_dropped) == (0, 1)
 
 
 def test_frame_is_a_valid_hipnuc_frame(imu_path):
