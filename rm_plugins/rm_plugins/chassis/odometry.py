@@ -93,6 +93,11 @@ class Odometry:
         self._source = YawSource.WHEELS
         self._angles = None
 
+    @property
+    def wheel_angles(self) -> tuple[float, ...] | None:
+        """The wheel angles of the last update (the reference of the next step) [rad]."""
+        return self._angles
+
     def restart_wheel_reference(self) -> None:
         """Take the next wheel angles as the reference without moving.
 

@@ -28,11 +28,21 @@ and changes nothing: the chassis keeps acting on the last valid command until th
 PASSIVE on a moving robot (limp wheels coast with no braking at all), and a sender that
 sends only bad commands still ends in PASSIVE within the timeout.
 
+follow_source: '' (the gimbal) takes the heading from the yaw joint angle; 'base_link'
+holds the robot's own heading at the moment the mode was entered, in odom (so FOLLOW
+drives straight in the robot frame it had, TWIST swings about it, and GYRO translates in
+that fixed world direction while spinning); it is taken anew after any PASSIVE.
+
 The wheels are driven in effort mode: the speed PIDs and the power limit run here (see
 ``wheels``), because only where the torques are computed can they be scaled to the power
-limit, as RoboMaster firmware does on the MCU. Run the plugin fast (500 Hz) and keep the
-bridge's /actuator_states rate high: the speed loops close over it. If the plugin stalls
-the bridge's own command timeout (100 ms) zeroes the wheels.
+limit, as RoboMaster firmware does on the MCU. The speed loops close over the bridge's
+/actuator_states, so run the plugin at that rate (faster only reuses old samples; raise
+both together). If the plugin stalls, the bridge's own command timeout (100 ms) zeroes
+the wheels.
+
+Odometry (``odometry``) counts the wheels' angle changes, so late ticks lose no distance;
+its yaw comes from the IMU when one is configured and fresh (minus the yaw joint angle
+when it sits on the gimbal), from the wheels otherwise.
 """
 
 from __future__ import annotations
@@ -70,8 +80,8 @@ _LOG_PERIOD_NS = _NS_PER_S  # at most one line per second per kind of rejected i
 # Largest time over which the yaw joint angle is extrapolated to now with its velocity [s].
 _MAX_EXTRAPOLATION_S = 0.05
 
-# Wheel feedback gap [s] after which the odometry takes the wheel angles as a new
-# reference (a bridge restart resets the multi-turn count; it takes longer than this).
+# Wheel feedback gap [s] after which the odometry checks for a restart of the encoders'
+# multi-turn count (a bridge restart takes longer than this).
 _ODOM_GAP_S = 0.5
 
 # Largest time between an IMU sample and the yaw joint sample combined into a chassis yaw [s]
@@ -360,14 +370,20 @@ class StandChassis(PluginBase):
             return  # no wheel feedback: hold the pose; the angles count on meanwhile
         stamp_ns = max(w.stamp_ns for w in wheels)
         last, self._last_odom_ns = self._last_odom_ns, stamp_ns
-        if last is not None and stamp_ns - last > _ODOM_GAP_S * _NS_PER_S:
-            # The bridge may have restarted (its multi-turn count with it): motion across
-            # such a gap cannot be told from a jump. Shorter gaps (stalls) lose nothing.
-            self._odometry.restart_wheel_reference()
-            self.logger.warning(
-                f'no wheel feedback for {(stamp_ns - last) / _NS_PER_S:.2f} s: odometry '
-                'keeps its pose and takes the wheel angles as a new reference'
-            )
+        reference = self._odometry.wheel_angles
+        gap_s = (stamp_ns - last) / _NS_PER_S if last is not None else 0.0
+        if reference is not None and gap_s > _ODOM_GAP_S:
+            # After a long gap the bridge may have restarted, its multi-turn count with it:
+            # a change further than the wheels can turn in the gap (twice the top speed,
+            # plus a radian) is that, not motion. Anything else counts, so a stall, however
+            # long, loses no distance.
+            reach = 2.0 * self.config.max_wheel_speed * gap_s + 1.0
+            if any(abs(w.position - a) > reach for w, a in zip(wheels, reference, strict=True)):
+                self._odometry.restart_wheel_reference()
+                self.logger.warning(
+                    f'wheel angles jumped after {gap_s:.2f} s without feedback (bridge '
+                    'restarted?): odometry keeps its pose and takes them as a new reference'
+                )
         yaw = None if self.config.imu_mount is ImuMount.NONE else self._imu_chassis_yaw(now_ns)
         if yaw is not None:
             self._imu_used_ns = now_ns
