@@ -6,7 +6,8 @@ The commander (:mod:`bench.commander`, its own process) steps /vel_cmd vx 0 -> 1
 second rm_sim bus on can0 stamps every 0x200 / 0x1FF frame on the same clock the moment
 the bridge sends it (:mod:`bench.robot_proc`). For each step the latency is the time to
 the first frame whose slot (wheel_fl in 0x200, yaw in 0x1FF) leaves the value it held in
-the 50 ms before the step by more than a threshold well above that baseline's noise:
+the 50 ms before the step by more than a threshold well above that baseline's noise (a
+step whose baseline moved by more than half the threshold is left out as *unsettled*):
 
 * wheel_fl: 2000 raw (2.4 A, 0.73 N·m at the wheel; the step asks the effort limit);
 * yaw: 1000 raw (0.96 V; the step's rate feed-forward asks ~2.3 V at once).
@@ -90,10 +91,15 @@ def analyse(result: dict[str, Any]) -> dict[str, Any]:
         a_times = [t for t, _ in applied]
         a_values = [v for _, v in applied]
         total, to_bridge, to_wire, noises = [], [], [], []
+        unsettled = 0
         for step in ups:
             t0 = step[t_key]
             t_wire, noise = _first_change(f_times, f_values, t0, threshold)
             noises.append(noise)
+            if noise > threshold / 2:
+                # not at rest before the step: a change could be the old motion's
+                unsettled += 1
+                continue
             if t_wire is None:
                 continue
             total.append((t_wire - t0) / 1e6)
@@ -105,6 +111,7 @@ def analyse(result: dict[str, Any]) -> dict[str, Any]:
         out[joint] = {
             'steps': len(ups),
             'detected': len(total),
+            'unsettled': unsettled,
             'threshold_raw': threshold,
             'baseline_noise_max_raw': max(finite_noise) if finite_noise else None,
             'total_ms': summary(total),

@@ -57,7 +57,7 @@ class ThreadProfiles:
         setattr(obj, attribute, wrapped)
 
     def report(self, out_dir: Path, top: int = 25) -> dict[str, Any]:
-        """Write one text profile per thread; return each thread's top functions."""
+        """Write one text and one pstats profile per thread; return each thread's top functions."""
         summary: dict[str, Any] = {}
         with self._lock:
             entries = list(self._profiles.values())
@@ -69,6 +69,7 @@ class ThreadProfiles:
             pstats.Stats(profile, stream=text).sort_stats('tottime').print_stats(top)
             safe = ''.join(c if c.isalnum() or c in '-_' else '_' for c in name)
             (out_dir / f'profile_{safe}.txt').write_text(text.getvalue())
+            profile.dump_stats(out_dir / f'profile_{safe}.prof')  # for pstats / snakeviz
             rows = sorted(stats.stats.items(), key=lambda kv: kv[1][2], reverse=True)[:top]
             summary[name] = {
                 'total_s': stats.total_tt,

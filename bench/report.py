@@ -101,7 +101,7 @@ def _detected(run: dict[str, Any]) -> float | None:
     lat = run.get('latency')
     if not lat:
         return None
-    steps = sum(v['steps'] for v in lat.values())
+    steps = sum(v['steps'] - v['unsettled'] for v in lat.values())
     return 100.0 * sum(v['detected'] for v in lat.values()) / steps if steps else None
 
 
@@ -151,6 +151,24 @@ ROWS: tuple[Row, ...] = (
         'robot',
         _get('load', 'scheduler', 'missed_pct'),
         ('<', 0.1),
+        _LOAD,
+    ),
+    Row(
+        'sched.tick.p99',
+        'scheduler',
+        'tick duration (update + pack + send) p99 [µs]',
+        'robot',
+        _get('load', 'scheduler', 'tick_us', 'p99'),
+        None,
+        _LOAD,
+    ),
+    Row(
+        'sched.simlock.p99',
+        'scheduler',
+        'sim physics tick (holds the world lock sends wait for) p99 [µs]',
+        'robot',
+        _get('load', 'sim_tick_us', 'p99'),
+        None,
         _LOAD,
     ),
     Row(
@@ -235,7 +253,7 @@ ROWS: tuple[Row, ...] = (
         None,
         _latency_windows,
     ),
-    Row('lat.detected', 'latency', 'steps seen on the wire [%]', 'robot', _detected),
+    Row('lat.detected', 'latency', 'settled steps seen on the wire [%]', 'robot', _detected),
     # 3. cpu
     Row(
         'cpu.load.host_bridge',

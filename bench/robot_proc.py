@@ -22,6 +22,7 @@ Run as ``python -m bench.robot_proc [--plugins a,b]`` from the repository root.
 from __future__ import annotations
 
 import argparse
+import array
 import json
 import os
 import pathlib
@@ -169,15 +170,20 @@ class Robot:
     def measure(self, name: str, seconds: float) -> dict[str, Any]:
         from bench.cpu import group_percent
         from bench.machine import Window, thread_cpu_percent, thread_cpu_snapshot
+        from bench.stats import summary
 
         frames0 = self._frame_counts()
         overruns0 = {n: self.host.runner(n).overruns for n in self.host.plugin_names}
         ru0 = resource.getrusage(resource.RUSAGE_SELF)
         window = Window()
         threads0 = thread_cpu_snapshot()
+        world = self.bridge.sim_world
+        physics_ns = array.array('q')
+        world._tick = _timed(type(world)._tick.__get__(world), physics_ns.append)
         self.recorder.start()
         time.sleep(seconds)
         sched = self.recorder.stop()
+        world.__dict__.pop('_tick', None)
         threads1 = thread_cpu_snapshot()
         facts = window.close()
         ru1 = resource.getrusage(resource.RUSAGE_SELF)
@@ -194,6 +200,8 @@ class Robot:
             'groups': {k: round(v, 3) for k, v in group_percent(per_thread).items()},
             'process_pct': round(process_pct, 3),
             'scheduler': sched,
+            # the physics tick runs under the world lock, which every bus send waits for
+            'sim_tick_us': summary(t / 1e3 for t in physics_ns),
             'frames_per_s': {
                 bus: {
                     'received': (frames1[bus][0] - frames0[bus][0]) / elapsed,
@@ -264,6 +272,18 @@ class Robot:
         for obj, attribute in targets:
             obj.__dict__.pop(attribute, None)
         return {'profiles': profiles.report(pathlib.Path(out_dir))}
+
+
+def _timed(function: Any, record: Any) -> Any:
+    clock = time.perf_counter_ns
+
+    def timed(*args: Any) -> Any:
+        t0 = clock()
+        result = function(*args)
+        record(clock() - t0)
+        return result
+
+    return timed
 
 
 def control_loop(robot: Robot) -> None:

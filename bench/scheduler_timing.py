@@ -9,12 +9,16 @@ Definitions (the scheduler's own):
 
 * period error: ``|start - deadline|`` of a tick, deadlines on an absolute grid [µs];
 * missed deadline: a deadline skipped because the previous tick ended after it
-  (``skipped_ticks``); the share is ``skipped / (ticks + skipped)``.
+  (``skipped_ticks``); the share is ``skipped / (ticks + skipped)``;
+* tick duration: update + pack + send of one tick [µs] (timed by wrapping the instance's
+  ``tick`` while recording). On rm_sim a send waits for the simulated world's lock, so
+  time the physics thread holds it shows up here.
 """
 
 from __future__ import annotations
 
 import array
+import time
 from typing import Any
 
 from bench.stats import summary
@@ -26,6 +30,7 @@ class TickRecorder:
     def __init__(self, scheduler: Any) -> None:
         self._scheduler = scheduler
         self.errors_ns = array.array('q')
+        self.ticks_ns = array.array('q')
         self._stats0 = None
 
     def start(self) -> None:
@@ -38,18 +43,33 @@ class TickRecorder:
             append(error_ns)
             original(error_ns)
 
+        self.ticks_ns = array.array('q')
+        append_tick = self.ticks_ns.append
+        tick = type(self._scheduler).tick.__get__(self._scheduler)
+        clock = time.perf_counter_ns
+
+        def timed_tick(now_ns: int) -> int:
+            t0 = clock()
+            frames = tick(now_ns)
+            append_tick(clock() - t0)
+            return frames
+
         self._stats0 = self._scheduler.stats()
         self._scheduler._record_start = record
+        self._scheduler.tick = timed_tick
 
     def stop(self) -> dict[str, Any]:
         """Stop recording (unhook) and return :func:`tick_summary` of the window."""
         self._scheduler.__dict__.pop('_record_start', None)
+        self._scheduler.__dict__.pop('tick', None)
         stats1 = self._scheduler.stats()
         s0 = self._stats0
         ticks = stats1.ticks - s0.ticks
         skipped = stats1.skipped_ticks - s0.skipped_ticks
         overruns = stats1.overruns - s0.overruns
-        return tick_summary(self.errors_ns, ticks=ticks, skipped=skipped, overruns=overruns)
+        out = tick_summary(self.errors_ns, ticks=ticks, skipped=skipped, overruns=overruns)
+        out['tick_us'] = summary(t / 1e3 for t in self.ticks_ns)
+        return out
 
 
 def tick_summary(
