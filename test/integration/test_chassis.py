@@ -743,67 +743,149 @@ def odom_yaw_error(r: ChassisRig) -> float:
     return wrap_to_pi(yaw_from_quaternion((q.x, q.y, q.z, q.w)) - r.body()[2])
 
 
-# -- omni ---------------------------------------------------------------------------------------
+# -- against a fake bridge (no sim) ------------------------------------------------------------
 
 
-def test_when_omni_drives_forward_expect_the_omni_wheel_targets(ros_context):
-    # Four omni wheels at the corners of the standard chassis (0.283 m from the centre),
-    # each rolling counter-clockwise: w_i = (-sin(a_i) vx + cos(a_i) vy + R wz) / r. The
-    # probe plays the bridge: every wheel online and at rest (the speeds do not matter for
-    # the targets), so this checks the kinematics the config selects, through topics.
-    angles = [math.pi / 4, -math.pi / 4, 3 * math.pi / 4, -3 * math.pi / 4]  # FL FR RL RR
-    params = [p for p in robot_parameters(kinematics='omni', mounting_angles=angles,
-                                          centre_distance=0.2828)
-              if p.name not in ('chassis.wheelbase', 'chassis.track', 'chassis.roller_signs')]
-    host = RobotHost(context=ros_context, parameter_overrides=params)
-    probe = rclpy.create_node('omni_probe', context=ros_context)
-    executor = EventsExecutor(context=ros_context)
-    stop = threading.Event()
-    spinner = threading.Thread(
-        target=lambda: [executor.spin_once(timeout_sec=0.02) for _ in iter(stop.is_set, True)],
-        daemon=True,
-    )
-    try:
-        states = []
-        probe.create_subscription(ChassisState, '/chassis_state', states.append, 10)
-        feed = probe.create_publisher(ActuatorState, '/actuator_states', 10)
-        cmd_pub = probe.create_publisher(ChassisCmd, '/chassis_cmd', 10)
-        vel_pub = probe.create_publisher(Twist, '/vel_cmd', 10)
-        joints = ['wheel_fl', 'wheel_fr', 'wheel_rl', 'wheel_rr']
+class FakeBridge:
+    """rm_robot with the chassis plugin, fed by a probe that plays the bridge.
 
-        def tick() -> None:
-            now = probe.get_clock().now().to_msg()
-            msg = ActuatorState(name=joints, position=[0.0] * 4, velocity=[0.0] * 4,
-                                effort=[0.0] * 4, temperature=[25.0] * 4, online=[True] * 4,
-                                error_code=[0] * 4)
-            msg.header.stamp = now
-            feed.publish(msg)
-            cmd = ChassisCmd(mode=ChassisCmd.RAW)
-            cmd.header.stamp = now
-            cmd_pub.publish(cmd)
-            vel = Twist()
-            vel.linear.x = 1.0
-            vel_pub.publish(vel)
+    Every 10 ms the probe publishes /actuator_states (every wheel and the yaw joint
+    online, at ``positions`` and ``velocities``, freshly stamped), and while ``commanding``
+    /chassis_cmd (``cmd``) and /vel_cmd (``vel``). For what needs no physics: kinematics,
+    odometry bookkeeping, state decisions.
+    """
 
-        probe.create_timer(0.01, tick)
-        for node in (host, probe):
-            executor.add_node(node)
-        spinner.start()
-        radius = chassis_section()['wheel_radius']
-        # vx = 1 m/s (after the ramp): w_i = -sin(a_i) / r = -+9.27 rad/s.
-        expected = [-math.sin(a) / radius for a in angles]
+    JOINTS = ('wheel_fl', 'wheel_fr', 'wheel_rl', 'wheel_rr', 'yaw')
 
-        def at_target() -> bool:
-            return bool(states) and states[-1].state == ChassisCmd.RAW and all(
-                abs(w - e) < 0.01 for w, e in zip(states[-1].wheel_target, expected, strict=True)
+    def __init__(self, context: Any, **chassis: Any) -> None:
+        drop = chassis.pop('drop', ())
+        params = [p for p in robot_parameters(**chassis) if p.name not in drop]
+        self.host = RobotHost(context=context, parameter_overrides=params)
+        self.probe = rclpy.create_node('fake_bridge', context=context)
+        self.positions = dict.fromkeys(self.JOINTS, 0.0)
+        self.velocities = dict.fromkeys(self.JOINTS, 0.0)
+        self.feeding = True
+        self.commanding = True
+        self.cmd = ChassisCmd(mode=ChassisCmd.RAW)
+        self.vel = Twist()
+        self.states: list[ChassisState] = []
+        self.odom: list[Odometry] = []
+        self.probe.create_subscription(ChassisState, '/chassis_state', self.states.append, 10)
+        self.probe.create_subscription(Odometry, '/odom', self.odom.append, 10)
+        self._feed = self.probe.create_publisher(ActuatorState, '/actuator_states', 10)
+        self._cmd = self.probe.create_publisher(ChassisCmd, '/chassis_cmd', 10)
+        self._vel = self.probe.create_publisher(Twist, '/vel_cmd', 10)
+        self.probe.create_timer(0.01, self._tick)
+        self.executor = EventsExecutor(context=context)
+        for node in (self.host, self.probe):
+            self.executor.add_node(node)
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._spin, daemon=True)
+        self._thread.start()
+
+    def _spin(self) -> None:
+        while not self._stop.is_set():
+            self.executor.spin_once(timeout_sec=0.02)
+
+    def _tick(self) -> None:
+        now = self.probe.get_clock().now().to_msg()
+        if self.feeding:
+            n = len(self.JOINTS)
+            msg = ActuatorState(
+                name=list(self.JOINTS), position=[self.positions[j] for j in self.JOINTS],
+                velocity=[self.velocities[j] for j in self.JOINTS], effort=[0.0] * n,
+                temperature=[25.0] * n, online=[True] * n, error_code=[0] * n,
             )
+            msg.header.stamp = now
+            self._feed.publish(msg)
+        if self.commanding:
+            self.cmd.header.stamp = now
+            self._cmd.publish(self.cmd)
+            self._vel.publish(self.vel)
 
-        assert wait_until(at_target, WAIT)
-        assert states[-1].cmd_vel.linear.x == pytest.approx(1.0)
-    finally:
-        stop.set()
-        if spinner.is_alive():
-            spinner.join(timeout=5.0)
-        host.destroy_node()
-        probe.destroy_node()
-        executor.shutdown()
+    def wait_until(self, predicate: Callable[[], Any], timeout: float = WAIT) -> bool:
+        return wait_until(lambda: bool(predicate()), timeout)
+
+    def close(self) -> None:
+        self._stop.set()
+        self._thread.join(timeout=5.0)
+        self.host.destroy_node()
+        self.probe.destroy_node()
+        self.executor.shutdown()
+
+
+@pytest.fixture
+def fake(ros_context):
+    made = []
+
+    def make(**chassis):
+        made.append(FakeBridge(ros_context, **chassis))
+        return made[-1]
+
+    yield make
+    for f in made:
+        f.close()
+
+
+def test_when_omni_drives_forward_expect_the_omni_wheel_targets(fake):
+    # Four omni wheels at the corners of the standard chassis (0.283 m from the centre),
+    # each rolling counter-clockwise: w_i = (-sin(a_i) vx + cos(a_i) vy + R wz) / r.
+    angles = [math.pi / 4, -math.pi / 4, 3 * math.pi / 4, -3 * math.pi / 4]  # FL FR RL RR
+    f = fake(kinematics='omni', mounting_angles=angles, centre_distance=0.2828,
+             drop=('chassis.wheelbase', 'chassis.track', 'chassis.roller_signs'))
+    f.vel.linear.x = 1.0
+    radius = chassis_section()['wheel_radius']
+    # vx = 1 m/s (after the ramp): w_i = -sin(a_i) / r = -+9.27 rad/s.
+    expected = [-math.sin(a) / radius for a in angles]
+
+    def at_target() -> bool:
+        return bool(f.states) and f.states[-1].state == ChassisCmd.RAW and all(
+            abs(w - e) < 0.01 for w, e in zip(f.states[-1].wheel_target, expected, strict=True)
+        )
+
+    assert f.wait_until(at_target)
+    assert f.states[-1].cmd_vel.linear.x == pytest.approx(1.0)
+
+
+def test_when_the_wheel_angles_jump_after_a_long_gap_expect_the_odometry_pose_kept(fake):
+    f = fake()
+    f.commanding = False  # PASSIVE: only the odometry works
+    radius = chassis_section()['wheel_radius']
+    # All wheels forward by 1 rad: 1 rad * r = 7.63 cm along x.
+    assert f.wait_until(lambda: f.odom)
+    f.positions.update(dict.fromkeys(f.JOINTS[:4], 1.0))
+    assert f.wait_until(lambda: f.odom[-1].pose.pose.position.x == pytest.approx(radius))
+    # The bridge restarts: 0.6 s without feedback, then the angles start again near 0
+    # (200 rad back; the wheels could have turned 2 * 45 * 0.6 + 1 = 55 rad at most).
+    f.feeding = False
+    time.sleep(0.6)  # a gap longer than _ODOM_GAP_S, in real time: nothing to wait on
+    f.positions.update(dict.fromkeys(f.JOINTS[:4], -199.0))
+    f.feeding = True
+    count = len(f.odom)
+    assert f.wait_until(lambda: len(f.odom) > count + 5)
+    assert f.odom[-1].pose.pose.position.x == pytest.approx(radius)
+    # Motion from the new reference counts again.
+    f.positions.update(dict.fromkeys(f.JOINTS[:4], -198.0))
+    assert f.wait_until(lambda: f.odom[-1].pose.pose.position.x == pytest.approx(2 * radius))
+
+
+def test_when_following_the_gimbal_without_yaw_feedback_expect_passive_with_the_reason(fake):
+    f = fake(yaw_joint='turret')  # a joint the bridge does not report
+    f.cmd.mode = ChassisCmd.FOLLOW
+    assert f.wait_until(lambda: f.states and f.states[-1].state == ChassisCmd.PASSIVE
+                        and 'turret' in f.states[-1].reason)
+    assert f.states[-1].reason == (
+        "FOLLOW needs the gimbal heading, but yaw joint 'turret' has no fresh feedback")
+    # With follow_source base_link it needs no gimbal.
+    f.cmd.follow_source = 'base_link'
+    assert f.wait_until(lambda: f.states[-1].state == ChassisCmd.FOLLOW)
+
+
+def test_when_vel_cmd_is_nan_expect_it_rejected_and_no_motion(fake):
+    f = fake()
+    f.vel.linear.x = math.nan
+    assert f.wait_until(lambda: f.states and f.states[-1].state == ChassisCmd.RAW)
+    count = len(f.states)
+    assert f.wait_until(lambda: len(f.states) > count + 20)
+    assert all(s.cmd_vel.linear.x == 0.0 for s in f.states[count:])
+    assert all(t == 0.0 for s in f.states[count:] for t in s.wheel_target)
