@@ -15,9 +15,13 @@ raises), or the device cannot be opened for a number of attempts.
 from __future__ import annotations
 
 import collections
+import heapq
 import itertools
+import math
 import os
 import threading
+import time
+import typing
 from collections.abc import Mapping
 from typing import Any
 
@@ -196,3 +200,150 @@ class _FlakySimBus(SimBus):
         if self._adapter.tx_full.is_set():
             raise can.CanOperationError('Transmit buffer full (injected)')
         super().send(msg, timeout)
+
+
+def hardware_config(parameters: Mapping[str, Any]) -> dict[str, Any]:
+    """The hardware config dict from a bridge's flat parameters (``buses.can0.channel``...).
+
+    Keeps the hardware schema's groups (buses, joints, scheduler, safety) and drops the
+    simulator's keys (``joints.<joint>.sim.*``) and the node's own parameters.
+    """
+    config: dict[str, Any] = {}
+    for name, value in parameters.items():
+        parts = name.split('.')
+        if parts[0] not in ('buses', 'joints', 'scheduler', 'safety'):
+            continue
+        if parts[0] == 'joints' and len(parts) > 2 and parts[2] == 'sim':
+            continue
+        if parts[0] == 'buses' and len(parts) > 2 and parts[2] == 'log_file':
+            continue
+        node = config
+        for part in parts[:-1]:
+            node = node.setdefault(part, {})
+        node[parts[-1]] = list(value) if isinstance(value, tuple) else value
+    return config
+
+
+class _JointCommand(typing.NamedTuple):
+    name: str
+    mode: int
+
+
+class WireWatch:
+    """Taps every simulated bus of a running bridge and checks every frame, in a thread.
+
+    Commands (``note_command``) arrive on the ROS executor thread and frames on the taps;
+    both carry wall-clock times, and the checker must see them in time order, so the
+    thread works ``lag_s`` behind real time: everything older than that is merged by time
+    and checked. A starved executor delivers its commands late to the bridge too (it
+    stamps them on arrival), so the two stay in step as long as the lag covers the delay.
+
+    Args:
+        world: the bridge's SimWorld (real time: frames carry ``time.time()``).
+        config: its hardware config (see :func:`hardware_config`).
+        grace_s: the checker's timing grace [s].
+        record: keep per-joint timelines (tests; not for long runs).
+        track_commands: apply the checker's ``no_command`` rule (feed note_command).
+        lag_s: how far behind real time the checking runs [s].
+        period_s: how often the thread works [s].
+        stall_s: the checker's stall gap [s] (see WireChecker).
+    """
+
+    def __init__(
+        self,
+        world: SimWorld,
+        config: Mapping[str, Any],
+        *,
+        grace_s: float = 0.05,
+        record: bool = False,
+        track_commands: bool = False,
+        lag_s: float = 0.3,
+        period_s: float = 0.01,
+        stall_s: float | None = 0.02,
+    ) -> None:
+        self.checker = WireChecker(
+            config,
+            grace_s=grace_s,
+            record=record,
+            track_commands=track_commands,
+            stall_s=stall_s,
+        )
+        self._taps = {
+            bus: SimBus(str(cfg.get('channel', bus)), world=world, rx_queue_size=0)
+            for bus, cfg in config['buses'].items()
+        }
+        self._lag_s = lag_s
+        self._lead_s = 0.01  # [s] see _work
+        self._frames: list[tuple[float, int, str, can.Message]] = []  # heap by time
+        self._commands: collections.deque[tuple[float, Any]] = collections.deque()
+        self._seq = itertools.count()
+        self._lock = threading.Lock()
+        self._done_until = 0.0  # everything before this wall time has been checked
+        self._stop = threading.Event()
+        self._period_s = period_s
+        self._thread = threading.Thread(target=self._run, name='wire-watch', daemon=True)
+        self._thread.start()
+
+    def _run(self) -> None:
+        while not self._stop.wait(self._period_s):
+            self._work(time.time() - self._lag_s)
+
+    def _work(self, horizon: float) -> None:
+        with self._lock:
+            for bus, tap in self._taps.items():
+                while (msg := tap.recv(0.0)) is not None:
+                    heapq.heappush(self._frames, (msg.timestamp, next(self._seq), bus, msg))
+            frames, commands, checker = self._frames, self._commands, self.checker
+            while frames and frames[0][0] <= horizon:
+                t, _, bus, msg = heapq.heappop(frames)
+                # The bridge's and this subscription's callbacks run one after the other
+                # in one executor spin: a command noted just after a frame may already
+                # have been applied to it.
+                while commands and commands[0][0] <= t + self._lead_s:
+                    self._note(*commands.popleft())
+                checker.feed(bus, msg)
+            while commands and commands[0][0] <= horizon:
+                self._note(*commands.popleft())
+            self._done_until = max(self._done_until, horizon)
+
+    def _note(self, t: float, command: Any) -> None:
+        if isinstance(command, _JointCommand):
+            self.checker.note_joint_command(command.name, command.mode, t)
+        else:
+            self.checker.note_command(command, t)
+
+    def note_command(self, msg: Any, t: float) -> None:
+        """An /actuator_cmd seen at wall time t (the checker's ``no_command`` rule)."""
+        self._commands.append((t, msg))
+
+    def watch_commands(self, hardware: CanHardware) -> None:
+        """Note every command where the bridge hands it to its hardware layer.
+
+        A subscription of the test's own sees /actuator_cmd up to hundreds of ms after
+        the bridge under CPU load (measured here), which is no oracle for a 100 ms rule;
+        this sees each command when the hardware takes it (after the bridge's validation,
+        which test_command_abuse.py checks on its own).
+        """
+        original = hardware.set_command
+        commands = self._commands
+
+        def set_command(name: str, mode: int, **kwargs: Any) -> None:
+            original(name, mode, **kwargs)  # raises for a rejected one: not noted
+            commands.append((time.time(), _JointCommand(name, mode)))
+
+        hardware.set_command = set_command  # type: ignore[method-assign]
+
+    def sync(self, timeout: float = 10.0) -> None:
+        """Wait until every frame up to now has been checked."""
+        target = time.time()
+        deadline = time.monotonic() + timeout
+        while self._done_until < target and time.monotonic() < deadline:
+            time.sleep(self._period_s)
+
+    def close(self) -> None:
+        """Stop the thread, check everything left, close the taps."""
+        self._stop.set()
+        self._thread.join(timeout=5.0)
+        self._work(math.inf)
+        for tap in self._taps.values():
+            tap.shutdown()

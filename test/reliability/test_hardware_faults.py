@@ -260,9 +260,7 @@ def _temperature(rig, joint, t):
         pytest.param({'velocity': 25.0, 'kp': 0.5, 'kd': 5.0}, id='shift-beyond-p-max'),
     ],
 )
-def test_when_an_mit_target_is_out_of_the_motor_ranges_expect_the_torque_still_limited(
-    rig, target
-):
+def test_when_an_mit_target_is_out_of_the_motor_ranges_expect_the_torque_still_limited(rig, target):
     # The motor saturates kp/kd (DM4310: 500, 5) and p/v/tau at its ranges; the bridge's
     # effort clamp must hold with what the motor really gets, or the frame asks far more
     # than max_effort (3 N·m here; thousands of N·m before the fix).

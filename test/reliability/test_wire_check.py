@@ -229,3 +229,17 @@ def test_actuator_states_with_nan_or_beyond_the_limit_are_reported():
         'yaw: MODE_OFF with command +0.5000',
         'arm: command +10.5000 beyond 10.0',
     ]
+
+
+def test_a_frame_sent_after_a_stall_is_judged_when_it_was_decided():
+    checker = WireChecker(CONFIG, grace_s=0.002, stall_s=0.02)
+    for k in range(50):  # a steady 1 kHz stream with fresh feedback
+        t = k * MS
+        feed(checker, wheel_fb(t), wheel_cmd(ONE_NM, t))
+    # the process stalls 150 ms after deciding a tick at 50 ms; its frame goes out at
+    # 199 ms: judged at 50 ms + 1 tick (feedback then 1 ms old), not as 150 ms offline
+    assert feed(checker, wheel_cmd(ONE_NM, 0.199)) == []
+    assert checker.stalls == 1 and checker.max_stall_ms == pytest.approx(150.0)
+    # the next tick is decided after the stall: it must be zero (offline by then)
+    found = feed(checker, wheel_cmd(ONE_NM, 0.200))
+    assert rules(found) == [('wheel', 'offline')]

@@ -23,12 +23,15 @@ A command frame is unsafe (a :class:`Violation`) when
 * ``no_command``: it is not zero although the joint has had no fresh, valid command
   (ActuatorCmd with finite values, a known mode other than MODE_OFF, a stamp within the
   command timeout) for longer than ``safety.command_timeout_s`` — only when commands are
-  fed (:meth:`WireChecker.note_command`);
+  fed (:meth:`WireChecker.note_command`), from the first one noted for the joint on (a
+  checker joining a running robot cannot know the commands before it);
 * ``malformed``: a command frame that does not decode (wrong length).
 
 The timing rules allow ``grace_s`` after the moment the joint had to be zero (the bridge
 acts on its next tick, and under CPU load its receive thread stamps feedback late); the
 latency of every "had to go to zero" episode is measured, so a test can assert it tightly.
+A frame sent after a stall of the bridge's process (a gap in its command frames) is judged
+at the time it was decided, not sent; stalls are counted.
 NaN cannot be encoded in a DJI or MIT frame; :func:`check_actuator_states` checks the
 reported commands on /actuator_states for NaN and the same limits.
 
@@ -54,6 +57,8 @@ from rm_base.hardware.protocols import cheetah, damiao, dji, mit
 
 _NS_PER_S = 1_000_000_000
 _NEVER = -math.inf
+#: Frames within this of the first frame after a stall belong to the same tick [s].
+_BURST_S = 0.0005
 
 
 @dataclasses.dataclass(frozen=True)
@@ -120,6 +125,7 @@ class _Joint:
         self.overheated_since: float | None = None
         self.fault_since: float | None = None
         self.command_until = _NEVER  # fresh command valid until [s]
+        self.commanded = False  # a command was noted (the rule starts there)
         # the current "must be zero" episode: since when, and whether zero was reached
         self.episode_since: float | None = None
         self.episode_zeroed = False
@@ -144,6 +150,9 @@ class WireChecker:
         keep: violations kept (the rest are only counted).
         record: keep every joint's ``(time, effort, non-zero)`` per command frame in
             ``timeline(joint)`` (tests; unbounded, so not in a soak).
+        stall_s: a gap this long in the bridge's command frames on a bus is a stall of
+            its process (see ``_decision_time``) [s]; None: frames are judged at the time
+            they were sent (lockstep, hand-made traffic).
     """
 
     def __init__(
@@ -155,6 +164,7 @@ class WireChecker:
         track_commands: bool = False,
         keep: int = 100,
         record: bool = False,
+        stall_s: float | None = None,
     ) -> None:
         if not isinstance(config, HardwareConfig):
             config = HardwareConfig.from_dict(config)
@@ -164,6 +174,12 @@ class WireChecker:
         self.track_commands = track_commands
         self._keep = keep
         self._record = record
+        self.stall_s = stall_s
+        self._tick_s = 1.0 / config.rate_hz
+        self._last_tx: dict[str, float] = {}
+        self._burst: dict[str, tuple[float, float]] = {}
+        self.stalls = 0
+        self.max_stall_ms = 0.0
         safety = config.safety
         self.feedback_timeout_s = safety.feedback_timeout_s
         self.command_timeout_s = safety.command_timeout_s
@@ -223,13 +239,14 @@ class WireChecker:
             self.foreign_frames += 1
             return []
         group = self._dji_frames.get(key)
-        if group is not None:
-            handled = True
-            self._check_dji(bus, msg.arbitration_id, group, data, t, found)
         mit_joint = self._mit_frames.get(key)
-        if mit_joint is not None:
+        if group is not None or mit_joint is not None:
             handled = True
-            self._check_mit(bus, msg.arbitration_id, mit_joint, data, t, found)
+            td = self._decision_time(bus, t)
+            if group is not None:
+                self._check_dji(bus, msg.arbitration_id, group, data, t, td, found)
+            if mit_joint is not None:
+                self._check_mit(bus, msg.arbitration_id, mit_joint, data, t, td, found)
         if not handled:
             self.unmatched_frames += 1
         for v in found:
@@ -237,6 +254,31 @@ class WireChecker:
             if len(self.violations) < self._keep:
                 self.violations.append(v)
         return found
+
+    def _decision_time(self, bus: str, t: float) -> float:
+        """The latest time the bridge may have decided a command frame sent at ``t``.
+
+        The scheduler decides a tick's frames, then sends them; if its process loses the
+        CPU in between (a stall), the frames reach the wire late. After a gap longer than
+        ``stall_s`` in the bridge's command frames on a bus, the frames of the first burst
+        are judged at the gap's start plus one tick: what the bridge could know then.
+        Stalls are counted (``stalls``, ``max_stall_ms``); the frames after the burst are
+        judged at their own time again.
+        """
+        prev = self._last_tx.get(bus)
+        self._last_tx[bus] = t
+        if self.stall_s is None:
+            return t
+        burst = self._burst.get(bus)
+        if burst is not None and t <= burst[0]:
+            return burst[1]
+        if prev is not None and t - prev > self.stall_s:
+            self.stalls += 1
+            self.max_stall_ms = max(self.max_stall_ms, 1e3 * (t - prev))
+            decided = prev + self._tick_s
+            self._burst[bus] = (t + _BURST_S, decided)
+            return decided
+        return t
 
     def feed_all(self, frames: Iterable[tuple[str, can.Message]]) -> list[Violation]:
         """Check ``(bus, frame)`` pairs in order; return the new violations."""
@@ -250,7 +292,8 @@ class WireChecker:
 
         Only a message the bridge must apply counts: equal array lengths, known joints,
         no joint twice, known modes, finite values, gains >= 0, and a header stamp that is
-        zero or within the command timeout of ``t``. MODE_OFF ends a joint's command.
+        zero or within the command timeout (plus the grace) of ``t``. MODE_OFF ends a
+        joint's command.
         """
         names = list(msg.name)
         columns = [list(getattr(msg, f)) for f in ('mode', 'position', 'velocity', 'effort')]
@@ -262,7 +305,8 @@ class WireChecker:
         stamp = getattr(getattr(msg, 'header', None), 'stamp', None)
         if stamp is not None and (stamp.sec or stamp.nanosec):
             age = t - (stamp.sec + stamp.nanosec / _NS_PER_S)
-            if abs(age) > self.command_timeout_s:
+            # near the limit the bridge (a callback earlier) may have taken it
+            if abs(age) > self.command_timeout_s + self.grace_s:
                 return
         modes, values = columns[0], columns[1:]
         for i in range(len(names)):
@@ -273,11 +317,19 @@ class WireChecker:
             if values[3][i] < 0.0 or values[4][i] < 0.0:
                 return
         for i, name in enumerate(names):
-            joint = self.joints[name]
-            if modes[i] == Mode.OFF:
-                joint.command_until = min(joint.command_until, t)
-            else:
-                joint.command_until = t + self.command_timeout_s
+            self.note_joint_command(name, modes[i], t)
+
+    def note_joint_command(self, joint: str, mode: int, t: float) -> None:
+        """One joint's valid command, taken at wire time ``t`` [s] (e.g. observed where the
+        bridge hands it to the hardware layer, after its own validation)."""
+        j = self.joints.get(joint)
+        if j is None:
+            return
+        j.commanded = True
+        if mode == Mode.OFF:
+            j.command_until = min(j.command_until, t)
+        else:
+            j.command_until = t + self.command_timeout_s
 
     # --- results -----------------------------------------------------------------------
     def timeline(self, joint: str) -> list[tuple[float, float, bool]]:
@@ -301,6 +353,8 @@ class WireChecker:
             'system_frames': self.system_frames,
             'unmatched_frames': self.unmatched_frames,
             'unsafe_frames': self.violation_count,
+            'stalls': self.stalls,
+            'max_stall_ms': round(self.max_stall_ms, 1),
             'zero_episodes': len(latencies),
             'max_zero_latency_ms': round(1e3 * max(latencies), 1) if latencies else None,
             'max_effort_ratio': round(
@@ -355,7 +409,7 @@ class WireChecker:
             reasons.append((joint.overheated_since, 'over_temperature'))
         if joint.fault_since is not None:
             reasons.append((joint.fault_since, 'device_fault'))
-        if self.track_commands and t > joint.command_until:
+        if self.track_commands and joint.commanded and t > joint.command_until:
             reasons.append((joint.command_until, 'no_command'))
         if not reasons:
             return None
@@ -367,6 +421,7 @@ class WireChecker:
         bus: str,
         can_id: int,
         t: float,
+        td: float,
         effort: float,
         nonzero: bool,
         limit_detail: str | None,
@@ -381,7 +436,7 @@ class WireChecker:
             stats.nonzero_frames += 1
         if limit_detail is not None:
             found.append(Violation(t, bus, can_id, joint.name, 'effort', limit_detail))
-        must = self._must_be_zero_since(joint, t)
+        must = self._must_be_zero_since(joint, td)
         if must is None:
             joint.episode_since = None
             return
@@ -393,9 +448,11 @@ class WireChecker:
                 stats.zero_latencies.append(max(0.0, t - joint.episode_since))
             joint.episode_zeroed = True
             return
-        late = t - since
+        late = td - since
         if late > self.grace_s:
             when = f'{late * 1e3:.1f} ms' if math.isfinite(late) else 'ever since start'
+            if td != t:
+                when += f' (decided by {1e3 * (t - td):.0f} ms before it was sent)'
             found.append(
                 Violation(
                     t,
@@ -415,6 +472,7 @@ class WireChecker:
         group: list[_Joint | None],
         data: bytes,
         t: float,
+        td: float,
         found: list[Violation],
     ) -> None:
         self.command_frames += 1
@@ -451,7 +509,7 @@ class WireChecker:
             allowed = joint.max_effort + step + self.effort_tolerance
             if detail is None and abs(effort) > allowed:
                 detail = f'raw {raw} = {effort:+.4f} N·m beyond max_effort {joint.max_effort} N·m'
-            self._judge(joint, bus, can_id, t, effort, raw != 0, detail, found)
+            self._judge(joint, bus, can_id, t, td, effort, raw != 0, detail, found)
 
     @staticmethod
     def _gm6020_effort(joint: _Joint, shadow: Gm6020Voltage, raw: int) -> tuple[float, float]:
@@ -467,7 +525,14 @@ class WireChecker:
         return effort, shadow.spec.si_per_raw / r * kt
 
     def _check_mit(
-        self, bus: str, can_id: int, joint: _Joint, data: bytes, t: float, found: list[Violation]
+        self,
+        bus: str,
+        can_id: int,
+        joint: _Joint,
+        data: bytes,
+        t: float,
+        td: float,
+        found: list[Violation],
     ) -> None:
         shadow = joint.shadow
         assert isinstance(shadow, MitActuator)
@@ -512,7 +577,7 @@ class WireChecker:
                 f'MIT kp {cmd.kp:.3f} kd {cmd.kd:.3f} p {cmd.position:+.3f} v {cmd.velocity:+.3f} '
                 f'tau {cmd.torque:+.3f} = {effort:+.4f} N·m beyond max_effort {joint.max_effort}'
             )
-        self._judge(joint, bus, can_id, t, effort if nonzero else 0.0, nonzero, detail, found)
+        self._judge(joint, bus, can_id, t, td, effort if nonzero else 0.0, nonzero, detail, found)
 
 
 def _mit_reading(shadow: MitActuator, data: bytes) -> tuple[float, float]:

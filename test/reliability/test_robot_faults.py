@@ -1,0 +1,296 @@
+"""Faults on the whole standard robot (SimRobot: can_bridge on rm_sim + rm_robot with every
+plugin, in this process), every frame on both buses checked by the unsafe-frame checker.
+
+* A motor goes silent: its command is zero on the wire within 100 ms (+ the checker's
+  real-time grace, see GRACE), the plugin that owns it goes to its safe state and names the
+  joint, and it comes back without a restart when the motor does.
+* A friction wheel stalls: the shooter does not feed (no ball against stopped wheels) and
+  the stalled wheel's current stays within its max_effort.
+* A wheel overheats: the bridge holds it at zero (OVER_TEMPERATURE on /diagnostics, MODE_OFF
+  on /actuator_states) while the others drive.
+* Bad plugin commands (NaN, ±inf, huge, unknown modes, stale stamps) on /chassis_cmd,
+  /vel_cmd, /gimbal_cmd and /shoot_cmd: rejected or clamped, nothing unsafe on the wire.
+
+One robot serves the module (start-up costs seconds); each test leaves it as it found it
+(faults cleared, commands stopped). The world runs in real time: waits on conditions,
+WAIT seconds at most.
+
+Covered elsewhere and not repeated: trigger jam -> BLOCK -> FEED and the jam fault
+(test/integration/test_shooter.py), chassis and gimbal command timeouts
+(test_chassis.py, test_gimbal.py), invalid /shoot_cmd (test_shooter.py).
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import pytest
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import Twist
+from rm_base.sim import Fault
+from support.robot import SimRobot
+
+from reliability.rigs import WireWatch, hardware_config
+from rm_msgs.msg import (
+    ActuatorState,
+    ChassisCmd,
+    ChassisState,
+    GimbalCmd,
+    GimbalState,
+    ShootCmd,
+    ShooterState,
+)
+
+pytestmark = [pytest.mark.ros, pytest.mark.slow]
+
+WAIT = 10.0  # [s] longest wait for a condition
+# [s] checker timing grace in real time. Generous: on this shared 2-vCPU VM a thread of
+# this process can lose the CPU for 100-300 ms (measured under parallel test load), and a
+# frame the scheduler decided on in time then reaches the wire that late. Exact timing is
+# asserted in lockstep (test_hardware_faults.py); the effort limits here have no grace.
+GRACE = 0.25
+
+# As test/integration/test_shooter.py: friction wheel and trigger loads and rotor speeds.
+BRIDGE = {
+    'joints.friction_l.sim.load_inertia': 4.5e-5,
+    'joints.friction_r.sim.load_inertia': 4.5e-5,
+    'joints.friction_l.max_velocity': 1000.0,
+    'joints.friction_r.max_velocity': 1000.0,
+    'joints.trigger.sim.load_inertia': 2e-4,
+}
+HOST = {'shooter.command_timeout': 0.5}
+
+
+@pytest.fixture(scope='module')
+def robot():
+    r = SimRobot('standard', overrides={'can_bridge': BRIDGE, 'rm_robot': HOST})
+    for topic, cls in (
+        ('/chassis_state', ChassisState),
+        ('/gimbal_state', GimbalState),
+        ('/shooter_state', ShooterState),
+    ):
+        r.subscribe(topic, cls, keep_history=True)
+    r.subscribe('/actuator_states', ActuatorState)
+    r.watch = WireWatch(
+        r.world, hardware_config(r.bridge_parameters), grace_s=GRACE, track_commands=True
+    )
+    r.watch.watch_commands(r.bridge.hardware)
+    yield r
+    r.watch.close()
+    r.close()
+
+
+@pytest.fixture(autouse=True)
+def clean(robot):
+    yield
+    for topic in ('/chassis_cmd', '/vel_cmd', '/gimbal_cmd', '/shoot_cmd'):
+        robot.stop_publishing(topic)
+    robot.world.clear_faults()
+    robot.watch.sync()
+    assert robot.watch.checker.violation_count == 0, '\n'.join(
+        map(str, robot.watch.checker.violations)
+    )
+
+
+def since(robot, topic, mark):
+    return robot.history(topic)[mark:]
+
+
+def state_of(robot, topic):
+    msg = robot.latest(topic)
+    return None if msg is None else msg.state
+
+
+def joint(robot, name):
+    return robot.joint(name)
+
+
+def drive_chassis(robot, vx=0.5):
+    robot.publish('/chassis_cmd', ChassisCmd(mode=ChassisCmd.RAW), rate_hz=50.0)
+    robot.publish('/vel_cmd', Twist(), rate_hz=50.0)  # replaced below with vx
+    vel = Twist()
+    vel.linear.x = vx
+    robot.publish('/vel_cmd', vel, rate_hz=50.0)
+
+
+def wheels_driven(robot):
+    return all(
+        joint(robot, w)['mode'] != 0 and joint(robot, w)['command'] != 0.0
+        for w in ('wheel_fl', 'wheel_fr', 'wheel_rl', 'wheel_rr')
+    )
+
+
+def test_when_a_wheel_goes_silent_expect_zero_and_the_chassis_passive_naming_it(robot):
+    drive_chassis(robot)
+    assert robot.wait_until(
+        lambda: state_of(robot, '/chassis_state') == ChassisCmd.RAW and wheels_driven(robot), WAIT
+    )
+    mark = len(robot.history('/chassis_state'))
+    episodes = len(robot.watch.checker.stats('wheel_fl').zero_latencies)
+    robot.world.inject('wheel_fl', Fault.offline())
+    assert robot.wait_until(lambda: not joint(robot, 'wheel_fl')['online'], WAIT)
+    assert robot.wait_until(lambda: state_of(robot, '/chassis_state') == ChassisCmd.PASSIVE, WAIT)
+    reasons = {m.reason for m in since(robot, '/chassis_state', mark)}
+    assert any('wheel_fl' in r for r in reasons), reasons
+    # on the wire: zero within the feedback timeout plus the grace (else a violation)
+    robot.watch.sync()
+    latencies = robot.watch.checker.stats('wheel_fl').zero_latencies[episodes:]
+    assert latencies and max(latencies) <= GRACE, latencies
+    # it comes back: RAW again, driving, no restart
+    robot.world.clear_faults('wheel_fl')
+    assert robot.wait_until(
+        lambda: state_of(robot, '/chassis_state') == ChassisCmd.RAW and wheels_driven(robot), WAIT
+    )
+
+
+def test_when_the_gimbal_yaw_goes_silent_expect_the_gimbal_passive_naming_it(robot):
+    robot.publish('/gimbal_cmd', GimbalCmd(mode=GimbalCmd.RATE, rate_yaw=0.5), rate_hz=50.0)
+    assert robot.wait_until(lambda: state_of(robot, '/gimbal_state') == GimbalCmd.RATE, WAIT)
+    mark = len(robot.history('/gimbal_state'))
+    robot.world.inject('yaw', Fault.offline())
+    assert robot.wait_until(lambda: state_of(robot, '/gimbal_state') == GimbalCmd.PASSIVE, WAIT)
+    reasons = {m.reason for m in since(robot, '/gimbal_state', mark)}
+    assert any('yaw' in r for r in reasons), reasons
+    assert robot.wait_until(lambda: joint(robot, 'yaw')['command'] == 0.0, WAIT)
+    robot.world.clear_faults('yaw')
+    assert robot.wait_until(lambda: state_of(robot, '/gimbal_state') == GimbalCmd.RATE, WAIT)
+
+
+def test_when_the_trigger_goes_silent_expect_the_shooter_passive_naming_it(robot):
+    robot.publish('/shoot_cmd', ShootCmd(mode=ShootCmd.READY, speed=15.0), rate_hz=50.0)
+    assert robot.wait_until(lambda: state_of(robot, '/shooter_state') == ShooterState.READY, WAIT)
+    mark = len(robot.history('/shooter_state'))
+    robot.world.inject('trigger', Fault.offline())
+    assert robot.wait_until(lambda: state_of(robot, '/shooter_state') == ShooterState.PASSIVE, WAIT)
+    reasons = {m.reason for m in since(robot, '/shooter_state', mark)}
+    assert any('trigger' in r for r in reasons), reasons
+    robot.world.clear_faults('trigger')
+    assert robot.wait_until(lambda: state_of(robot, '/shooter_state') == ShooterState.READY, WAIT)
+
+
+def test_when_a_friction_wheel_stalls_expect_no_shot_and_its_current_limited(robot):
+    # from rest: PASSIVE, and /actuator_states showing the stall (a locked rotor stops at
+    # once in the sim; a burst within one state period would still see it turning)
+    robot.publish('/shoot_cmd', ShootCmd(mode=ShootCmd.PASSIVE), rate_hz=50.0)
+    assert robot.wait_until(lambda: state_of(robot, '/shooter_state') == ShooterState.PASSIVE, WAIT)
+    robot.world.inject('friction_l', Fault.jam())  # locked: it can never reach speed
+    assert robot.wait_until(lambda: joint(robot, 'friction_l')['velocity'] == 0.0, WAIT)
+    fired = robot.latest('/shooter_state').shots_fired
+    push = ShootCmd(mode=ShootCmd.PUSH, speed=15.0, hz=10.0, num=3, burst_id=901)
+    robot.publish('/shoot_cmd', push, rate_hz=50.0)
+    # FEED (no ball yet) or PUSH (a ball at the switch): either way it waits for the wheels
+    assert robot.wait_until(
+        lambda: (
+            (s := robot.latest('/shooter_state')) is not None
+            and s.state in (ShooterState.FEED, ShooterState.PUSH)
+            and 'friction wheels' in s.reason
+        ),
+        WAIT,
+    ), robot.latest('/shooter_state')
+    trigger = robot.world.motor('trigger').model
+    assert robot.wait_until(lambda: abs(trigger.velocity) < 0.01, WAIT)  # settled
+    angle = trigger.angle
+    deadline = time.monotonic() + 1.0
+    while time.monotonic() < deadline:  # a second of waiting: the trigger stays put
+        assert abs(trigger.angle - angle) < 0.05
+        time.sleep(0.02)
+    assert robot.latest('/shooter_state').shots_fired == fired
+    # the stalled wheel gets its velocity loop's full output, never more than max_effort
+    robot.watch.sync()
+    seen = robot.watch.checker.stats('friction_l').max_effort_seen
+    assert 0.25 <= seen <= 0.3 * 1.01, seen  # standard.yaml friction max_effort 0.3 N·m
+
+
+def test_when_a_wheel_overheats_expect_it_held_at_zero_while_the_others_drive(robot):
+    drive_chassis(robot)
+    assert robot.wait_until(lambda: wheels_driven(robot), WAIT)
+    robot.world.inject('wheel_rr', Fault.over_temperature(130.0))  # limit 80 °C
+    assert robot.wait_until(
+        lambda: joint(robot, 'wheel_rr')['mode'] == 0 and joint(robot, 'wheel_rr')['command'] == 0,
+        WAIT,
+    )
+    assert joint(robot, 'wheel_rr')['temperature'] == 130.0
+    assert robot.bridge.hardware.actuators['wheel_rr'].hold_reason.value == 'over_temperature'
+    others = ('wheel_fl', 'wheel_fr', 'wheel_rl')
+    assert all(joint(robot, w)['command'] != 0.0 for w in others)
+    # the chassis does not look at temperatures: it stays in RAW on three wheels
+    robot.world.inject('wheel_rr', Fault.over_temperature(60.0))
+    assert robot.wait_until(lambda: wheels_driven(robot), WAIT)
+
+
+def _stamp(robot, offset_s):
+    t = robot.driver.get_clock().now().nanoseconds + round(offset_s * 1e9)
+    return Time(sec=t // 1_000_000_000, nanosec=t % 1_000_000_000)
+
+
+BAD_CHASSIS = [
+    ChassisCmd(mode=9),
+    ChassisCmd(mode=ChassisCmd.RAW, power_limit=math.nan),
+    ChassisCmd(mode=ChassisCmd.GYRO, follow_source='nowhere'),
+]
+BAD_GIMBAL = [
+    GimbalCmd(mode=7),
+    GimbalCmd(mode=GimbalCmd.RATE, rate_yaw=math.nan),
+    GimbalCmd(mode=GimbalCmd.RATE, rate_pitch=-math.inf),
+]
+BAD_SHOOTER = [
+    ShootCmd(mode=5, speed=15.0),
+    ShootCmd(mode=ShootCmd.PUSH, speed=math.inf, hz=10.0, num=3, burst_id=1),
+    ShootCmd(mode=ShootCmd.READY, speed=-1.0),
+]
+
+
+def test_when_plugin_commands_are_invalid_or_stale_expect_every_plugin_passive(robot):
+    for topic, messages in (
+        ('/chassis_cmd', BAD_CHASSIS),
+        ('/gimbal_cmd', BAD_GIMBAL),
+        ('/shoot_cmd', BAD_SHOOTER),
+    ):
+        for msg in messages:
+            robot.publish(topic, msg, rate_hz=100.0)
+            time.sleep(0.15)
+    # valid commands, but stamped 5 s ago: stale on arrival
+    for topic, msg in (
+        ('/chassis_cmd', ChassisCmd(mode=ChassisCmd.RAW)),
+        ('/gimbal_cmd', GimbalCmd(mode=GimbalCmd.RATE, rate_yaw=1.0)),
+        ('/shoot_cmd', ShootCmd(mode=ShootCmd.READY, speed=15.0)),
+    ):
+        robot.stop_publishing(topic)
+        pub = robot.driver.create_publisher(type(msg), topic, 10)
+        end = time.monotonic() + 0.5
+        while time.monotonic() < end:
+            msg.header.stamp = _stamp(robot, -5.0)
+            pub.publish(msg)
+            time.sleep(0.01)
+    for topic, passive in (
+        ('/chassis_state', ChassisCmd.PASSIVE),
+        ('/gimbal_state', GimbalCmd.PASSIVE),
+        ('/shooter_state', ShooterState.PASSIVE),
+    ):
+        assert state_of(robot, topic) == passive, (topic, robot.latest(topic))
+    for name in ('wheel_fl', 'yaw', 'pitch', 'friction_l', 'trigger'):
+        assert joint(robot, name)['command'] == 0.0, name
+
+
+def test_when_plugin_commands_are_huge_expect_outputs_within_every_limit(robot):
+    vel = Twist()
+    vel.linear.x, vel.linear.y, vel.angular.z = 1e9, -1e12, 1e300
+    robot.publish('/chassis_cmd', ChassisCmd(mode=ChassisCmd.RAW), rate_hz=50.0)
+    robot.publish('/vel_cmd', vel, rate_hz=50.0)
+    robot.publish(
+        '/gimbal_cmd', GimbalCmd(mode=GimbalCmd.RATE, rate_yaw=1e9, rate_pitch=-1e9), rate_hz=50.0
+    )
+    robot.publish(
+        '/shoot_cmd',
+        ShootCmd(mode=ShootCmd.PUSH, speed=1e9, hz=1e9, num=2, burst_id=77),
+        rate_hz=50.0,
+    )
+    assert robot.wait_until(lambda: wheels_driven(robot), WAIT)
+    time.sleep(1.0)  # let every loop run into its limits (the checker watches all along)
+    robot.watch.sync()
+    limits = {j.name: j.max_effort for j in robot.bridge.hardware.actuators.values()}
+    for name, limit in limits.items():
+        assert robot.watch.checker.stats(name).max_effort_seen <= limit * 1.01 + 1e-3, name
+    shooter = robot.latest('/shooter_state')
+    assert shooter.shots_fired <= 2 + robot.history('/shooter_state')[0].shots_fired + 2
