@@ -304,10 +304,14 @@ def test_pitch_never_drives_past_its_limits(sim):
     s = sim()
     cfg = s.gimbal.config
     s.command(GimbalCmd.RATE, rate_pitch=2.0)  # down at 2 rad/s
+    # Near a limit the joint slows down to limit_gain * (distance to the limit), 10 1/s:
+    # the last 0.02 rad take about 0.3 s, hence the half second of settling.
     assert s.robot.wait_until(lambda: abs(s.barrel()[1] - cfg.pitch_max) < 0.02, WAIT)
+    s.settle(0.5)
     lows, why_low = s.sample(lambda: s.barrel()[1], GimbalCmd.RATE, 1.0)
     s.command(GimbalCmd.RATE, rate_pitch=-2.0)  # up
     assert s.robot.wait_until(lambda: abs(s.barrel()[1] - cfg.pitch_min) < 0.02, WAIT)
+    s.settle(0.5)
     highs, why_high = s.sample(lambda: s.barrel()[1], GimbalCmd.RATE, 1.0)
     # The target is clamped to the limits and the joint velocity is bounded near them, so
     # the barrel rests at the limit: within 0.02 rad of it, never more than that beyond.
