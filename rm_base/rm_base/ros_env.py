@@ -13,15 +13,17 @@ rclpy's own SIGINT handler shuts the context down before ``main`` regains contro
 context is invalid"), so a node could not command zero output on the way down. With
 Python's default handler the KeyboardInterrupt reaches ``main`` while the context still
 works; ``main`` publishes its last messages, then calls ``rclpy.try_shutdown()``.
-No rclpy import here.
+No rclpy import here (PyYAML only, to check parameter files before rcl reads them).
 """
 
 from __future__ import annotations
 
 import os
 import signal
-from collections.abc import MutableMapping
+from collections.abc import MutableMapping, Sequence
 from types import FrameType
+
+import yaml
 
 DISCOVERY_RANGE_VAR = 'ROS_AUTOMATIC_DISCOVERY_RANGE'
 
@@ -45,3 +47,46 @@ def prepare_ros_process(environ: MutableMapping[str, str] | None = None) -> None
     use_localhost_discovery(environ)
     signal.signal(signal.SIGINT, signal.default_int_handler)
     signal.signal(signal.SIGTERM, _raise_keyboard_interrupt)
+
+
+def init_error_line(err: BaseException) -> str:
+    """One line for the operator from a failed ``rclpy.init``.
+
+    rcl's message (e.g. for a params file that is not valid YAML) without the source
+    locations it appends (``, at /project/src/...``).
+    """
+    text = ' '.join(str(err).split())
+    return text.split(', at /', 1)[0].rstrip(' ,')
+
+
+def params_file_error(args: Sequence[str]) -> str | None:
+    """Check every ``--params-file`` in a ROS command line before rcl reads it.
+
+    rcl logs an error of its own and raises a long message for a params file it cannot
+    parse; this gives the operator one line naming the file and the place instead.
+
+    Args:
+        args: the process arguments (``sys.argv`` or what is passed to ``rclpy.init``).
+
+    Returns:
+        None if every params file is readable YAML without anchors, else one line.
+    """
+    files = [args[i + 1] for i, arg in enumerate(args[:-1]) if arg == '--params-file']
+    for path in files:
+        try:
+            with open(path, encoding='utf-8') as stream:
+                for event in yaml.parse(stream):
+                    if isinstance(event, yaml.AliasEvent):
+                        line = event.start_mark.line + 1
+                        return (
+                            f'{path}:{line}: YAML anchors and aliases are not supported in '
+                            'ROS 2 parameter files; spell the values out'
+                        )
+        except OSError as err:
+            return f'cannot read parameter file {path}: {err.strerror}'
+        except yaml.YAMLError as err:
+            mark = getattr(err, 'problem_mark', None)
+            where = f'{path}:{mark.line + 1}:{mark.column + 1}' if mark else path
+            problem = getattr(err, 'problem', None) or str(err)
+            return f'{where}: not valid YAML: {problem}'
+    return None

@@ -27,7 +27,7 @@ from rclpy.signals import SignalHandlerOptions
 from rm_base.bridge import CanBridgeNode
 from rm_base.errors import ConfigError
 from rm_base.host.node import RobotHost
-from rm_base.ros_env import prepare_ros_process
+from rm_base.ros_env import init_error_line, params_file_error, prepare_ros_process
 
 from rm_bringup.status import StatusView
 
@@ -123,7 +123,15 @@ def main(argv: list[str] | None = None) -> int:
     for path in files:
         ros_args += ['--params-file', str(path)]
     # rclpy's handlers would shut the context down before the zero commands go out.
-    rclpy.init(args=['bringup', *ros_args], signal_handler_options=SignalHandlerOptions.NO)
+    bad_file = params_file_error(ros_args)
+    if bad_file is not None:
+        print(f'[bringup] configuration error: {bad_file}', file=sys.stderr)
+        return 1
+    try:
+        rclpy.init(args=['bringup', *ros_args], signal_handler_options=SignalHandlerOptions.NO)
+    except RuntimeError as err:  # rcl's RCLError, e.g. a params file that is not YAML
+        print(f'[bringup] configuration error: {init_error_line(err)}', file=sys.stderr)
+        return 1
     bridge = host = None
     try:
         bridge = CanBridgeNode()

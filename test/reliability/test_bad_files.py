@@ -233,12 +233,6 @@ def test_a_bridge_params_file_without_buses_is_one_line_and_exit_1(tmp_path):
 
 @pytest.mark.ros
 @pytest.mark.slow
-@pytest.mark.xfail(
-    strict=True,
-    reason='FOUND: rclpy.init raises RCLError on a params file that is not valid YAML and '
-    'the three executables print its traceback (exit 1) instead of one line; not a motor '
-    'safety issue, left to the owners of main.py/bringup.py (see README, Reliability)',
-)
 @pytest.mark.parametrize('tool', ['can_bridge', 'rm_robot', 'bringup'])
 def test_a_params_file_that_is_not_yaml_is_one_line_and_exit_1(tmp_path, tool):
     path = tmp_path / 'robot.yaml'

@@ -13,7 +13,7 @@ from rclpy.signals import SignalHandlerOptions
 from rm_base.bridge.node import NODE_NAME, CanBridgeNode
 from rm_base.errors import ConfigError
 from rm_base.hardware import BusError
-from rm_base.ros_env import prepare_ros_process
+from rm_base.ros_env import init_error_line, params_file_error, prepare_ros_process
 
 # How long one spin_once may block [s]; bounds the reaction to SIGINT/SIGTERM.
 _SPIN_TIMEOUT = 0.1
@@ -59,7 +59,15 @@ def main(args: list[str] | None = None) -> int:
     sys.setswitchinterval(min(sys.getswitchinterval(), _GIL_SWITCH_INTERVAL))
     # rclpy's signal handlers would shut the context down before the node could publish
     # its final states; Python's KeyboardInterrupt leaves the shutdown to the finally below.
-    rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    bad_file = params_file_error(sys.argv if args is None else args)
+    if bad_file is not None:
+        print(f'[{NODE_NAME}] configuration error: {bad_file}', file=sys.stderr)
+        return 1
+    try:
+        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
+    except RuntimeError as err:  # rcl's RCLError, e.g. a params file that is not YAML
+        print(f'[{NODE_NAME}] configuration error: {init_error_line(err)}', file=sys.stderr)
+        return 1
     package_logger = logging.getLogger('rm_base')
     handler = RosLogHandler(rclpy.logging.get_logger(NODE_NAME))
     package_logger.addHandler(handler)
