@@ -13,6 +13,10 @@ A scenario is what an operator (or a planner) did, written down as data:
 - ``faults``: what the harness does to the simulated world during the replay, at bag time
   (the fault schedule lives here, not in the bag, since no ROS message carries it).
 - ``tail_s``: how long the harness keeps recording after the last command.
+- ``record``: the robot's output topics the harness records (the sim's ground truth is
+  always sampled). Only what the tests need: every subscription is one more callback in
+  the robot's single executor, which under load delivers late to the plugins too (the
+  GYRO replay measured /odom 0.1-1 s late with every output recorded).
 
 Simulated loads: standard_sim.yaml leaves every motor with no load but its rotor, which
 makes the loops the robot config was tuned for (wheels carrying a 16 kg robot, friction
@@ -33,6 +37,8 @@ from typing import Any
 DATA_DIR = Path(__file__).resolve().parents[1] / 'data'  # test/data/<scenario>/: the bags
 RATE_HZ = 50.0  # [Hz] command rate of a live commander (RoboMaster clients send 50-100 Hz)
 TOPIC_OFFSET_NS = 1_000_000  # [ns] between the streams of different topics
+
+OUTPUT_TOPICS = ('/odom', '/chassis_state', '/gimbal_state', '/shooter_state', '/actuator_states')
 
 CHASSIS_CMD = ('/chassis_cmd', 'rm_msgs/msg/ChassisCmd')
 VEL_CMD = ('/vel_cmd', 'geometry_msgs/msg/Twist')
@@ -75,15 +81,16 @@ class Command:
 class Jam:
     """A ball wedged in a mechanism: ``motor`` locks at ``at_s`` [s of bag time].
 
-    The jam holds while the motor pushes forward and frees once it pushes back, as a
-    wedged ball comes free when the trigger reverses: the harness clears it when the
-    motor's torque falls below ``frees_below`` [N*m] (the sim's electromagnetic torque at
-    the output shaft; negative = against the feed direction).
+    The ball wedges when the motor drives into it and comes free when the motor backs
+    off, as a jammed trigger is freed by reversing: the harness clears the jam once the
+    motor, after pushing forward with at least ``torque`` [N*m], pushes back with at least
+    as much (the sim's electromagnetic torque at the output shaft; positive = the feed
+    direction). Pushes back before that (the end of a slot step braking) do not free it.
     """
 
     motor: str
     at_s: float
-    frees_below: float = -0.5
+    torque: float = 0.5
 
 
 @dataclass(frozen=True)
@@ -105,6 +112,7 @@ class Scenario:
     commands: tuple[Command, ...]
     faults: tuple[Jam, ...] = ()
     tail_s: float = 1.0
+    record: tuple[str, ...] = OUTPUT_TOPICS
 
     @property
     def end_s(self) -> float:
@@ -229,6 +237,7 @@ SQUARE = Scenario(
         *_streams(VEL_CMD, *_square_legs()),
     ),
     tail_s=1.0,
+    record=('/odom', '/chassis_state'),
 )
 
 # -- 2. GYRO with the gimbal tracking a world point -----------------------------------------------
@@ -243,11 +252,17 @@ GYRO_STOP_END_S = 7.0
 # ~4x as costly as on the real robot; 500 W keeps the power limit out of the way.
 GYRO_POWER_LIMIT = 500.0  # [W]
 
+# The simulated Hi220 at 200 frames/s instead of 400 (as test_gimbal.py runs it): this
+# replay runs three plugins, the 1 kHz sim and bridge and the IMU stream in one process,
+# and every IMU frame is read, parsed and delivered to two plugins by the one executor.
+GYRO_IMU_RATE = 200.0  # [Hz]
+
 GYRO_TRACK = Scenario(
     name='gyro_track',
     description='GYRO spin in place for 4.5 s, gimbal TRACK on a point in odom',
     robot=Robot(
-        plugins=('imu', 'chassis', 'gimbal'), overrides={'can_bridge': SIM_LOADS['chassis']}
+        plugins=('imu', 'chassis', 'gimbal'),
+        overrides={'can_bridge': {**SIM_LOADS['chassis'], 'sim.imu.rate_hz': GYRO_IMU_RATE}},
     ),
     commands=(
         *_streams(
@@ -273,6 +288,7 @@ GYRO_TRACK = Scenario(
         *_streams(VEL_CMD, (0.0, GYRO_STOP_END_S, _twist())),
     ),
     tail_s=0.5,
+    record=('/gimbal_state',),
 )
 
 # -- 3. a five-shot burst with a jam --------------------------------------------------------------
@@ -285,10 +301,22 @@ BURST_PASSIVE_END_S = 5.0
 BURST_SHOTS = 5
 JAM_AT_S = BURST_START_S + 0.5
 
+# The shooter's command watchdog: 0.5 s instead of the robot's 0.2 s, as in
+# test_shooter.py: on this shared 2-core VM the whole process (sim, bridge, five plugin
+# threads, the player) stalls for 0.2-0.35 s now and then, which would time the command
+# out and (by design) abandon the burst.
+SHOOTER_COMMAND_TIMEOUT = 0.5  # [s]
+
 BURST_JAM = Scenario(
     name='burst_jam',
     description='READY, PUSH 5 shots at 5 Hz with a trigger jam 0.5 s in, then PASSIVE',
-    robot=Robot(plugins=('gpio', 'shooter'), overrides={'can_bridge': SIM_LOADS['shooter']}),
+    robot=Robot(
+        plugins=('gpio', 'shooter'),
+        overrides={
+            'can_bridge': SIM_LOADS['shooter'],
+            'rm_robot': {'shooter.command_timeout': SHOOTER_COMMAND_TIMEOUT},
+        },
+    ),
     commands=_streams(
         SHOOT_CMD,
         (0.0, BURST_START_S, {'mode': 'ready', 'speed': 15.0}),
@@ -301,10 +329,13 @@ BURST_JAM = Scenario(
     ),
     faults=(Jam('trigger', JAM_AT_S),),
     tail_s=0.5,
+    record=('/shooter_state', '/actuator_states'),
 )
 
 # -- 4. command dropout while driving -------------------------------------------------------------
-# RAW at 1 m/s forward; every command stops at 2 s (the commander died).
+# RAW at 1 m/s forward; every command stops at 2 s (the commander died). The chassis goes
+# PASSIVE (limp) after its command_timeout and coasts to a stop on the motors' friction
+# (~3 s from 1 m/s on the sim), which the 4 s of recording after the bag cover.
 DROPOUT_AT_S = 2.0
 
 DROPOUT = Scenario(
@@ -315,7 +346,8 @@ DROPOUT = Scenario(
         *_streams(CHASSIS_CMD, (0.0, DROPOUT_AT_S, {'mode': 'raw'})),
         *_streams(VEL_CMD, (0.0, DROPOUT_AT_S, _twist(vx=1.0))),
     ),
-    tail_s=2.0,
+    tail_s=4.0,
+    record=('/chassis_state', '/actuator_states'),
 )
 
 SCENARIOS: dict[str, Scenario] = {s.name: s for s in (SQUARE, GYRO_TRACK, BURST_JAM, DROPOUT)}
