@@ -57,7 +57,7 @@ MODE_POWER = 500.0  # [W] power limit of the motion-mode tests (not binding)
 # disturbed [s]: rm_sim catches up a lag below 50 ms in a burst of ticks (run with the
 # controllers' last commands) and lets its clock slip past that, while the plugin's ramps,
 # PIDs and look-ahead run on real time, as on a robot, whose physics never waits.
-SIM_LAG = 0.03
+SIM_LAG = 0.06
 
 
 # -- rig ----------------------------------------------------------------------------------------
@@ -102,6 +102,7 @@ class Samples(list):
     def __init__(self) -> None:
         super().__init__()
         self.disturbed: list[str] = []
+        self.reasons: list[str] = []
 
 
 class ChassisRig:
@@ -117,7 +118,9 @@ class ChassisRig:
             'standard', plugins=['chassis'],
             overrides={
                 'can_bridge': sim_loads(yaw_joint),
-                'rm_robot': {f'chassis.{k}': v for k, v in (chassis or {}).items()},
+                # /chassis_state and /odom at 50 Hz: plenty to watch, less load.
+                'rm_robot': {f'chassis.{k}': v
+                             for k, v in {'publish_rate': 50.0, **(chassis or {})}.items()},
             },
         )
         self.world = self.robot.world
@@ -215,15 +218,16 @@ class ChassisRig:
         with self.world.lock:
             return tuple(self.world.body.twist)
 
-    def record(self, seconds: float, period: float = 0.004) -> Samples:
+    def record(self, seconds: float, period: float = 0.01) -> Samples:
         """Sample (sim time [s], x, y, yaw, yaw joint, vx, vy, wz) for seconds of sim time.
 
         The result says whether the window was disturbed: the sim's clock moved against
         real time by more than SIM_LAG (a burst to catch up, or a slip), or the plugin
-        changed state (e.g. PASSIVE after a stall longer than a timeout).
+        changed state (e.g. PASSIVE after a stall longer than a timeout; the reasons are
+        kept in ``samples.reasons``).
         """
         samples = Samples()
-        states = set()
+        states = {}
         lags = []
         overruns = self.world.overruns
         with self.world.lock:
@@ -235,7 +239,7 @@ class ChassisRig:
                 samples.append((now_ns / 1e9, body.x, body.y, body.yaw, body.gimbal_yaw,
                                 *body.twist))
                 lags.append(time.monotonic() - now_ns / 1e9)
-            states.add(self.plugin.state)
+            states.setdefault(self.plugin.state, self.plugin.reason)
             if now_ns >= end_ns:
                 break
             time.sleep(period)
@@ -246,27 +250,37 @@ class ChassisRig:
             samples.disturbed.append(
                 f'the sim fell {1e3 * (max(lags) - min(lags)):.0f} ms behind real time')
         if len(states) > 1:
-            samples.disturbed.append(f'the plugin changed state: {sorted(s.name for s in states)}')
+            samples.disturbed.append(
+                'the plugin changed state: '
+                + '; '.join(f'{s.name} ({why})' for s, why in states.items()))
+            samples.reasons.extend(states.values())
         return samples
 
     def clean(self, maneuver: Callable[[], Samples], attempts: int = 3, *,
-              allow_skips: bool = False) -> Samples:
+              allow_sim_timing: bool = False) -> Samples:
         """Run maneuver (which returns a recording) until a recording is undisturbed.
 
-        The CPU of this machine is shared and bursty: a stall longer than a timeout sends
-        the chassis to PASSIVE (as it should), and one longer than 50 ms makes the sim
-        skip ahead. Such a window says nothing about the plugin, so it is run again; the
-        last recording is returned if every attempt was disturbed (the assertions then
-        decide, and the reasons are printed). allow_skips: only a change of state counts
-        (for a measurement that the sim's timing does not spoil).
+        The CPU of this machine is shared and bursty. A stall longer than a timeout sends
+        the chassis to PASSIVE (as it should), and rm_sim bursts to catch up a lag below
+        50 ms and lets its clock slip past that, while the plugin runs on real time. Such
+        a window says nothing about the plugin, so it is run again. If every attempt was
+        disturbed that way, the machine is too loaded for this measurement: the test is
+        skipped, saying so. A fall-back for any other reason (a failed tick) fails it.
+        allow_sim_timing: only a change of state counts (for a measurement that the
+        sim's timing does not spoil).
         """
-        for attempt in range(attempts):
+        seen = []
+        for _ in range(attempts):
             samples = maneuver()
-            disturbed = [d for d in samples.disturbed if not (allow_skips and 'sim' in d)]
+            failures = [why for why in samples.reasons if why.startswith('run failed')]
+            assert not failures, f'the plugin failed: {failures}'
+            disturbed = [d for d in samples.disturbed
+                         if not (allow_sim_timing and d.startswith('the sim'))]
             if not disturbed:
                 return samples
-            print(f'attempt {attempt + 1} disturbed: {"; ".join(disturbed)}')
-        return samples
+            seen.append('; '.join(disturbed))
+            print(f'attempt {len(seen)} disturbed: {seen[-1]}')
+        pytest.skip(f'machine too loaded: all {attempts} attempts disturbed ({" | ".join(seen)})')
 
 
 @pytest.fixture
@@ -341,6 +355,7 @@ def test_when_raw_forward_expect_every_wheel_at_v_over_r_and_the_body_moving_for
     samples = r.clean(drive)
     # The body moves +x at 1 m/s (+-5 %), no sideways drift, no turn.
     (t0, x0, y0, *_), (t1, x1, y1, yaw1, *_) = samples[0], samples[-1]
+    print(f'measured RAW: {(x1 - x0) / (t1 - t0):.3f} m/s, wheels {r.joints()}')
     assert (x1 - x0) / (t1 - t0) == pytest.approx(1.0, rel=0.05)
     assert abs(y1 - y0) < 0.01 and abs(yaw1) < 0.01
     assert r.state() == ChassisCmd.RAW
@@ -393,9 +408,12 @@ def test_when_following_a_gimbal_turned_left_expect_the_chassis_to_turn_under_it
     start_phi = samples[0][4]
     assert start_phi > 0.75
     # The chassis yaw converges to the gimbal's: |yaw joint| < 0.03 rad, turning < 0.1
-    # rad/s, within 2 s (PID kp 6/s: time constant ~0.2 s, plus the rate and ramp limits).
+    # rad/s, within 2 s (PID kp 10/s: time constant 0.1 s, plus the rate and ramp limits;
+    # ~0.35 s measured).
     settled = [s for s in samples if abs(s[4]) < 0.03 and abs(s[7]) < 0.1]
     assert settled, f'not settled in 3 s: yaw joint {samples[-1][4]:.3f} rad'
+    print(f'measured FOLLOW: settled after {settled[0][0] - samples[0][0]:.2f} s, final '
+          f'yaw joint {samples[-1][4]:.4f} rad')
     assert settled[0][0] - samples[0][0] < 2.0
     # ... and stays: the chassis ends under the gimbal, whose world heading never moved.
     gimbal = samples[0][3] + samples[0][4]
@@ -418,18 +436,19 @@ def test_when_twisting_expect_the_chassis_to_swing_about_the_gimbal_with_the_amp
 
     # A sim skip shifts the phase of the swing but not its size, so only a change of state
     # spoils a recording here.
-    samples = r.clean(swing, attempts=4, allow_skips=True)
+    samples = r.clean(swing, attempts=4, allow_sim_timing=True)
     t = np.array([s[0] for s in samples])
     # Chassis heading - gimbal heading = -phi, wrapped (the joint angle is multi-turn).
     heading = np.array([wrap_to_pi(-s[4]) for s in samples])
     # Per period: half the peak-to-peak is the amplitude, the mid-point the centre. The
     # chassis swings about the gimbal heading (centre within 0.05 rad) with the configured
-    # amplitude, +-0.1 rad (the heading PID lags the 0.6 rad, 1.2 s sine by ~8 % here).
+    # amplitude, +-0.1 rad (0.55-0.61 measured: the wheel loops lag the 1.2 s swing).
     amplitudes, centres = [], []
     for k in range(3):
         window = heading[(t >= t[0] + k * period) & (t < t[0] + (k + 1) * period)]
         amplitudes.append((window.max() - window.min()) / 2.0)
         centres.append((window.max() + window.min()) / 2.0)
+    print(f'measured TWIST: amplitudes {np.round(amplitudes, 3)}, centres {np.round(centres, 3)}')
     assert float(np.median(amplitudes)) == pytest.approx(amplitude, abs=0.1)
     assert abs(float(np.median(centres))) < 0.05
     # It swings with that period: the heading crosses the centre twice per period (5 or
@@ -454,6 +473,9 @@ def test_when_gyro_while_translating_expect_the_spin_rate_and_a_fixed_world_dire
 
     samples = r.clean(spin_and_drive)
     (t0, x0, y0, yaw0, *_), (t1, x1, y1, yaw1, *_) = samples[0], samples[-1]
+    print(f'measured GYRO: spin {(yaw1 - yaw0) / (t1 - t0):.3f} rad/s, speed '
+          f'{math.hypot(x1 - x0, y1 - y0) / (t1 - t0):.3f} m/s, direction '
+          f'{math.atan2(y1 - y0, x1 - x0):.4f} rad')
     # Spin rate within 3 %, over ~1.5 turns.
     assert (yaw1 - yaw0) / (t1 - t0) == pytest.approx(spin, rel=0.03)
     # The robot moves at 1 m/s (+-5 %) along the gimbal's heading, 0.3 rad (+-0.05 rad;
@@ -484,6 +506,8 @@ def test_when_gyro_follows_base_link_expect_translation_along_the_heading_at_ent
 
     samples = r.clean(enter_and_drive)
     (t0, x0, y0, *_), (t1, x1, y1, *_) = samples[0], samples[-1]
+    print(f'measured GYRO base_link: direction {math.atan2(y1 - y0, x1 - x0) - entry[-1]:.4f} '
+          f'rad from the heading at entry')
     # Along the heading at entry, +-0.05 rad, at 1 m/s (+-5 %), in a straight line.
     assert wrap_to_pi(math.atan2(y1 - y0, x1 - x0) - entry[-1]) == pytest.approx(0.0, abs=0.05)
     assert math.hypot(x1 - x0, y1 - y0) / (t1 - t0) == pytest.approx(1.0, rel=0.05)
@@ -539,6 +563,8 @@ def test_when_a_command_limits_acceleration_expect_the_measured_slope_within_it(
     # not much below: the ramp is what limits it, -15 %).
     ramp = (v > 0.4) & (v < 1.6)
     slope = np.polyfit(t[ramp], v[ramp], 1)[0]
+    print(f'measured accel: slope {slope:.3f} m/s^2, most ahead of the ramp '
+          f'{float(np.max(v - 2.0 * (t - t[0]))):.3f} m/s')
     assert 2.0 * 0.85 <= slope <= 2.0 * 1.10
     # And never ahead of the ramp that started with the command: v(t) <= 2 m/s^2 * t
     # + 0.05 m/s (where the wheel PI loops catch up after a lag or a stalled tick, the
@@ -578,6 +604,8 @@ def test_when_accelerating_hard_expect_the_estimated_power_under_the_limit(rig):
                                                [msg.velocity[i] for i in index])))
     assert len(wire) > 50
     powers = [p for _, p in wire]
+    print(f'measured power: plugin max {max(s.power for s in states):.2f} W, wire max '
+          f'{max(powers):.2f} W, wire mean {sum(powers) / len(powers):.2f} W')
     assert max(powers) <= limit * 1.30
     stamps = [t for t, _ in wire]
     for k, t in enumerate(stamps):
@@ -607,6 +635,8 @@ def test_when_chassis_cmd_stops_expect_passive_within_the_timeout(rig):
     # one report period, CPU steal) after the last command's stamp.
     first = next(s for s in r.history('/chassis_state', since) if s.state == ChassisCmd.PASSIVE)
     stamp_ns = first.header.stamp.sec * 1_000_000_000 + first.header.stamp.nanosec
+    latency = (stamp_ns - last_stamp_ns) / 1e9
+    print(f'measured dropout: PASSIVE {latency:.3f} s after the last command')
     assert (stamp_ns - last_stamp_ns) / 1e9 <= timeout + 0.25
     assert 'no command on /chassis_cmd' in first.reason
     assert r.wait_until(
@@ -633,6 +663,7 @@ def test_when_vel_cmd_stops_expect_a_stop_on_the_brake_ramp_not_passive(rig):
     brake = chassis_section()['ramp.linear.brake_acceleration']
     falling = (v < 1.2) & (v > 0.3)
     slope = np.polyfit(t[falling], v[falling], 1)[0]
+    print(f'measured brake: {slope:.3f} m/s^2')
     assert slope == pytest.approx(-brake, rel=0.2)
     assert abs(v[-1]) < 0.05
 
@@ -676,6 +707,8 @@ def test_when_driving_a_square_expect_odom_on_the_sim_pose(rig):
     odom = r.latest('/odom')
     position = odom.pose.pose.position
     q = odom.pose.pose.orientation
+    print(f'measured odometry: error {position.x - x:.4f}, {position.y - y:.4f} m after a path '
+          f'to ({x:.2f}, {y:.2f}, {yaw:.2f})')
     # Wheel odometry on a slip-free sim: within 2 cm and 0.02 rad after ~3.5 m and 90°.
     assert position.x == pytest.approx(x, abs=0.02)
     assert position.y == pytest.approx(y, abs=0.02)
@@ -734,6 +767,8 @@ def test_when_an_imu_on_the_gimbal_drifts_expect_the_odom_yaw_to_follow_it(rig):
     drift['since'] = time.monotonic()
     error = spin_then_stop(1.0)
     assert drift['total'] > 0.25
+    print(f'measured IMU: reference error {reference:.4f} rad, drift {drift["total"]:.3f} '
+          f'rad followed to {error - reference:.4f} rad')
     assert error - reference == pytest.approx(drift['total'], abs=0.08)
 
 

@@ -219,7 +219,7 @@ def read_config(p: PluginParams) -> ChassisConfig:
     )
     follow_gains = _pid(
         p, 'follow.pid', 'rad', 'rad/s', angle=True,
-        defaults={'kp': 6.0, 'ki': 0.0, 'kd': 0.3, 'output_limit': 8.0,
+        defaults={'kp': 10.0, 'ki': 0.0, 'kd': 0.0, 'output_limit': 8.0,
                   'integral_limit': 1.0, 'integral_separation': 0.3},
     )
     follow = FollowParams(
