@@ -21,13 +21,11 @@ import sys
 import time
 
 import rclpy
-from rclpy.executors import ExternalShutdownException
 from rclpy.experimental import EventsExecutor
-from rclpy.signals import SignalHandlerOptions
 from rm_base.bridge import CanBridgeNode
 from rm_base.errors import ConfigError
 from rm_base.host.node import RobotHost
-from rm_base.ros_env import init_error_line, params_file_error, prepare_ros_process
+from rm_base.node_main import init_ros, spin_until_shutdown
 
 from rm_bringup.status import StatusView
 
@@ -113,7 +111,6 @@ class _StatusPrinter:
 def main(argv: list[str] | None = None) -> int:
     """Run the robot until Ctrl-C/SIGTERM (or --duration); return the exit status."""
     args = parse_args(sys.argv[1:] if argv is None else argv)
-    prepare_ros_process()
     try:
         files = parameter_files(args.robot, args.config, args.sim)
     except ConfigError as err:
@@ -122,15 +119,7 @@ def main(argv: list[str] | None = None) -> int:
     ros_args = ['--ros-args']
     for path in files:
         ros_args += ['--params-file', str(path)]
-    # rclpy's handlers would shut the context down before the zero commands go out.
-    bad_file = params_file_error(ros_args)
-    if bad_file is not None:
-        print(f'[bringup] configuration error: {bad_file}', file=sys.stderr)
-        return 1
-    try:
-        rclpy.init(args=['bringup', *ros_args], signal_handler_options=SignalHandlerOptions.NO)
-    except RuntimeError as err:  # rcl's RCLError, e.g. a params file that is not YAML
-        print(f'[bringup] configuration error: {init_error_line(err)}', file=sys.stderr)
+    if not init_ros('bringup', ['bringup', *ros_args]):
         return 1
     bridge = host = None
     try:
@@ -159,15 +148,14 @@ def main(argv: list[str] | None = None) -> int:
     deadline = None if args.duration is None else time.monotonic() + args.duration
     mode = 'on rm_sim' if args.sim else 'on its CAN buses'
     print(f'[bringup] {", ".join(p.name for p in files)}: robot running {mode}; Ctrl-C stops')
+
+    def tick() -> bool:
+        if printer is not None:
+            printer.maybe_print()
+        return deadline is None or time.monotonic() < deadline
+
     try:
-        while rclpy.ok():
-            executor.spin_once(timeout_sec=_SPIN_TIMEOUT)
-            if printer is not None:
-                printer.maybe_print()
-            if deadline is not None and time.monotonic() >= deadline:
-                break
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
+        spin_until_shutdown(executor, on_tick=tick, timeout_sec=_SPIN_TIMEOUT)
     finally:
         if printer is not None:
             printer.finish()

@@ -6,17 +6,12 @@ import logging
 import sys
 
 import rclpy
-from rclpy.executors import ExternalShutdownException
 from rclpy.experimental import EventsExecutor
-from rclpy.signals import SignalHandlerOptions
 
 from rm_base.bridge.node import NODE_NAME, CanBridgeNode
 from rm_base.errors import ConfigError
 from rm_base.hardware import BusError
-from rm_base.ros_env import init_error_line, params_file_error, prepare_ros_process
-
-# How long one spin_once may block [s]; bounds the reaction to SIGINT/SIGTERM.
-_SPIN_TIMEOUT = 0.1
+from rm_base.node_main import init_ros, spin_until_shutdown
 
 # The 1 kHz scheduler thread shares the GIL with the receive, publisher and executor
 # threads (and the physics thread on rm_sim). A thread that wakes up may wait up to one
@@ -55,19 +50,9 @@ def _one_line(err: BaseException) -> str:
 
 def main(args: list[str] | None = None) -> int:
     """Run can_bridge until SIGINT/SIGTERM; return the exit status (1 on a config error)."""
-    prepare_ros_process()
+    if not init_ros(NODE_NAME, args):
+        return 1
     sys.setswitchinterval(min(sys.getswitchinterval(), _GIL_SWITCH_INTERVAL))
-    # rclpy's signal handlers would shut the context down before the node could publish
-    # its final states; Python's KeyboardInterrupt leaves the shutdown to the finally below.
-    bad_file = params_file_error(sys.argv if args is None else args)
-    if bad_file is not None:
-        print(f'[{NODE_NAME}] configuration error: {bad_file}', file=sys.stderr)
-        return 1
-    try:
-        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
-    except RuntimeError as err:  # rcl's RCLError, e.g. a params file that is not YAML
-        print(f'[{NODE_NAME}] configuration error: {init_error_line(err)}', file=sys.stderr)
-        return 1
     package_logger = logging.getLogger('rm_base')
     handler = RosLogHandler(rclpy.logging.get_logger(NODE_NAME))
     package_logger.addHandler(handler)
@@ -92,10 +77,7 @@ def main(args: list[str] | None = None) -> int:
     executor = EventsExecutor(context=node.context)
     executor.add_node(node)
     try:
-        while rclpy.ok(context=node.context):
-            executor.spin_once(timeout_sec=_SPIN_TIMEOUT)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
+        spin_until_shutdown(executor, node.context)
     finally:
         # Zero output on the wire (DISABLE to MIT motors) before anything else goes.
         node.destroy_node()

@@ -5,16 +5,12 @@ from __future__ import annotations
 import sys
 
 import rclpy
-from rclpy.executors import Executor, ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import Executor, SingleThreadedExecutor
 from rclpy.experimental import EventsExecutor
-from rclpy.signals import SignalHandlerOptions
 
 from rm_base.errors import ConfigError
 from rm_base.host.node import NODE_NAME, ExecutorKind, RobotHost
-from rm_base.ros_env import init_error_line, params_file_error, prepare_ros_process
-
-# How long one spin_once may block [s]; bounds the reaction to SIGINT/SIGTERM.
-_SPIN_TIMEOUT = 0.1
+from rm_base.node_main import init_ros, spin_until_shutdown
 
 
 def make_executor(node: RobotHost) -> Executor:
@@ -34,17 +30,7 @@ def make_executor(node: RobotHost) -> Executor:
 
 def main(args: list[str] | None = None) -> int:
     """Run rm_robot until SIGINT/SIGTERM; return the exit status (1 on a config error)."""
-    prepare_ros_process()
-    # rclpy's signal handlers would shut the context down before the plugins could
-    # publish zero output; Python's KeyboardInterrupt leaves that to the finally below.
-    bad_file = params_file_error(sys.argv if args is None else args)
-    if bad_file is not None:
-        print(f'[{NODE_NAME}] configuration error: {bad_file}', file=sys.stderr)
-        return 1
-    try:
-        rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
-    except RuntimeError as err:  # rcl's RCLError, e.g. a params file that is not YAML
-        print(f'[{NODE_NAME}] configuration error: {init_error_line(err)}', file=sys.stderr)
+    if not init_ros(NODE_NAME, args):
         return 1
     try:
         node = RobotHost()
@@ -60,10 +46,7 @@ def main(args: list[str] | None = None) -> int:
     executor = make_executor(node)
     executor.add_node(node)
     try:
-        while rclpy.ok(context=node.context):
-            executor.spin_once(timeout_sec=_SPIN_TIMEOUT)
-    except (KeyboardInterrupt, ExternalShutdownException):
-        pass
+        spin_until_shutdown(executor, node.context)
     finally:
         # Every plugin off (zero output on /actuator_cmd) while the context still works.
         node.shutdown()

@@ -1,0 +1,78 @@
+"""Start-up and spin loop shared by the rm_ros2 executables (can_bridge, rm_robot, bringup).
+
+if not init_ros('rm_robot', args):
+return 1
+node = ...                           # build the node(s) before the try
+spin_until_shutdown(executor, node.context)
+# then: zero output, destroy, rclpy.try_shutdown()
+"""
+
+from __future__ import annotations
+
+import sys
+from collections.abc import Sequence
+
+import rclpy
+from rclpy.context import Context
+from rclpy.executors import Executor, ExternalShutdownException
+from rclpy.signals import SignalHandlerOptions
+
+from rm_base.ros_env import init_error_line, params_file_error, prepare_ros_process
+
+# How long one spin_once may block [s]; bounds the reaction to SIGINT/SIGTERM.
+SPIN_TIMEOUT = 0.1
+
+
+def init_ros(name: str, args: Sequence[str] | None) -> bool:
+    """Prepare the process and ``rclpy.init``; on a bad parameter file print one line.
+
+    Args:
+        name: executable name for the error line.
+        args: command line for rclpy (None: ``sys.argv``).
+
+    Returns:
+        True if rclpy is initialised; False after printing the configuration error.
+    """
+    prepare_ros_process()
+    bad_file = params_file_error(sys.argv if args is None else args)
+    if bad_file is not None:
+        print(f'[{name}] configuration error: {bad_file}', file=sys.stderr)
+        return False
+    try:
+        # rclpy's signal handlers would shut the context down before the node could send
+        # its zero output; Python's KeyboardInterrupt leaves the shutdown to the caller.
+        rclpy.init(
+            args=None if args is None else list(args),
+            signal_handler_options=SignalHandlerOptions.NO,
+        )
+    except RuntimeError as err:  # rcl's RCLError, e.g. a params file rcl cannot parse
+        print(f'[{name}] configuration error: {init_error_line(err)}', file=sys.stderr)
+        return False
+    return True
+
+
+def spin_until_shutdown(
+    executor: Executor,
+    context: Context | None = None,
+    *,
+    on_tick=None,
+    timeout_sec: float = SPIN_TIMEOUT,
+) -> None:
+    """Spin until Ctrl-C, SIGTERM or context shutdown (or on_tick returns False).
+
+    EventsExecutor.spin() ignores SIGINT on rclpy 7.1.6 (ROS_WHEELS.md), so this loops on
+    spin_once with a short timeout instead.
+
+    Args:
+        executor: the executor with the node(s) added.
+        context: the context to watch (default: rclpy's global one).
+        on_tick: called after every spin_once; returning False stops the loop.
+        timeout_sec: longest block of one spin_once [s].
+    """
+    try:
+        while rclpy.ok(context=context):
+            executor.spin_once(timeout_sec=timeout_sec)
+            if on_tick is not None and on_tick() is False:
+                break
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass

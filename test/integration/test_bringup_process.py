@@ -1,0 +1,63 @@
+"""bringup as a user runs it: the whole robot on rm_sim, a status line, Ctrl-C stops it."""
+
+import os
+import pathlib
+import signal
+import subprocess
+
+import pytest
+from ament_index_python.packages import get_package_prefix
+from support.ros import isolate_ros_environment, wait_until
+
+pytestmark = [pytest.mark.ros, pytest.mark.slow]
+
+BRINGUP = pathlib.Path(get_package_prefix('rm_bringup')) / 'lib' / 'rm_bringup' / 'bringup'
+
+
+def start_bringup(args, stderr_path):
+    env = dict(os.environ)
+    isolate_ros_environment(env)
+    # stderr (the nodes' logs) goes to a file: a pipe nobody reads could fill up and stall
+    # the robot while the test waits for its status line on stdout.
+    with open(stderr_path, 'w') as stderr:
+        return subprocess.Popen(
+            [str(BRINGUP), *args], env=env, stdout=subprocess.PIPE, stderr=stderr, text=True
+        )
+
+
+def test_when_started_on_the_sim_expect_status_lines_and_a_clean_stop_on_sigint(tmp_path):
+    log = tmp_path / 'stderr.log'
+    proc = start_bringup(['--robot', 'standard', '--sim'], log)
+    lines = []
+
+    def status_seen():
+        # Without a terminal the status goes out as a line every 2 s.
+        line = proc.stdout.readline()
+        if line:
+            lines.append(line)
+        return any(s.startswith('chassis ') for s in lines) or proc.poll() is not None
+
+    try:
+        # The first status line that shows the chassis proves both nodes run and talk.
+        assert wait_until(status_seen, 60.0, period=0.0)
+        assert proc.poll() is None, ''.join(lines) + log.read_text()
+        proc.send_signal(signal.SIGINT)
+        proc.wait(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    err = log.read_text()
+    status = next(s for s in lines if s.startswith('chassis '))
+    assert 'gimbal ' in status and 'shooter ' in status and 'can0 ' in status, status
+    assert proc.returncode == 0, err
+    assert 'Traceback' not in err, err
+    assert err.rstrip().endswith('[bringup] stopped: zero output sent'), err
+
+
+def test_when_the_robot_is_unknown_expect_one_line_naming_the_installed_ones(tmp_path):
+    log = tmp_path / 'stderr.log'
+    proc = start_bringup(['--robot', 'nope', '--sim'], log)
+    assert proc.wait(timeout=30) == 1
+    err = log.read_text().strip().splitlines()
+    assert len(err) == 1 and 'installed robots: hero, standard' in err[0], err
