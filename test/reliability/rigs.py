@@ -247,6 +247,8 @@ class WireWatch:
         lag_s: how far behind real time the checking runs [s].
         period_s: how often the thread works [s].
         stall_s: the checker's stall gap [s] (see WireChecker).
+        feedback_window_s: the checker's feedback window [s] (see WireChecker): the
+            feedback timeout plus the grace.
     """
 
     def __init__(
@@ -260,6 +262,7 @@ class WireWatch:
         lag_s: float = 0.3,
         period_s: float = 0.01,
         stall_s: float | None = 0.02,
+        feedback_window_s: float = 0.15,
     ) -> None:
         self.checker = WireChecker(
             config,
@@ -267,6 +270,7 @@ class WireWatch:
             record=record,
             track_commands=track_commands,
             stall_s=stall_s,
+            feedback_window_s=feedback_window_s,
         )
         self._taps = {
             bus: SimBus(str(cfg.get('channel', bus)), world=world, rx_queue_size=0)

@@ -96,7 +96,10 @@ class Bridge:
             context=context, parameter_overrides=[Parameter(k, value=v) for k, v in params.items()]
         )
         self.world = self.node.sim_world
-        self.checker = WireChecker(config, grace_s=GRACE, record=True)
+        # real time: the stall and feedback-window allowances of reliability.rigs.WireWatch
+        self.checker = WireChecker(
+            config, grace_s=GRACE, record=True, stall_s=0.02, feedback_window_s=0.15
+        )
         self.tap = SimBus(self.channel, world=self.world, rx_queue_size=0)
         self.driver = rclpy.create_node('abuse_driver', context=context)
         self.pub = self.driver.create_publisher(ActuatorCmd, 'actuator_cmd', 1000)
@@ -138,6 +141,15 @@ class Bridge:
             time.sleep(1.0 / rate_hz)
         self.drain()
 
+    def publish_until(self, done, make, rate_hz: float = 200.0) -> bool:
+        """Publish make() at rate_hz until done() (at most WAIT seconds); return done()."""
+        end = time.monotonic() + WAIT
+        while not done() and time.monotonic() < end:
+            self.pub.publish(make())
+            time.sleep(1.0 / rate_hz)
+        self.drain()
+        return bool(done())
+
     def output(self, joint, since):
         """Non-zero commands to joint on the wire after wire time since."""
         self.drain()
@@ -176,8 +188,10 @@ def test_when_a_command_is_invalid_expect_it_rejected_counted_and_nothing_on_the
     bridge, joint, values, reason
 ):
     start = bridge.world.timestamp()
-    bridge.publish_for(0.3, lambda: cmd(joint, **values))
-    assert wait_until(lambda: bridge.rejected().get(reason, 0) > 10, WAIT), bridge.rejected()
+    # publish until a few have arrived (under CPU load a 200 Hz stream arrives thinned)
+    assert bridge.publish_until(
+        lambda: bridge.rejected().get(reason, 0) >= 5, lambda: cmd(joint, **values)
+    ), bridge.rejected()
     for name in JOINTS:  # no joint was ever driven: only bad commands came
         assert bridge.output(name, start) == [], name
     assert bridge.node.command_stats().accepted == 0
@@ -201,8 +215,9 @@ def test_when_a_value_is_huge_expect_the_output_clamped_to_max_effort(bridge, jo
     bridge.publish_for(0.4, lambda: cmd(joint, **values))
     efforts = [abs(e) for e in bridge.output(joint, start)]
     assert efforts, 'the joint was never driven: a huge value is clamped, not rejected'
-    # at the clamp (within a GM6020 back-EMF estimate or an MIT quantisation step)
-    assert max(efforts) == pytest.approx(LIMITS[joint], rel=0.05)
+    assert max(efforts) <= LIMITS[joint] * 1.05
+    if joint == 'wheel':  # current-driven: the frame's effort is exact, and at the clamp
+        assert max(efforts) == pytest.approx(LIMITS[joint], rel=0.01)
     bridge.assert_safe()
 
 
@@ -214,9 +229,10 @@ def test_when_a_command_is_stale_or_from_the_future_expect_it_rejected(bridge):
         return Time(sec=t // 1_000_000_000, nanosec=t % 1_000_000_000)
 
     # 5 s old (a replayed or long-delayed message) and 5 s ahead (a sender's clock off)
-    bridge.publish_for(0.3, lambda: cmd('wheel', 1, stamp=stamped(-5.0), effort=1.0))
-    bridge.publish_for(0.3, lambda: cmd('wheel', 1, stamp=stamped(+5.0), effort=1.0))
-    assert wait_until(lambda: bridge.rejected().get('stale', 0) > 20, WAIT), bridge.rejected()
+    old = lambda: cmd('wheel', 1, stamp=stamped(-5.0), effort=1.0)  # noqa: E731
+    ahead = lambda: cmd('wheel', 1, stamp=stamped(+5.0), effort=1.0)  # noqa: E731
+    assert bridge.publish_until(lambda: bridge.rejected().get('stale', 0) >= 5, old)
+    assert bridge.publish_until(lambda: bridge.rejected().get('stale', 0) >= 10, ahead)
     assert bridge.output('wheel', start) == []
     # a fresh stamp is applied
     fresh = bridge.world.timestamp()

@@ -42,6 +42,7 @@ kept, the rest are counted.
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 import math
 from collections.abc import Iterable, Mapping
@@ -73,6 +74,8 @@ class Violation:
         rule: ``effort``, ``unknown_slot``, ``offline``, ``over_temperature``,
             ``device_fault``, ``no_command`` or ``malformed``.
         detail: what was on the wire and what was allowed.
+        after_stall: ``(ms since, stall ms)`` if the frame came within ``stall_window_s``
+            after a stall of the bridge's process (see WireChecker), else None.
     """
 
     time: float
@@ -81,12 +84,16 @@ class Violation:
     joint: str
     rule: str
     detail: str
+    after_stall: tuple[float, float] | None = None
 
     def __str__(self) -> str:
-        return (
+        text = (
             f'{self.time:.4f} {self.bus} 0x{self.can_id:03X} {self.joint or "-"}: '
             f'{self.rule}: {self.detail}'
         )
+        if self.after_stall is not None:
+            text += f' [{self.after_stall[0]:.0f} ms after a {self.after_stall[1]:.0f} ms stall]'
+        return text
 
 
 @dataclasses.dataclass
@@ -110,18 +117,63 @@ class JointStats:
     feedback_frames: int = 0
 
 
+class _Window:
+    """Sliding min and max of a value over the last ``span_s`` seconds (never fewer than the
+    last two samples), in O(1) amortised per sample."""
+
+    def __init__(self, span_s: float) -> None:
+        self.span_s = span_s
+        self._samples: collections.deque[tuple[float, float]] = collections.deque()
+        self._lo: collections.deque[tuple[float, float]] = collections.deque()
+        self._hi: collections.deque[tuple[float, float]] = collections.deque()
+
+    def add(self, t: float, x: float) -> None:
+        self._samples.append((t, x))
+        while self._lo and self._lo[-1][1] >= x:
+            self._lo.pop()
+        self._lo.append((t, x))
+        while self._hi and self._hi[-1][1] <= x:
+            self._hi.pop()
+        self._hi.append((t, x))
+        samples = self._samples
+        while len(samples) > 2 and samples[0][0] < t - self.span_s:
+            old_t = samples.popleft()[0]
+            for mono in (self._lo, self._hi):
+                while mono and mono[0][0] <= old_t:
+                    mono.popleft()
+
+    def bounds(self) -> tuple[float, float] | None:
+        """(min, max) over the window, or None before any sample."""
+        if not self._samples:
+            return None
+        return self._lo[0][1], self._hi[0][1]
+
+    @property
+    def last(self) -> float:
+        return self._samples[-1][1]
+
+
+def _min_abs(lo: float, hi: float) -> float:
+    """The value of smallest magnitude in [lo, hi] (signed)."""
+    if lo <= 0.0 <= hi:
+        return 0.0
+    return lo if abs(lo) < abs(hi) else hi
+
+
 class _Joint:
     """The checker's view of one joint: limits from the config, feedback from the wire."""
 
-    def __init__(self, actuator: Actuator, hysteresis_c: float) -> None:
+    def __init__(self, actuator: Actuator, hysteresis_c: float, window_s: float) -> None:
         self.name = actuator.name
         self.shadow = actuator  # only its decoder and resolved limits are used
         self.max_effort = actuator.max_effort
         self.temperature_limit = actuator.temperature_limit
         self.temperature_resume = actuator.temperature_limit - hysteresis_c
-        self.feedback_times: list[float] = []  # the last two decoded feedback times [s]
-        self.device_velocities: list[float] = []  # matching rotor/motor velocities
-        self.positions: list[float] = []  # MIT: matching motor-side positions [rad]
+        self.last_feedback_t = _NEVER  # newest decoded feedback [s]
+        # what the motor reported over the feedback the bridge may still be acting on:
+        # rotor/motor velocity [rad/s] and (MIT) the motor-side position [rad]
+        self.velocity = _Window(window_s)
+        self.position = _Window(window_s)
         self.overheated_since: float | None = None
         self.fault_since: float | None = None
         self.command_until = _NEVER  # fresh command valid until [s]
@@ -133,7 +185,7 @@ class _Joint:
         self.timeline: list[tuple[float, float, bool]] = []
 
     def last_feedback(self) -> float:
-        return self.feedback_times[-1] if self.feedback_times else _NEVER
+        return self.last_feedback_t
 
 
 class WireChecker:
@@ -153,6 +205,13 @@ class WireChecker:
         stall_s: a gap this long in the bridge's command frames on a bus is a stall of
             its process (see ``_decision_time``) [s]; None: frames are judged at the time
             they were sent (lockstep, hand-made traffic).
+        stall_window_s: a violation this soon after a stall is marked ``after_stall``
+            (counted apart in the summary; still a violation) [s].
+        feedback_window_s: the effort of a GM6020 voltage or an MIT frame depends on
+            the motor's speed (and position); it is judged with the most favourable value
+            the motor reported within this window (at least the last two frames), since
+            the bridge may act on any feedback it has not yet timed out. 0 in lockstep;
+            the feedback timeout in real time.
     """
 
     def __init__(
@@ -165,6 +224,8 @@ class WireChecker:
         keep: int = 100,
         record: bool = False,
         stall_s: float | None = None,
+        stall_window_s: float = 0.5,
+        feedback_window_s: float = 0.0,
     ) -> None:
         if not isinstance(config, HardwareConfig):
             config = HardwareConfig.from_dict(config)
@@ -178,6 +239,10 @@ class WireChecker:
         self._tick_s = 1.0 / config.rate_hz
         self._last_tx: dict[str, float] = {}
         self._burst: dict[str, tuple[float, float]] = {}
+        self._last_stall: dict[str, tuple[float, float]] = {}  # bus -> (end, length ms)
+        self.stall_window_s = stall_window_s
+        self.violations_by_rule: dict[str, int] = {}
+        self.violations_after_stall = 0
         self.stalls = 0
         self.max_stall_ms = 0.0
         safety = config.safety
@@ -190,7 +255,7 @@ class WireChecker:
         self._feedback: dict[tuple[str, int], list[_Joint]] = {}
         for jc in config.joints:
             actuator = ACTUATOR_TYPES[jc.type](jc, safety)
-            joint = _Joint(actuator, safety.temperature_hysteresis_c)
+            joint = _Joint(actuator, safety.temperature_hysteresis_c, feedback_window_s)
             self.joints[jc.name] = joint
             if isinstance(actuator, DjiActuator):
                 key = (jc.bus, actuator.command_frame_id)
@@ -249,8 +314,15 @@ class WireChecker:
                 self._check_mit(bus, msg.arbitration_id, mit_joint, data, t, td, found)
         if not handled:
             self.unmatched_frames += 1
+        stall = self._last_stall.get(bus)
+        if found and stall is not None and t - stall[0] <= self.stall_window_s:
+            after = (1e3 * (t - stall[0]), stall[1])
+            found = [dataclasses.replace(v, after_stall=after) for v in found]
         for v in found:
             self.violation_count += 1
+            self.violations_by_rule[v.rule] = self.violations_by_rule.get(v.rule, 0) + 1
+            if v.after_stall is not None:
+                self.violations_after_stall += 1
             if len(self.violations) < self._keep:
                 self.violations.append(v)
         return found
@@ -275,6 +347,7 @@ class WireChecker:
         if prev is not None and t - prev > self.stall_s:
             self.stalls += 1
             self.max_stall_ms = max(self.max_stall_ms, 1e3 * (t - prev))
+            self._last_stall[bus] = (t, 1e3 * (t - prev))
             decided = prev + self._tick_s
             self._burst[bus] = (t + _BURST_S, decided)
             return decided
@@ -353,6 +426,8 @@ class WireChecker:
             'system_frames': self.system_frames,
             'unmatched_frames': self.unmatched_frames,
             'unsafe_frames': self.violation_count,
+            'unsafe_by_rule': dict(self.violations_by_rule),
+            'unsafe_after_stall': self.violations_after_stall,
             'stalls': self.stalls,
             'max_stall_ms': round(self.max_stall_ms, 1),
             'zero_episodes': len(latencies),
@@ -378,13 +453,14 @@ class WireChecker:
             return  # not this joint's (MIT id nibble) or did not decode
         fb = shadow.feedback
         joint.stats.feedback_frames += 1
-        joint.feedback_times = [*joint.feedback_times[-1:], t]
-        joint.device_velocities = [*joint.device_velocities[-1:], fb.device_velocity]
+        joint.last_feedback_t = t
         if isinstance(shadow, MitActuator):
             # what the motor itself reports (motor side, wrapped): its law uses these
             q, dq = _mit_reading(shadow, bytes(msg.data))
-            joint.positions = [*joint.positions[-1:], q]
-            joint.device_velocities[-1] = dq
+            joint.position.add(t, q)
+            joint.velocity.add(t, dq)
+        else:
+            joint.velocity.add(t, fb.device_velocity)
         temperature = fb.temperature
         if temperature is not None:
             if temperature >= joint.temperature_limit:
@@ -513,16 +589,17 @@ class WireChecker:
 
     @staticmethod
     def _gm6020_effort(joint: _Joint, shadow: Gm6020Voltage, raw: int) -> tuple[float, float]:
-        """Effort a GM6020 voltage command asks for; the smaller over the last two ω.
+        """Effort a GM6020 voltage command asks for, the smallest over the feedback window.
 
-        The bridge computed the voltage with the newest feedback it had processed, which
-        may be one frame older than the newest on the wire.
+        The bridge computes the voltage with the newest feedback it has processed, which
+        may be older than the newest on the wire (see ``feedback_window_s``).
         """
         volts = raw * shadow.spec.si_per_raw
         kt, r, ke = shadow.torque_constant, shadow.resistance, shadow.back_emf_constant
-        candidates = [(volts - ke * w) / r * kt for w in (joint.device_velocities or [0.0])]
-        effort = min(candidates, key=abs)
-        return effort, shadow.spec.si_per_raw / r * kt
+        bounds = joint.velocity.bounds() or (0.0, 0.0)
+        # linear in ω: the extremes are at the window's bounds
+        a, b = ((volts - ke * w) / r * kt for w in bounds)
+        return _min_abs(min(a, b), max(a, b)), shadow.spec.si_per_raw / r * kt
 
     def _check_mit(
         self,
@@ -550,20 +627,20 @@ class WireChecker:
         t_step = 2.0 * limits.t_max / ((1 << mit.TORQUE_BITS) - 1)
         nonzero = cmd.kp > 0.0 or cmd.kd > 0.0 or abs(cmd.torque) > t_step
         g = shadow.gear_ratio
-        # the torque the motor applies, at the latest (or the one before) feedback
-        states = list(zip(joint.positions, joint.device_velocities, strict=False)) or [(0.0, 0.0)]
-        torques = [
-            cmd.kp * (cmd.position - q) + cmd.kd * (cmd.velocity - dq) + cmd.torque
-            for q, dq in states
-        ]
-        torque = min(torques, key=abs)
-        effort = torque * g
+        # the torque the motor applies, the smallest over the feedback window (linear in
+        # q and dq: the extremes are at the window's bounds)
+        q_lo, q_hi = joint.position.bounds() or (0.0, 0.0)
+        dq_lo, dq_hi = joint.velocity.bounds() or (0.0, 0.0)
+        lo = cmd.kp * (cmd.position - q_hi) + cmd.kd * (cmd.velocity - dq_hi) + cmd.torque
+        hi = cmd.kp * (cmd.position - q_lo) + cmd.kd * (cmd.velocity - dq_lo) + cmd.torque
+        effort = _min_abs(lo, hi) * g
         # quantisation of p, v, kp, kd and tau, at this command's size
         p_step = 2.0 * limits.p_max / ((1 << mit.POSITION_BITS) - 1)
         v_step = 2.0 * limits.v_max / ((1 << mit.VELOCITY_BITS) - 1)
         kp_step = (limits.kp_max - limits.kp_min) / ((1 << mit.KP_BITS) - 1)
         kd_step = (limits.kd_max - limits.kd_min) / ((1 << mit.KD_BITS) - 1)
-        q, dq = states[-1]
+        q = joint.position.last if joint.position.bounds() else 0.0
+        dq = joint.velocity.last if joint.velocity.bounds() else 0.0
         step = g * (
             t_step
             + cmd.kp * p_step
