@@ -6,7 +6,7 @@
 ROBOT ?= standard
 PYTEST_ARGS ?=
 
-.PHONY: all setup test run lint lock clean bench
+.PHONY: all setup test run lint lock clean bench soak
 
 all: test
 
@@ -26,6 +26,9 @@ lint: setup
 
 bench: setup
 	@scripts/with_env.sh python bench/run.py $(BENCH_ARGS)
+
+soak: setup
+	@scripts/with_env.sh python test/soak/run_soak.py $(SOAK_ARGS)
 
 ## lock: regenerate requirements/lock.txt from a fresh venv built from requirements.in
 lock:
