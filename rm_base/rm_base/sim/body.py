@@ -182,11 +182,15 @@ class RobotBody:
         """Pitch joint angle [rad] (0 without a pitch joint); positive noses down."""
         return self.pitch_joint.angle if self.pitch_joint is not None else 0.0
 
+    def attitude(self, mount: Mount) -> tuple[float, float, float]:
+        """(roll, pitch, yaw) [rad] of the chassis or the gimbal in the world frame."""
+        if mount is Mount.CHASSIS:
+            return (0.0, 0.0, self.yaw)
+        return (0.0, self.gimbal_pitch, self.yaw + self.gimbal_yaw)
+
     def orientation(self, mount: Mount) -> NDArray[np.float64]:
         """Rotation matrix world <- body of the chassis or the gimbal."""
-        if mount is Mount.CHASSIS:
-            return rotation_matrix_from_rpy(0.0, 0.0, self.yaw)
-        return rotation_matrix_from_rpy(0.0, self.gimbal_pitch, self.yaw + self.gimbal_yaw)
+        return rotation_matrix_from_rpy(*self.attitude(mount))
 
     def angular_velocity(self, mount: Mount) -> NDArray[np.float64]:
         """Angular velocity of the chassis or gimbal in the world frame [rad/s]."""

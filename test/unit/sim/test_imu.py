@@ -133,6 +133,47 @@ def test_when_nobody_reads_expect_writes_never_block(imu_path):
         assert imu.frames_written > 0
 
 
+@pytest.mark.parametrize('mount', ['gimbal', 'chassis'])
+@pytest.mark.parametrize(
+    ('pose', 'mount_rpy'),
+    [
+        ((0.0, 0.0, 0.0), (0.0, 0.0, 0.0)),
+        ((2.5, -0.7, 0.3), (0.0, 0.0, 0.0)),
+        ((-3.0, 2.9, -0.4), (0.1, -0.2, 3.0)),
+        ((1.0, 0.5, 1.4), (math.pi, 0.0, -math.pi / 2)),
+    ],
+)
+def test_sample_matches_the_rotation_matrix_reference(imu_path, mount, pose, mount_rpy):
+    # sample() works in plain floats; sensor_rotation() and rm_base.geometry are the
+    # reference (numpy, validated)
+    from rm_base.geometry import quaternion_from_rotation_matrix, rpy_from_quaternion
+
+    yaw, gimbal_yaw, pitch = pose
+    imu_config = {
+        'path': imu_path,
+        'mount': mount,
+        'mount_rpy': list(mount_rpy),
+        'magnetic_field': [20.0, -5.0, 40.0],
+    }
+    config = robot(imu_config, yaw=yaw, gimbal_yaw=gimbal_yaw, pitch=pitch)
+    with SimWorld.from_config(config) as world:
+        body, imu = world.body, world.imu()
+        body.twist = (0.3, -0.2, 1.7)
+        body.linear_acceleration = (0.8, -1.1)
+        rotation = imu.sensor_rotation()
+        q = quaternion_from_rotation_matrix(rotation)
+        expected = {
+            'acc': rotation.T @ (body.world_acceleration() + np.array([0.0, 0.0, G])),
+            'gyr': rotation.T @ body.angular_velocity(imu.mount),
+            'mag': rotation.T @ imu.magnetic_field,
+            'quat': (q.w, q.x, q.y, q.z),
+            'euler': rpy_from_quaternion(q),
+        }
+        got = imu.sample()
+    for key, value in expected.items():
+        np.testing.assert_allclose(got[key], value, atol=1e-9, err_msg=key)
+
+
 def test_when_a_terminal_write_is_slow_expect_the_world_lock_free(imu_path):
     # Every bus send waits for the world lock; a terminal write (a system call that took
     # milliseconds on a loaded machine, bench/) must not hold it.
