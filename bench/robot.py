@@ -8,7 +8,8 @@ One run = a fresh robot process (:mod:`bench.robot_proc`: bridge + host + rm_sim
    simulator still run): CPU and scheduler timing;
 2. ``load``: the commander streams /chassis_cmd GYRO, /vel_cmd, /gimbal_cmd RATE and
    /shoot_cmd READY at 100 Hz; once the wheels, the yaw and the friction wheels are
-   driven: CPU and scheduler timing;
+   driven: CPU and scheduler timing, with :mod:`bench.canary` measuring the machine's
+   own wake-up latency in the same window;
 3. ``latency``: command steps (see :mod:`bench.latency`) with the tap on.
 """
 
@@ -169,7 +170,12 @@ def run_once(plan: RobotPlan, log_dir: Path, tag: str) -> dict[str, Any]:
         active = robot.request('wait_active 20 ' + ' '.join(ACTIVE_JOINTS), 30.0)
         if not active['active']:
             result['notes'].append(f'not every joint driven under load: {active["holds"]}')
-        result['load'] = robot.request(f'measure load {plan.load_s}', plan.load_s + 30.0)
+        canary = Child('bench.canary', [str(plan.load_s)], log_dir / f'canary_{tag}.log')
+        try:
+            result['load'] = robot.request(f'measure load {plan.load_s}', plan.load_s + 30.0)
+            result['canary'] = canary.wait(30.0)
+        finally:
+            canary.close()
         commander.request('stop', 10.0)
 
         tap = robot.request('tap_on ' + ' '.join(PROBES), 10.0)
