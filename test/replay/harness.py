@@ -75,6 +75,7 @@ OUTPUTS: tuple[tuple[str, str], ...] = (
     ('/gimbal_state', 'rm_msgs/msg/GimbalState'),
     ('/shooter_state', 'rm_msgs/msg/ShooterState'),
     ('/actuator_states', 'rm_msgs/msg/ActuatorState'),
+    ('/imu', 'sensor_msgs/msg/Imu'),
 )
 # A plugin is up once it has published here (plugins without one are not waited for).
 READY_TOPICS: dict[str, tuple[str, str]] = {

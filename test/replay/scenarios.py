@@ -18,11 +18,11 @@ A scenario is what an operator (or a planner) did, written down as data:
   the robot's single executor, which under load delivers late to the plugins too (the
   GYRO replay measured /odom 0.1-1 s late with every output recorded).
 
-Simulated loads: standard_sim.yaml leaves every motor with no load but its rotor, which
-makes the loops the robot config was tuned for (wheels carrying a 16 kg robot, friction
-wheels, a trigger disc) far too fast on the sim, and the chassis wheel loops oscillate.
-``SIM_LOADS`` gives the motors the loads the integration tests use (test_chassis.py,
-test_shooter.py); they are physics of the simulated robot, not tuning.
+Simulated loads: standard_sim.yaml gives the turret, barrel, friction wheels and trigger
+their loads but leaves the wheels with nothing but their rotors, which makes the wheel
+loops the robot config was tuned for (wheels carrying a 16 kg robot) far too fast on the
+sim: they oscillate. ``SIM_LOADS`` gives the wheels the robot's mass as test_chassis.py
+does; it is physics of the simulated robot, not tuning (and belongs in the overlay).
 """
 
 from __future__ import annotations
@@ -51,17 +51,9 @@ WHEEL_RADIUS = 0.0763  # [m] = standard.yaml chassis.wheel_radius
 # The sim's chassis body is kinematic: the robot's mass sits in the wheel motors, a
 # quarter at each rim: m / 4 * r^2 = 16 / 4 * 0.0763^2 = 0.0233 kg*m^2.
 WHEEL_LOAD_INERTIA = ROBOT_MASS / 4.0 * WHEEL_RADIUS**2
-# A friction wheel + hub of ~100 g at r = 30 mm: 0.5 * 0.1 * 0.03^2 = 4.5e-5 kg*m^2.
-FRICTION_LOAD_INERTIA = 4.5e-5
-TRIGGER_LOAD_INERTIA = 2e-4  # [kg*m^2] trigger disc with balls, output shaft
 
 SIM_LOADS: dict[str, dict[str, float]] = {
     'chassis': {f'joints.{w}.sim.load_inertia': WHEEL_LOAD_INERTIA for w in WHEELS},
-    'shooter': {
-        'joints.friction_l.sim.load_inertia': FRICTION_LOAD_INERTIA,
-        'joints.friction_r.sim.load_inertia': FRICTION_LOAD_INERTIA,
-        'joints.trigger.sim.load_inertia': TRIGGER_LOAD_INERTIA,
-    },
 }
 
 
@@ -312,10 +304,7 @@ BURST_JAM = Scenario(
     description='READY, PUSH 5 shots at 5 Hz with a trigger jam 0.5 s in, then PASSIVE',
     robot=Robot(
         plugins=('gpio', 'shooter'),
-        overrides={
-            'can_bridge': SIM_LOADS['shooter'],
-            'rm_robot': {'shooter.command_timeout': SHOOTER_COMMAND_TIMEOUT},
-        },
+        overrides={'rm_robot': {'shooter.command_timeout': SHOOTER_COMMAND_TIMEOUT}},
     ),
     commands=_streams(
         SHOOT_CMD,
