@@ -12,11 +12,12 @@ update all, pack all, send), same feedback (1 kHz per motor from the feeder of
 * **rclpy timer, EventsExecutor**: the same on ``rclpy.experimental.EventsExecutor``
   (for reference: the executor bringup uses for its callbacks).
 
-Period error of the timer: at callback entry ``period - timer.time_until_next_call()``
-(rcl has already moved the timer's next call time one period on), i.e. how late the
-callback runs against rcl's own grid. rcl skips missed periods; missed deadlines are the
-ticks short of ``elapsed / period``. CPU: the loop thread's own CPU time (scheduler
-thread, or the executor thread).
+Period error of the timer: ``start - deadline`` on rcl's own grid (taken from
+``time_until_next_call()`` at the first call), followed call by call with rcl's own
+bookkeeping (``rcl_timer_call``: the next call one period on, whole periods already past
+skipped and counted as missed). The scheduler skips when a tick *ends* past the next
+deadline, rcl when a call *starts* past it; each is measured by its own rule. CPU: the
+loop thread's own CPU time (scheduler thread, or the executor thread).
 """
 
 from __future__ import annotations
@@ -84,15 +85,32 @@ def _measure_timer(rig: Rig, plan: BaselinePlan, events: bool) -> dict[str, Any]
     period_ns = rig.hw.scheduler.period_ns
     errors = array.array('q')
     recording = threading.Event()
-    ticks = [0]
+    counts = {'ticks': 0, 'skipped': 0}
+    deadline: list[int | None] = [None]
     tick = rig.hw.tick
+    clock = time.perf_counter_ns
     timer = None
 
     def on_timer() -> None:
-        until = timer.time_until_next_call()
-        if recording.is_set():
-            errors.append(period_ns - until)
-            ticks[0] += 1
+        start = clock()
+        if deadline[0] is None:
+            # rcl has moved its next call time one period on: this call's deadline is
+            # one period before it (steady time and perf_counter are both CLOCK_MONOTONIC)
+            deadline[0] = start + timer.time_until_next_call() - period_ns
+        due = deadline[0]
+        record = recording.is_set()
+        if record:
+            errors.append(start - due)
+            counts['ticks'] += 1
+        # rcl_timer_call's bookkeeping (done as the callback starts): the next call one
+        # period on, skipping whole periods already past
+        due += period_ns
+        if start > due:
+            missed = 1 + (start - due - 1) // period_ns
+            due += missed * period_ns
+            if record:
+                counts['skipped'] += missed
+        deadline[0] = due
         tick()
 
     timer = node.create_timer(
@@ -110,11 +128,9 @@ def _measure_timer(rig: Rig, plan: BaselinePlan, events: bool) -> dict[str, Any]
         time.sleep(plan.warmup_s)
         window = Window()
         threads0 = thread_cpu_snapshot()
-        t0 = time.perf_counter_ns()
         recording.set()
         time.sleep(plan.seconds)
         recording.clear()
-        elapsed_ns = time.perf_counter_ns() - t0
         threads1 = thread_cpu_snapshot()
         facts = window.close()
     finally:
@@ -123,11 +139,9 @@ def _measure_timer(rig: Rig, plan: BaselinePlan, events: bool) -> dict[str, Any]
         executor.shutdown()
         node.destroy_node()
         context.try_shutdown()
-    n = ticks[0]
-    skipped = max(0, round(elapsed_ns / period_ns) - n)
     per_thread = thread_cpu_percent(threads0, threads1, facts.elapsed_s)
     return {
-        'scheduler': tick_summary(errors, ticks=n, skipped=skipped),
+        'scheduler': tick_summary(errors, ticks=counts['ticks'], skipped=counts['skipped']),
         'loop_cpu_pct': per_thread.get('bench-executor', 0.0),
         'window': facts.as_dict(),
     }
