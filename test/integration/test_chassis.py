@@ -355,11 +355,13 @@ def test_when_raw_forward_expect_every_wheel_at_v_over_r_and_the_body_moving_for
         return r.record(0.5)
 
     samples = r.clean(drive)
-    # The body moves +x at 1 m/s (+-5 %), no sideways drift, no turn.
+    # The body moves +x at 1 m/s (+-5 %), no sideways drift (< 1 cm over the window), no
+    # turn (< 0.02 rad since the start: the four wheels break away from standstill a few
+    # milliseconds apart).
     (t0, x0, y0, *_), (t1, x1, y1, yaw1, *_) = samples[0], samples[-1]
     print(f'measured RAW: {(x1 - x0) / (t1 - t0):.3f} m/s, wheels {r.joints()}')
     assert (x1 - x0) / (t1 - t0) == pytest.approx(1.0, rel=0.05)
-    assert abs(y1 - y0) < 0.01 and abs(yaw1) < 0.01
+    assert abs(y1 - y0) < 0.01 and abs(yaw1) < 0.02
     assert r.state() == ChassisCmd.RAW
 
 
@@ -508,10 +510,10 @@ def test_when_gyro_follows_base_link_expect_translation_along_the_heading_at_ent
 
     samples = r.clean(enter_and_drive)
     (t0, x0, y0, *_), (t1, x1, y1, *_) = samples[0], samples[-1]
-    print(f'measured GYRO base_link: direction {math.atan2(y1 - y0, x1 - x0) - entry[-1]:.4f} '
-          f'rad from the heading at entry')
+    off = wrap_to_pi(math.atan2(y1 - y0, x1 - x0) - entry[-1])
+    print(f'measured GYRO base_link: direction {off:.4f} rad from the heading at entry')
     # Along the heading at entry, +-0.05 rad, at 1 m/s (+-5 %), in a straight line.
-    assert wrap_to_pi(math.atan2(y1 - y0, x1 - x0) - entry[-1]) == pytest.approx(0.0, abs=0.05)
+    assert off == pytest.approx(0.0, abs=0.05)
     assert math.hypot(x1 - x0, y1 - y0) / (t1 - t0) == pytest.approx(1.0, rel=0.05)
     assert_straight(samples, 0.05)
     assert r.latest('/chassis_state').reason == 'commanded GYRO (follow source base_link)'
