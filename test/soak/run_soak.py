@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import logging
 import math
 import os
 import pathlib
@@ -367,7 +368,13 @@ class FaultInjector:
         lat = wait_for(
             lambda: self.robot.joint(joint).hold_reason.value == 'over_temperature', DETECT_S
         )
-        rec.detected, rec.latency_ms = lat is not None, None if lat is None else 1e3 * lat
+        if lat is not None:
+            rec.detected, rec.latency_ms = True, 1e3 * lat
+        elif getattr(getattr(self.robot.joint(joint), 'spec', None), 'has_temperature', True):
+            rec.detected = False
+        else:
+            rec.note = 'its ESC reports no temperature (C610): invisible to the bridge'
+
         time.sleep(self.rng.uniform(0.3, 1.5))
         world.inject(joint, Fault.over_temperature(50.0))  # cooled down
         time.sleep(0.2)
@@ -386,17 +393,21 @@ class FaultInjector:
         jams = before.jam_count if before is not None else 0
         self.robot.world.inject(joint, Fault.jam())
 
+        asked = []  # whether the joint was asked to move while jammed
+
         def shown() -> bool:
             if joint == 'trigger':
                 s = self.robot.state('shooter_state')
+                asked.append(s is not None and s.state in (ShooterState.FEED, ShooterState.PUSH))
                 return s is not None and (s.jam_count > jams or s.state == ShooterState.BLOCK)
+            asked.append(actuator.state().mode != 0)
             return abs(actuator.state().command) >= 0.99 * actuator.max_effort
 
         lat = wait_for(shown, 3.0)
         if lat is not None:
             rec.detected, rec.latency_ms = True, 1e3 * lat
-        elif actuator.state().mode == 0:
-            rec.note = 'joint not driven during the jam'
+        elif not any(asked):
+            rec.note = 'not asked to move while jammed (held or off): nothing to detect'
         else:
             rec.detected = False
         time.sleep(self.rng.uniform(0.2, 1.0))
@@ -494,6 +505,12 @@ def main(argv: list[str] | None = None) -> int:
         f'logs in {workdir}',
         flush=True,
     )
+    # the hardware layer's log lines go to a file, not the terminal
+    handler = logging.FileHandler(workdir / 'can_bridge.log')
+    handler.setFormatter(logging.Formatter('%(asctime)s %(name)s: %(message)s'))
+    logging.getLogger('rm_base').addHandler(handler)
+    logging.getLogger('rm_base').setLevel(logging.INFO)
+    logging.getLogger('rm_base').propagate = False
     robot = Robot(workdir)
     commander = Commander(robot, rng)
     injector = FaultInjector(robot, rng, host_restarts=not args.no_host_restart)
