@@ -32,8 +32,6 @@ PROBES: dict[str, tuple[str, int, str, float]] = {
     'yaw': ('t_gimbal_ns', 1000, 'velocity', 2.0),
 }
 BASELINE_NS = 50_000_000
-#: A step not seen on the wire within this long counts as lost [ns].
-WINDOW_NS = 100_000_000
 
 
 def _slot_value(data_hex: str, slot: int) -> int:
@@ -42,7 +40,7 @@ def _slot_value(data_hex: str, slot: int) -> int:
 
 
 def _first_change(
-    times: list[int], values: list[float], t0: int, threshold: float
+    times: list[int], values: list[float], t0: int, threshold: float, window_ns: int
 ) -> tuple[int | None, float]:
     """(time of the first sample after t0 off the pre-t0 baseline, baseline noise)."""
     lo = bisect_left(times, t0 - BASELINE_NS)
@@ -53,18 +51,20 @@ def _first_change(
     base = statistics.median(base_values)
     noise = max(abs(v - base) for v in base_values)
     for i in range(hi, len(times)):
-        if times[i] - t0 > WINDOW_NS:
+        if times[i] - t0 > window_ns:
             break
         if abs(values[i] - base) > threshold:
             return times[i], noise
     return None, noise
 
 
-def analyse(result: dict[str, Any]) -> dict[str, Any]:
+def analyse(result: dict[str, Any], window_ns: int) -> dict[str, Any]:
     """Latency per probe joint from the commander's steps and the robot's tap records.
 
     Args:
         result: ``{'steps': [...], 'slots': {...}, 'frames': {...}, 'applied': [...]}``.
+        window_ns: how long a step is held [ns]; one not seen on the wire by then is
+            counted as lost (``steps - unsettled - detected``).
 
     Returns:
         Per joint: steps, detected, total/to-bridge/to-wire summaries [ms], and the
@@ -94,7 +94,7 @@ def analyse(result: dict[str, Any]) -> dict[str, Any]:
         unsettled = 0
         for step in ups:
             t0 = step[t_key]
-            t_wire, noise = _first_change(f_times, f_values, t0, threshold)
+            t_wire, noise = _first_change(f_times, f_values, t0, threshold, window_ns)
             noises.append(noise)
             if noise > threshold / 2:
                 # not at rest before the step: a change could be the old motion's
@@ -103,7 +103,7 @@ def analyse(result: dict[str, Any]) -> dict[str, Any]:
             if t_wire is None:
                 continue
             total.append((t_wire - t0) / 1e6)
-            t_app, _ = _first_change(a_times, a_values, t0, applied_threshold)
+            t_app, _ = _first_change(a_times, a_values, t0, applied_threshold, window_ns)
             if t_app is not None and t_app <= t_wire:
                 to_bridge.append((t_app - t0) / 1e6)
                 to_wire.append((t_wire - t_app) / 1e6)

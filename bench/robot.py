@@ -185,7 +185,7 @@ def run_once(plan: RobotPlan, log_dir: Path, tag: str) -> dict[str, Any]:
             duration + 60.0,
         )
         frames = robot.request('tap_off', 30.0)
-        result['latency'] = analyse({**tap, **steps, **frames})
+        result['latency'] = analyse({**tap, **steps, **frames}, int(plan.hold_s * 1e9))
         for phase in ('idle', 'load'):
             result['notes'] += _domain_conflict(result[phase])
     finally:
