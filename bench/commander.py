@@ -35,6 +35,7 @@ STEP_VX = 1.5  # [m/s]
 STEP_RATE_YAW = 8.0  # [rad/s]
 STEP_ACCEL = (50.0, 50.0, 200.0)  # [m/s^2, m/s^2, rad/s^2]
 STEP_POWER_LIMIT = 500.0  # [W]
+SETTLE_S = 1.0  # [s] at rest before the first step
 
 
 class Commander:
@@ -148,9 +149,9 @@ class Commander:
         period = 1.0 / rate_hz
         rng = random.Random(7)
         now = time.monotonic()
-        # settle in RAW at rest first, then the steps
+        # settle in RAW at rest first (the load pattern spun the chassis), then the steps
         changes: list[tuple[float, bool]] = []
-        t = now + rest_s
+        t = now + max(rest_s, SETTLE_S)
         for _ in range(n):
             t += rng.uniform(0.0, 0.01)
             changes.append((t, True))

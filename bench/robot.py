@@ -179,7 +179,7 @@ def run_once(plan: RobotPlan, log_dir: Path, tag: str) -> dict[str, Any]:
         commander.request('stop', 10.0)
 
         tap = robot.request('tap_on ' + ' '.join(PROBES), 10.0)
-        duration = plan.steps * (plan.hold_s + plan.rest_s + 0.01) + plan.rest_s
+        duration = plan.steps * (plan.hold_s + plan.rest_s + 0.01) + plan.rest_s + 1.0
         steps = commander.request(
             f'steps {plan.steps} {plan.hold_s} {plan.rest_s} {plan.command_rate_hz}',
             duration + 60.0,
