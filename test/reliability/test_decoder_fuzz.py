@@ -180,17 +180,21 @@ def test_a_truncated_stream_yields_exactly_its_complete_frames_in_order(frames_,
     assert parser.crc_errors == 0
 
 
-@STREAMS
-@given(streams, st.lists(st.tuples(st.integers(0, 10_000), st.integers(0, 255)), max_size=6))
-def test_a_corrupted_stream_never_raises_and_yields_only_finite_samples(frames_, edits):
+@settings(max_examples=100, deadline=None, derandomize=True)
+@given(streams, st.integers(0, 10_000), st.binary(min_size=1, max_size=2))
+def test_a_corrupted_stream_yields_only_intact_frames(frames_, where, burst):
+    # One burst of up to 16 bits: CRC-16 detects every such error in a frame, so what comes
+    # out must be frames exactly as sent (derandomized: a CRC collision after a corrupted
+    # length, ~2**-16 per frame, would fail the same way every run, not now and then).
+    originals = {s.system_time_ms: s for s in hipnuc.HipnucParser().feed(b''.join(frames_))}
     stream = bytearray(b''.join(frames_))
-    for index, value in edits:
-        stream[index % len(stream)] = value
+    at = where % len(stream)
+    stream[at : at + len(burst)] = burst
     parser = hipnuc.HipnucParser()
     got = parser.feed(bytes(stream))
     assert len(got) <= len(frames_)
     for sample in got:
-        assert finite(*sample.acc, *sample.gyr, *sample.quat)
+        assert sample == originals.get(sample.system_time_ms), sample
 
 
 @STREAMS
