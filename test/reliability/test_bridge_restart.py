@@ -99,13 +99,15 @@ def test_when_the_bridge_restarts_expect_the_shooter_safe_meanwhile_and_no_shot_
     restart_bridge(robot)
     restarted = time.monotonic()
     assert abs(trigger_angle(robot)) < 1e-9  # a new world: the trigger starts at 0
-    # Back: the shooter feeds a ball again (at most about a slot) and waits READY; it must
-    # not step the trigger on towards the old bridge's 3 rad.
+    # Back: the shooter feeds a ball again and waits READY; it must not step the trigger on
+    # towards the old bridge's 3 rad.
     assert wait_until(
         lambda: (s := shooter(robot)) and s.state == ShooterState.READY and s.header.stamp, WAIT
     )
+    # Feeding may pass one ball window when the switch reading lags under CPU load (to
+    # ~1.8 slots); the old hold (> 3 slots) is never reached.
     while time.monotonic() < restarted + 1.5:  # long enough for a 3 rad move at 12 rad/s
-        assert trigger_angle(robot) < 1.5 * SLOT, 'the trigger moved on without a command'
+        assert trigger_angle(robot) < 2.5 * SLOT, 'the trigger moved on without a command'
         time.sleep(0.01)
     # in between the joint states were stale: the shooter was safe (PASSIVE) and said why
     states = robot.history('/shooter_state')[mark:]

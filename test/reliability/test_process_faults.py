@@ -229,12 +229,18 @@ def test_when_rm_robot_is_killed_expect_zero_current_within_the_command_timeout_
 
 def test_when_can_bridge_is_killed_expect_the_chassis_passive_naming_a_wheel_then_back(robot):
     t_kill = robot.kill(robot.bridge)
-    passive = lambda: [  # noqa: E731
-        m for m in robot.chassis_since(t_kill) if m.state == ChassisCmd.PASSIVE
-    ]
-    assert wait_until(passive, WAIT), robot.latest_chassis()
-    reason = passive()[0].reason
-    assert 'wheel' in reason and 'no fresh feedback' in reason, reason
+
+    def passive_naming_a_wheel():
+        return [
+            m.reason
+            for m in robot.chassis_since(t_kill)
+            if m.state == ChassisCmd.PASSIVE and 'wheel' in m.reason
+        ]
+
+    # (under CPU load this observer's own /chassis_cmd may lapse too, which is another
+    # PASSIVE reason; the wheels' stale feedback must be named in any case)
+    assert wait_until(passive_naming_a_wheel, WAIT), robot.latest_chassis()
+    assert 'no fresh feedback' in passive_naming_a_wheel()[0]
     # the host itself runs on, commanding zero output in PASSIVE
     assert robot.host.poll() is None
     robot.start('can_bridge')
