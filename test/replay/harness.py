@@ -8,8 +8,9 @@ What happens:
 
 1. A SimRobot (support.robot) is built from the scenario's robot (config, plugins,
    overrides); the harness subscribes to the outputs the scenario records (of OUTPUTS)
-   and waits until every loaded plugin has reported its state once (READY_TOPICS) and
-   every command topic is matched both ways.
+   and waits until every loaded plugin reports its state (READY_TOPICS) with little
+   delay (READY_LATENCY_S: the robot's one executor has no backlog) and every command
+   topic is matched both ways.
 2. The bag (test/data/<scenario>/ unless given) is played with rmcli's own playback
    (``rm_bringup.cli.bag_play.play``: the bag's order and relative timing, absolute
    deadlines), into publishers with the QoS the bag recorded (rmcli's rule). Three things
@@ -65,6 +66,11 @@ from replay.scenarios import DATA_DIR, Jam, Scenario, headers
 SAMPLE_PERIOD_S = 0.01  # [s] ground-truth sampling and fault checks (wall clock)
 REFRESH_PERIODS = 3  # a held-back stream is refreshed after this many of its periods
 READY_TIMEOUT_S = 20.0  # [s] for the plugins' first states and the subscriptions to match
+# The robot is up once its state messages reach us within this of their stamps: all its
+# nodes share one executor, which can start with a backlog of the start-up's messages
+# (commands delivered 0.8 s late, and so rejected as stale, were measured without this).
+READY_LATENCY_S = 0.05  # [s]
+RECORD_DEPTH = 50  # messages a recording subscription holds while the executor is busy
 SIM_BODY_TOPIC = '/sim/body'
 SIM_GIMBAL_TOPIC = '/sim/gimbal'
 
@@ -77,13 +83,14 @@ OUTPUTS: tuple[tuple[str, str], ...] = (
     ('/actuator_states', 'rm_msgs/msg/ActuatorState'),
     ('/imu', 'sensor_msgs/msg/Imu'),
 )
-# A plugin is up once it has published here (plugins without one are not waited for).
+# A plugin is up once it has published here (plugins without one are not waited for; the
+# imu plugin's /imu is not watched: 400 messages/s for the one executor, and the gimbal
+# reports on /gimbal_state whether it has IMU data).
 READY_TOPICS: dict[str, tuple[str, str]] = {
     'chassis': ('/chassis_state', 'rm_msgs/msg/ChassisState'),
     'gimbal': ('/gimbal_state', 'rm_msgs/msg/GimbalState'),
     'shooter': ('/shooter_state', 'rm_msgs/msg/ShooterState'),
     'gpio': ('/gpio_state', 'rm_msgs/msg/GpioState'),
-    'imu': ('/imu', 'sensor_msgs/msg/Imu'),
 }
 
 
@@ -391,31 +398,36 @@ class _Recorder:
         self._ros_clock = robot.driver.get_clock()
         self.received: dict[str, list[Received]] = {topic: [] for topic, _ in outputs}
         self.first_seen: set[str] = set()
-        # Best effort matches every publisher (reliable or not); depth for bursts.
-        qos = QoSProfile(depth=200, reliability=ReliabilityPolicy.BEST_EFFORT)
+        self.latency_s: dict[str, float] = {}  # the latest message's receive time - stamp
+        # Best effort matches every publisher (reliable or not); a bounded depth, so that
+        # a busy executor drops old samples here rather than queueing work for later.
+        qos = QoSProfile(depth=RECORD_DEPTH, reliability=ReliabilityPolicy.BEST_EFFORT)
         self._subscriptions = [
             robot.driver.create_subscription(
                 get_message_class(msgtype), topic, self._callback(topic), qos
             )
-            for topic, msgtype in outputs
-        ] + [
-            # raw: no deserialization of what is only waited for (/imu: 400 messages/s)
-            robot.driver.create_subscription(
-                get_message_class(msgtype), topic, self._callback(topic), qos, raw=True
-            )
-            for topic, msgtype in watched
+            for topic, msgtype in (*outputs, *watched)
         ]
 
     def _callback(self, topic: str) -> Callable[[Any], None]:
         def store(msg: Any) -> None:
             stamp_ns = self._ros_clock.now().nanoseconds
+            header = getattr(msg, 'header', None)
             with self._lock:
                 self.first_seen.add(topic)
+                if header is not None:
+                    sent_ns = header.stamp.sec * 1_000_000_000 + header.stamp.nanosec
+                    self.latency_s[topic] = (stamp_ns - sent_ns) * 1e-9
                 if self._clock is not None and topic in self.received:
                     clock = self._clock
                     self.received[topic].append(Received(clock.t(), clock.wall(), stamp_ns, msg))
 
         return store
+
+    def keeping_up(self, topics: list[str]) -> bool:
+        """Whether every topic has arrived, its latest message within READY_LATENCY_S."""
+        with self._lock:
+            return all(self.latency_s.get(topic, math.inf) < READY_LATENCY_S for topic in topics)
 
     def start(self, clock: _Clock) -> None:
         """Record from now on."""
@@ -496,12 +508,13 @@ def replay(
             )
 
         if not robot.wait_until(
-            lambda: set(ready) <= recorder.first_seen and not unmatched(), READY_TIMEOUT_S
+            lambda: recorder.keeping_up(ready) and not unmatched(), READY_TIMEOUT_S
         ):
             missing = sorted(set(ready) - recorder.first_seen)
             raise ReplayError(
                 f'{scenario.name}: robot not ready after {READY_TIMEOUT_S} s '
-                f'(no message on {missing}, not matched both ways: {unmatched()})'
+                f'(no message on {missing}, latency {recorder.latency_s} s, '
+                f'not matched both ways: {unmatched()})'
             )
 
         start_ns = reader.start_time
