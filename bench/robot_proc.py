@@ -38,8 +38,11 @@ PREFIX = '@@BENCH '
 
 
 def reply(obj: dict[str, Any]) -> None:
-    sys.stdout.write(PREFIX + json.dumps(obj) + '\n')
-    sys.stdout.flush()
+    try:
+        sys.stdout.write(PREFIX + json.dumps(obj) + '\n')
+        sys.stdout.flush()
+    except (BrokenPipeError, ValueError):
+        pass  # the parent is gone; stdin's end of file stops this process
 
 
 def make_tap_class():
@@ -354,6 +357,13 @@ def _timed(function: Any, record: Any) -> Any:
 
 
 def control_loop(robot: Robot) -> None:
+    try:
+        _serve(robot)
+    finally:
+        robot.stop.set()
+
+
+def _serve(robot: Robot) -> None:
     for line in sys.stdin:
         words = line.split()
         if not words:
@@ -378,7 +388,6 @@ def control_loop(robot: Robot) -> None:
                 reply({'error': f'unknown command {cmd!r}'})
         except Exception as err:
             reply({'error': f'{type(err).__name__}: {err}'})
-    robot.stop.set()
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -23,6 +23,7 @@ import datetime as dt
 import json
 import os
 import shlex
+import signal
 import sys
 import time
 import traceback
@@ -70,8 +71,13 @@ def log(text: str) -> None:
     print(f'[bench] {text}', file=sys.stderr, flush=True)
 
 
+def _stop_on_sigterm(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt(f'signal {signum}')  # so every child is closed on the way out
+
+
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
+    signal.signal(signal.SIGTERM, _stop_on_sigterm)
     # Network rule, before anything imports rclpy; children inherit it.
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     os.environ['ROS_DOMAIN_ID'] = str(args.domain_id)
