@@ -181,6 +181,13 @@ ROWS: tuple[Row, ...] = (
         _LOAD,
     ),
     Row(
+        'sched.tick.alone',
+        'scheduler',
+        'one tick alone on a thread, no contention [µs CPU]',
+        'throughput',
+        _get('tick', 'us_per_tick'),
+    ),
+    Row(
         'sched.idle.p99',
         'scheduler',
         'idle robot: period error p99 [µs]',

@@ -1,6 +1,8 @@
 """Measurement 4: how many feedback frames per second the bridge decodes and dispatches.
 
-Three views, all on the bridge's own code (``ManagedBus`` receive thread and
+First the cost of one scheduler tick of the standard robot alone on a thread (update,
+pack, send; the work the 1 kHz loop has to fit). Then three views, all on the bridge's
+own code (``ManagedBus`` receive thread and
 ``dispatch``, the actuators' ``handle_frame``), on rigs without motor physics
 (:mod:`bench.rigs`):
 
@@ -43,6 +45,7 @@ class ThroughputPlan:
     """Sizes and durations [s] of one throughput run."""
 
     cost_frames: int = 200_000
+    tick_count: int = 5_000
     knee_rates: tuple[int, ...] = KNEE_RATES
     knee_s: float = 1.5
     sweep_s: float = 3.0
@@ -50,7 +53,12 @@ class ThroughputPlan:
 
 
 QUICK_PLAN = ThroughputPlan(
-    cost_frames=20_000, knee_rates=(5_000, 20_000), knee_s=0.2, sweep_s=0.25, warmup_s=0.1
+    cost_frames=20_000,
+    tick_count=500,
+    knee_rates=(5_000, 20_000),
+    knee_s=0.2,
+    sweep_s=0.25,
+    warmup_s=0.1,
 )
 
 
@@ -75,6 +83,45 @@ def dispatch_cost(frames_total: int) -> dict[str, Any]:
     finally:
         rig.close()
     return {'us_per_frame': cost_ns / 1e3, 'frames_per_cpu_s': 1e9 / cost_ns}
+
+
+def tick_cost(ticks: int) -> dict[str, Any]:
+    """CPU time of one ``Scheduler.tick`` of the standard robot, alone on one thread.
+
+    Every joint online and commanded (velocity targets, fresh feedback every 10 ticks), the
+    frames sent to empty rm_sim channels: the work of a tick without any contention.
+    """
+    rig = Rig(standard_hardware())
+    try:
+        rig.hw.open()
+        now = time.perf_counter_ns
+        streams = [
+            (rig.hw.buses[bus].dispatch, frames[0])
+            for bus, per_joint in rig.feedback_frames().items()
+            for frames in per_joint
+        ]
+
+        def refresh() -> None:
+            t = now()
+            for dispatch, frame in streams:
+                dispatch(frame, t)
+            rig.command_all()
+
+        refresh()
+        for _ in range(200):  # warm up
+            rig.hw.tick()
+        spent = 0
+        for i in range(ticks):
+            if i % 10 == 0:
+                refresh()
+            c0 = time.thread_time_ns()
+            rig.hw.tick()
+            spent += time.thread_time_ns() - c0
+        holds = {a.hold_reason.value for a in rig.hw.actuators.values()}
+    finally:
+        rig.close()
+    us = spent / ticks / 1e3
+    return {'us_per_tick': us, 'pct_at_1khz': us / 10.0, 'holds': sorted(holds)}
 
 
 def _bridge_threads(per_thread: dict[str, float]) -> dict[str, float]:
@@ -213,6 +260,7 @@ def run_once(plan: ThroughputPlan) -> dict[str, Any]:
     """One throughput run: cost per frame, knee, CPU per motor."""
     sys.setswitchinterval(0.001)  # as in bringup (RobotHost lowers it process-wide)
     return {
+        'tick': tick_cost(plan.tick_count),
         'cost': dispatch_cost(plan.cost_frames),
         'knee': knee(plan),
         'sweep': motor_sweep(plan),
