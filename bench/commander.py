@@ -6,8 +6,9 @@ per command on stdout:
 
 * ``stream <rate_hz>``: the load pattern until ``stop``: chassis GYRO translating at
   1 m/s, gimbal RATE with slowly varying rates, shooter READY at 15 m/s;
-* ``steps <n> <hold_s> <rest_s> <rate_hz>``: the latency pattern: chassis RAW (shooter
-  READY as before), every topic at rate_hz, and n steps: /vel_cmd vx 0 -> 1.5 m/s and
+* ``steps <n> <hold_s> <rest_s> <rate_hz> [<settle_s>]``: the latency pattern: chassis
+  RAW (shooter READY as before), every topic at rate_hz, settle_s (1 s) at rest, then n
+  steps: /vel_cmd vx 0 -> 1.5 m/s and
   /gimbal_cmd rate_yaw 0 -> 8 rad/s, held hold_s, back to 0 for rest_s (+ 0-10 ms of
   random jitter, so steps fall at every phase of the plugins' periods). A step is
   published the moment it is due, not on the rate grid; its time is taken on
@@ -142,7 +143,9 @@ class Commander:
         return {'streaming': False}
 
     # -- the latency pattern ---------------------------------------------------------------
-    def steps(self, n: int, hold_s: float, rest_s: float, rate_hz: float) -> dict[str, Any]:
+    def steps(
+        self, n: int, hold_s: float, rest_s: float, rate_hz: float, settle_s: float = SETTLE_S
+    ) -> dict[str, Any]:
         self.stop_stream()
         subs = self.wait_subscribers(10.0)
         raw = self.types['chassis'].RAW
@@ -151,7 +154,7 @@ class Commander:
         now = time.monotonic()
         # settle in RAW at rest first (the load pattern spun the chassis), then the steps
         changes: list[tuple[float, bool]] = []
-        t = now + max(rest_s, SETTLE_S)
+        t = now + max(rest_s, settle_s)
         for _ in range(n):
             t += rng.uniform(0.0, 0.01)
             changes.append((t, True))
@@ -215,7 +218,11 @@ def main() -> int:
                 elif cmd == 'steps':
                     reply(
                         commander.steps(
-                            int(args[0]), float(args[1]), float(args[2]), float(args[3])
+                            int(args[0]),
+                            float(args[1]),
+                            float(args[2]),
+                            float(args[3]),
+                            *(float(a) for a in args[4:5]),
                         )
                     )
                 elif cmd == 'quit':

@@ -120,11 +120,12 @@ class RobotPlan:
     hold_s: float = 0.15
     rest_s: float = 0.3
     command_rate_hz: float = 100.0
+    settle_s: float = 1.0
     plugins: str = ''
     switch_interval_us: float | None = None
 
 
-QUICK_PLAN = RobotPlan(idle_s=0.5, load_s=0.7, steps=3, hold_s=0.12, rest_s=0.25)
+QUICK_PLAN = RobotPlan(idle_s=0.3, load_s=0.5, steps=3, hold_s=0.12, rest_s=0.25, settle_s=0.3)
 
 
 def _domain_conflict(measure: dict[str, Any]) -> list[str]:
@@ -179,9 +180,10 @@ def run_once(plan: RobotPlan, log_dir: Path, tag: str) -> dict[str, Any]:
         commander.request('stop', 10.0)
 
         tap = robot.request('tap_on ' + ' '.join(PROBES), 10.0)
-        duration = plan.steps * (plan.hold_s + plan.rest_s + 0.01) + plan.rest_s + 1.0
+        duration = plan.steps * (plan.hold_s + plan.rest_s + 0.01) + plan.settle_s
         steps = commander.request(
-            f'steps {plan.steps} {plan.hold_s} {plan.rest_s} {plan.command_rate_hz}',
+            f'steps {plan.steps} {plan.hold_s} {plan.rest_s} {plan.command_rate_hz} '
+            f'{plan.settle_s}',
             duration + 60.0,
         )
         frames = robot.request('tap_off', 30.0)
