@@ -1,7 +1,7 @@
 """Replay of test/data/gyro_track: GYRO spin in place while the gimbal TRACKs a point.
 
 The robot (imu, chassis and gimbal plugins of standard.yaml on rm_sim; the sim wheels
-carrying a 16 kg robot) stands for 2 s while the gimbal turns onto a point 3.6 m away
+carrying a 16 kg robot) stands for 2.5 s while the gimbal turns onto a point 3.6 m away
 in odom, spins in GYRO for 4.5 s, then stops. The aim is judged on the sim's ground
 truth: the barrel's world heading (chassis yaw + yaw joint angle) against the bearing
 of the point from the robot.
@@ -22,7 +22,7 @@ pytestmark = [pytest.mark.ros, pytest.mark.slow]
 # less the spin-up (~0.3 s at the 20-30 rad/s^2 angular ramp): ~25 rad, 4 turns.
 MIN_TURNS = 3.5
 SETTLE_S = 1.0  # [s] after GYRO starts (spin-up, then the gimbal's loops catch up)
-STATIC_FROM_S = 1.5  # [s] standing, the gimbal has turned onto the point (~1.2 s)
+STATIC_FROM_S = 2.0  # [s] standing, the gimbal has turned onto the point (1.2-1.8 s)
 # Aim tolerances, on the sim's ground truth. Standing, the angle loop has nothing to
 # follow: measured 0.004-0.02 rad once settled. Spinning, the gimbal's loops see the
 # chassis spin through the IMU and /actuator_states, both a few ms to tens of ms late
@@ -57,9 +57,12 @@ def test_when_gyro_spins_expect_more_than_three_and_a_half_turns(replayed):
     rates = [s.wz for s in result.body_between(GYRO_START_S + SETTLE_S, GYRO_END_S)]
     print(f'gyro: {turns:.2f} turns, wz {min(rates):.2f}..{max(rates):.2f} rad/s')
     assert turns > MIN_TURNS, info
-    # ... and stands still again by the end of the bag (RAW, zero velocity, for 1 s; the
-    # wheel loops ring for a few tenths of a second after braking from the spin).
-    assert abs(min(result.body, key=lambda s: abs(s.t - GYRO_STOP_END_S)).wz) < 0.1, info
+    # ... and stops again after it (RAW, zero velocity, for 1 s): over the last 0.5 s the
+    # heading moves by less than 0.1 rad (spinning on, it would turn 3 rad). The wheel
+    # loops ring a little after braking from the spin (+-0.3 rad/s for ~1 s measured).
+    still = result.body_between(GYRO_END_S + 0.5, GYRO_STOP_END_S)
+    print(f'after GYRO: heading moved {still[-1].yaw - still[0].yaw:+.3f} rad in 0.5 s')
+    assert abs(still[-1].yaw - still[0].yaw) < 0.1, info
 
 
 def test_when_standing_expect_the_barrel_on_the_point(replayed):
