@@ -32,6 +32,7 @@ from rm_base.sim import Fault
 from support.robot import SimRobot
 
 from reliability.rigs import WireWatch, hardware_config
+from reliability.wire import check_actuator_states, max_efforts
 from rm_msgs.msg import (
     ActuatorState,
     ChassisCmd,
@@ -76,6 +77,15 @@ def robot():
         r.world, hardware_config(r.bridge_parameters), grace_s=GRACE, track_commands=True
     )
     r.watch.watch_commands(r.bridge.hardware)
+    # every /actuator_states too: no NaN, nothing beyond a limit, MODE_OFF means 0
+    limits = max_efforts(hardware_config(r.bridge_parameters))
+    r.state_problems = []
+    r.driver.create_subscription(
+        ActuatorState,
+        '/actuator_states',
+        lambda m: r.state_problems.extend(check_actuator_states(m, limits)),
+        50,
+    )
     yield r
     r.watch.close()
     r.close()
@@ -91,6 +101,7 @@ def clean(robot):
     assert robot.watch.checker.violation_count == 0, '\n'.join(
         map(str, robot.watch.checker.violations)
     )
+    assert robot.state_problems == []
 
 
 def since(robot, topic, mark):

@@ -55,11 +55,13 @@ from rclpy.experimental import EventsExecutor  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 from rclpy.qos import qos_profile_sensor_data  # noqa: E402
 from reliability.rigs import WireWatch, hardware_config  # noqa: E402
+from reliability.wire import check_actuator_states, max_efforts  # noqa: E402
 from rm_base.bridge import CanBridgeNode  # noqa: E402
 from rm_base.sim import Fault, FaultKind  # noqa: E402
 from support.robot import CONFIG_DIR, load_parameters  # noqa: E402
 
 from rm_msgs.msg import (  # noqa: E402
+    ActuatorState,
     ChassisCmd,
     ChassisState,
     GimbalCmd,
@@ -123,6 +125,15 @@ class Robot:
             self.node.create_subscription(
                 cls, topic, lambda m, t=topic: self._store(t, m), qos_profile_sensor_data
             )
+        # every /actuator_states: no NaN, nothing beyond a limit, MODE_OFF means 0
+        limits = max_efforts(hardware_config(params))
+        self.state_problems: list[str] = []
+        self.node.create_subscription(
+            ActuatorState,
+            'actuator_states',
+            lambda m: self.state_problems.extend(check_actuator_states(m, limits)),
+            50,
+        )
         self.executor = EventsExecutor(context=self.context)
         self.executor.add_node(self.bridge)
         self.executor.add_node(self.node)
@@ -591,6 +602,8 @@ def main(argv: list[str] | None = None) -> int:
         'unsafe_by_rule': checker.violations_by_rule,
         'unsafe_after_stall': checker.violations_after_stall,
         'unsafe_during_fault': during,
+        'actuator_states_problems': len(robot.state_problems),
+        'actuator_states_examples': robot.state_problems[:5],
         'unsafe_examples': [str(v) for v in checker.violations[:10]],
         'wire': checker.summary(),
         'crashes': crash_count,
@@ -617,7 +630,7 @@ def main(argv: list[str] | None = None) -> int:
     print(text, flush=True)
     if args.report is not None:
         args.report.write_text(text + '\n')
-    ok = report['unsafe_frames'] == 0 and crash_count == 0
+    ok = report['unsafe_frames'] == 0 and crash_count == 0 and not robot.state_problems
     print(
         f'[soak] {"PASS" if ok else "FAIL"}: unsafe frames {report["unsafe_frames"]}, '
         f'crashes {crash_count}',
