@@ -40,8 +40,8 @@ What happens:
 
 3. While playing and for the scenario's ``tail_s`` after it, a sampler thread reads the
    sim's ground truth every SAMPLE_PERIOD_S (chassis pose and twist, gimbal joint angles)
-   and applies the scenario's faults at their bag times (Jam: lock the motor, free it when
-   it pushes back).
+   and applies the scenario's faults at their bag times (Jam: lock the motor at its next
+   push forward, free it when it pushes back).
 4. The result holds every output message and body sample against the *replay clock*
    (simulated time since playback start, in seconds: the bag's own time axis), plus the
    commands as they were published. With ``output`` everything is also written to a
@@ -148,7 +148,7 @@ class FaultRecord:
 
     t: float  # [s] replay clock
     motor: str
-    action: str  # 'inject' | 'wedged' | 'clear'
+    action: str  # 'armed' | 'wedged' (locked) | 'clear'
     detail: str
 
 
@@ -348,7 +348,8 @@ class _Faults:
     def __init__(self, world: Any, faults: tuple[Jam, ...]) -> None:
         self._world = world
         self._pending = sorted(faults, key=lambda f: f.at_s)
-        self._active: dict[Jam, bool] = {}  # jam -> the motor has pushed into it
+        self._armed: list[Jam] = []
+        self._wedged: list[Jam] = []
         self.records: list[FaultRecord] = []
 
     def update(self, t: float) -> None:
@@ -356,23 +357,29 @@ class _Faults:
 
         while self._pending and self._pending[0].at_s <= t:
             jam = self._pending.pop(0)
-            self._world.inject(jam.motor, Fault.jam())
-            self._active[jam] = False
-            self.records.append(FaultRecord(t, jam.motor, 'inject', 'jam (locked rotor)'))
-        for jam, wedged in list(self._active.items()):
-            with self._world.lock:
-                torque = self._world.motor(jam.motor).model.torque
-            if not wedged and torque >= jam.torque:
-                self._active[jam] = True
+            self._armed.append(jam)
+            self.records.append(FaultRecord(t, jam.motor, 'armed', 'jam at the next push'))
+        for jam in list(self._armed):
+            torque = self._torque(jam.motor)
+            if torque >= jam.torque:
+                self._world.inject(jam.motor, Fault.jam())
+                self._armed.remove(jam)
+                self._wedged.append(jam)
                 self.records.append(
-                    FaultRecord(t, jam.motor, 'wedged', f'pushed with {torque:.2f} N*m')
+                    FaultRecord(t, jam.motor, 'wedged', f'locked pushing {torque:.2f} N*m')
                 )
-            elif wedged and torque <= -jam.torque:
+        for jam in list(self._wedged):
+            torque = self._torque(jam.motor)
+            if torque <= -jam.torque:
                 self._world.clear_faults(jam.motor, FaultKind.JAM)
-                del self._active[jam]
+                self._wedged.remove(jam)
                 self.records.append(
                     FaultRecord(t, jam.motor, 'clear', f'pushed back with {torque:.2f} N*m')
                 )
+
+    def _torque(self, motor: str) -> float:
+        with self._world.lock:
+            return self._world.motor(motor).model.torque
 
 
 def _sample_body(world: Any, clock: _Clock, ros_clock: Any) -> BodySample:

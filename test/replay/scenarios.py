@@ -109,13 +109,14 @@ class Command:
 
 @dataclass(frozen=True)
 class Jam:
-    """A ball wedged in a mechanism: ``motor`` locks at ``at_s`` [s of bag time].
+    """A ball that wedges in a mechanism: from ``at_s`` [s of bag time] on, the next push.
 
-    The ball wedges when the motor drives into it and comes free when the motor backs
-    off, as a jammed trigger is freed by reversing: the harness clears the jam once the
-    motor, after pushing forward with at least ``torque`` [N*m], pushes back with at least
-    as much (the sim's electromagnetic torque at the output shaft; positive = the feed
-    direction). Pushes back before that (the end of a slot step braking) do not free it.
+    From ``at_s`` the jam is armed; the next time ``motor`` pushes forward with at least
+    ``torque`` [N*m] (the sim's electromagnetic torque at the output shaft; positive = the
+    feed direction), the ball wedges: the motor locks. It comes free once the motor pushes
+    back with at least as much, as a jammed trigger is freed by reversing. Armed, not
+    locked at once: a lock at an arbitrary instant could catch the trigger braking past
+    the end of a step, a state no ball produces.
     """
 
     motor: str
@@ -330,8 +331,8 @@ GYRO_TRACK = Scenario(
 
 # -- 3. a five-shot burst with a jam --------------------------------------------------------------
 # READY (friction wheels up, a ball fed), then PUSH 5 shots at 5 Hz held until 4.5 s, then
-# PASSIVE. The trigger jams 0.5 s into the burst (after ~2-3 shots) and frees when it
-# reverses (BLOCK), so the burst completes with one jam.
+# PASSIVE. From 0.5 s into the burst (after 2-3 shots) the next push of the trigger jams;
+# the jam frees when the trigger reverses (BLOCK), so the burst completes with one jam.
 BURST_START_S = 1.5
 BURST_END_S = 4.5
 BURST_PASSIVE_END_S = 5.0

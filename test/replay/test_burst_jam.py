@@ -1,9 +1,9 @@
 """Replay of test/data/burst_jam: READY, a five-shot burst at 5 Hz with one jam, PASSIVE.
 
 The robot runs the gpio (simulated ball switch) and shooter plugins of standard.yaml on
-rm_sim. The scenario's fault schedule locks the trigger 0.5 s into the burst; the jam
-holds while the trigger pushes into it and frees when the trigger pushes back (the
-shooter's BLOCK reverse), as a wedged ball does (replay.scenarios.Jam).
+rm_sim. The scenario's fault schedule makes the trigger's first push from 0.5 s into the
+burst on jam: the trigger locks, and frees when it pushes back (the shooter's BLOCK
+reverse), as a wedged ball does (replay.scenarios.Jam).
 """
 
 from __future__ import annotations
@@ -44,10 +44,10 @@ def test_when_the_trigger_jams_mid_burst_expect_five_shots_and_one_block(replaye
     assert entries(states, ShooterState.BLOCK) == 1, info
     assert max(s.msg.jam_count for s in samples) == 1, info
     assert not any(s.msg.fault for s in samples), info
-    # The jam was injected, wedged and freed by the reverse while BLOCK.
-    assert [f.action for f in result.faults] == ['inject', 'wedged', 'clear'], info
+    # The jam was armed, wedged at the next push and freed by the reverse while BLOCK.
+    assert [f.action for f in result.faults] == ['armed', 'wedged', 'clear'], info
     block = next(s for s in samples if s.msg.state == ShooterState.BLOCK)
-    assert JAM_AT_S <= block.t, info
+    assert JAM_AT_S <= result.faults[1].t <= block.t, info
     assert result.faults[2].t >= block.t - 0.05, info  # freed by BLOCK's reverse
     # After BLOCK the trigger fed again (FEED) and the burst went on.
     assert ShooterState.FEED in states[states.index(ShooterState.BLOCK) :], info

@@ -140,22 +140,26 @@ def test_while_the_stream_continues_expect_the_last_message_sent_again_when_held
     assert [s.refresh for s in log] == [False, True, False, False]
 
 
-def test_a_jam_is_freed_only_by_pushing_back_after_pushing_into_it():
+def test_a_jam_locks_at_the_next_push_and_frees_when_pushed_back():
     world = FakeWorld()
     faults = _Faults(world, (Jam('trigger', at_s=1.0, torque=0.5),))
-    faults.update(0.9)
+    world.model.torque = 1.5
+    faults.update(0.9)  # not armed yet
     assert world.calls == []
+    world.model.torque = -1.5  # braking at the end of a step when the jam is armed
     faults.update(1.0)
-    assert world.calls == [('inject', 'trigger', FaultKind.JAM)]
-    world.model.torque = -1.5  # braking at the end of a step: the jam is not wedged yet
     faults.update(1.01)
-    world.model.torque = 1.5  # drives into the jam
-    faults.update(1.02)
+    assert world.calls == []  # pulling back: no ball wedges
     world.model.torque = 0.2
+    faults.update(1.02)
+    assert world.calls == []
+    world.model.torque = 1.5  # the next push: the ball wedges
     faults.update(1.03)
-    assert [c[0] for c in world.calls] == ['inject']
+    assert world.calls == [('inject', 'trigger', FaultKind.JAM)]
+    world.model.torque = 0.2
+    faults.update(1.04)
     world.model.torque = -0.6  # reverses: the ball comes free
     faults.update(1.2)
     assert world.calls[-1] == ('clear', 'trigger', FaultKind.JAM)
-    assert [r.action for r in faults.records] == ['inject', 'wedged', 'clear']
-    assert [r.t for r in faults.records] == [1.0, 1.02, 1.2]
+    assert [r.action for r in faults.records] == ['armed', 'wedged', 'clear']
+    assert [r.t for r in faults.records] == [1.0, 1.03, 1.2]
