@@ -41,7 +41,7 @@ What happens:
 3. While playing and for the scenario's ``tail_s`` after it, a sampler thread reads the
    sim's ground truth every SAMPLE_PERIOD_S (chassis pose and twist, gimbal joint angles)
    and applies the scenario's faults at their bag times (Jam: lock the motor at its next
-   push forward, free it when it pushes back).
+   drive forward, free it when it pushes back for a while).
 4. The result holds every output message and body sample against the *replay clock*
    (simulated time since playback start, in seconds: the bag's own time axis), plus the
    commands as they were published. With ``output`` everything is also written to a
@@ -349,10 +349,11 @@ class _Faults:
         self._world = world
         self._pending = sorted(faults, key=lambda f: f.at_s)
         self._armed: list[Jam] = []
-        self._wedged: list[Jam] = []
+        self._wedged: dict[Jam, float | None] = {}  # jam -> since when it is pushed back
         self.records: list[FaultRecord] = []
 
     def update(self, t: float) -> None:
+        """Arm, lock and free the jams at replay clock t [s]."""
         from rm_base.sim import Fault, FaultKind
 
         while self._pending and self._pending[0].at_s <= t:
@@ -360,26 +361,33 @@ class _Faults:
             self._armed.append(jam)
             self.records.append(FaultRecord(t, jam.motor, 'armed', 'jam at the next push'))
         for jam in list(self._armed):
-            torque = self._torque(jam.motor)
-            if torque >= jam.torque:
+            torque, speed = self._motor(jam.motor)
+            if torque >= jam.torque and speed >= jam.speed:
                 self._world.inject(jam.motor, Fault.jam())
                 self._armed.remove(jam)
-                self._wedged.append(jam)
+                self._wedged[jam] = None
                 self.records.append(
-                    FaultRecord(t, jam.motor, 'wedged', f'locked pushing {torque:.2f} N*m')
+                    FaultRecord(
+                        t, jam.motor, 'wedged', f'locked at {speed:.1f} rad/s, {torque:.2f} N*m'
+                    )
                 )
-        for jam in list(self._wedged):
-            torque = self._torque(jam.motor)
-            if torque <= -jam.torque:
+        for jam, since in list(self._wedged.items()):
+            torque, _ = self._motor(jam.motor)
+            if torque > -jam.torque:
+                self._wedged[jam] = None
+            elif since is None:
+                self._wedged[jam] = t
+            elif t - since >= jam.free_s:
                 self._world.clear_faults(jam.motor, FaultKind.JAM)
-                self._wedged.remove(jam)
-                self.records.append(
-                    FaultRecord(t, jam.motor, 'clear', f'pushed back with {torque:.2f} N*m')
-                )
+                del self._wedged[jam]
+                detail = f'pushed back ({torque:.2f} N*m) for {t - since:.3f} s'
+                self.records.append(FaultRecord(t, jam.motor, 'clear', detail))
 
-    def _torque(self, motor: str) -> float:
+    def _motor(self, motor: str) -> tuple[float, float]:
+        """Torque [N*m] and speed [rad/s] of a simulated motor at its output shaft."""
         with self._world.lock:
-            return self._world.motor(motor).model.torque
+            model = self._world.motor(motor).model
+            return model.torque, model.velocity
 
 
 def _sample_body(world: Any, clock: _Clock, ros_clock: Any) -> BodySample:

@@ -111,17 +111,21 @@ class Command:
 class Jam:
     """A ball that wedges in a mechanism: from ``at_s`` [s of bag time] on, the next push.
 
-    From ``at_s`` the jam is armed; the next time ``motor`` pushes forward with at least
-    ``torque`` [N*m] (the sim's electromagnetic torque at the output shaft; positive = the
-    feed direction), the ball wedges: the motor locks. It comes free once the motor pushes
-    back with at least as much, as a jammed trigger is freed by reversing. Armed, not
-    locked at once: a lock at an arbitrary instant could catch the trigger braking past
-    the end of a step, a state no ball produces.
+    From ``at_s`` the jam is armed. The next time ``motor`` drives forward -- moving at
+    ``speed`` [rad/s] or more while pushing with ``torque`` [N*m] or more (the sim's
+    output shaft; positive = the feed direction) -- the ball wedges: the motor locks. It
+    comes free once the motor has pushed back with at least ``torque`` for ``free_s``
+    [s], as a jammed trigger is freed by reversing. Armed rather than locked at once,
+    and freed by a sustained reverse only: a lock at an arbitrary instant can catch the
+    trigger braking past the end of a step, and a lock's recoil pulls back for a few ms,
+    neither of which a ball does.
     """
 
     motor: str
     at_s: float
     torque: float = 0.5
+    speed: float = 1.0
+    free_s: float = 0.05
 
 
 @dataclass(frozen=True)

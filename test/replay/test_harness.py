@@ -28,7 +28,7 @@ class FakeWorld:
         self.time_ns = 0
         self.lock = threading.Lock()
         self.calls: list[tuple] = []
-        self.model = SimpleNamespace(torque=0.0)
+        self.model = SimpleNamespace(torque=0.0, velocity=0.0)
 
     def motor(self, name):
         return SimpleNamespace(model=self.model)
@@ -140,26 +140,31 @@ def test_while_the_stream_continues_expect_the_last_message_sent_again_when_held
     assert [s.refresh for s in log] == [False, True, False, False]
 
 
-def test_a_jam_locks_at_the_next_push_and_frees_when_pushed_back():
+def test_a_jam_locks_at_the_next_drive_forward_and_frees_after_a_sustained_reverse():
     world = FakeWorld()
-    faults = _Faults(world, (Jam('trigger', at_s=1.0, torque=0.5),))
-    world.model.torque = 1.5
+    model = world.model
+    faults = _Faults(world, (Jam('trigger', at_s=1.0, torque=0.5, speed=1.0, free_s=0.05),))
+    model.torque, model.velocity = 1.5, 10.0
     faults.update(0.9)  # not armed yet
     assert world.calls == []
-    world.model.torque = -1.5  # braking at the end of a step when the jam is armed
+    model.torque, model.velocity = -1.5, 8.0  # braking at the end of a step
     faults.update(1.0)
+    model.torque, model.velocity = 0.8, 0.1  # holding at the end of a step: not moving
     faults.update(1.01)
-    assert world.calls == []  # pulling back: no ball wedges
-    world.model.torque = 0.2
-    faults.update(1.02)
     assert world.calls == []
-    world.model.torque = 1.5  # the next push: the ball wedges
+    model.torque, model.velocity = 1.5, 3.0  # the next step drives a ball: it wedges
     faults.update(1.03)
     assert world.calls == [('inject', 'trigger', FaultKind.JAM)]
-    world.model.torque = 0.2
+    model.torque, model.velocity = -0.8, 0.0  # the lock's recoil, 20 ms: still jammed
     faults.update(1.04)
-    world.model.torque = -0.6  # reverses: the ball comes free
-    faults.update(1.2)
+    faults.update(1.06)
+    model.torque = 1.5  # stalled, pushing on
+    faults.update(1.07)
+    model.torque = -1.5  # BLOCK reverses, 50 ms: the ball comes free
+    for t in (1.20, 1.22, 1.24):
+        faults.update(t)
+    assert world.calls[-1] == ('inject', 'trigger', FaultKind.JAM)
+    faults.update(1.25)
     assert world.calls[-1] == ('clear', 'trigger', FaultKind.JAM)
     assert [r.action for r in faults.records] == ['armed', 'wedged', 'clear']
-    assert [r.t for r in faults.records] == [1.0, 1.03, 1.2]
+    assert [r.t for r in faults.records] == [1.0, 1.03, 1.25]
