@@ -3,6 +3,8 @@
 The chassis must go PASSIVE within its command_timeout of the last /chassis_cmd, the
 wheels must be switched off (MODE_OFF, zero output) and the robot coasts to a stop on
 the motors' friction: PASSIVE means limp, nothing brakes (rm_plugins.chassis docstring).
+Measured: PASSIVE 0.255-0.29 s after the last command (timeout 0.25 s); the robot coasts
+1.5 m from 1 m/s and stops ~3.1 s after PASSIVE (the sim's motor friction alone).
 """
 
 from __future__ import annotations
