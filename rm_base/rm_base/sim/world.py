@@ -20,6 +20,9 @@ channel's motors send. A channel belongs to exactly one world.
 
 from __future__ import annotations
 
+import collections
+import contextlib
+import copy
 import logging
 import math
 import threading
@@ -111,6 +114,10 @@ class SimChannel:
         self._endpoints: list[_Endpoint] = []
         self._state = can.BusState.ACTIVE
         self.closed = False
+        # frames sent while the physics thread held the lock (see send)
+        self._handed_over: collections.deque[tuple[_Endpoint | None, can.Message, float | None]] = (
+            collections.deque()
+        )
 
     # -- bus faults ----------------------------------------------------------------------
 
@@ -167,33 +174,70 @@ class SimChannel:
         Raises:
             can.CanOperationError: the channel is closed or in (injected) bus-off.
         """
-        with self.world.lock:
-            if self.closed:
-                raise can.CanOperationError(f'rm_sim channel {self.name} is closed')
-            if self._state is can.BusState.ERROR:
-                self.stats.lost += 1
-                raise can.CanOperationError(f'rm_sim channel {self.name} is bus-off (injected)')
-            self.stats.sent += 1
-            stamp = self.world.timestamp() if timestamp is None else timestamp
-            for endpoint in list(self._endpoints):
-                if endpoint is sender and not endpoint.receive_own_messages:
-                    continue
-                endpoint._deliver(_copy(msg, stamp, self.name, is_rx=endpoint is not sender))
-            if msg.is_error_frame:
-                self.stats.unclaimed += 1
-                return
-            replies: list[Frame] = []
-            claimed = self._route(
-                msg.arbitration_id,
-                bytes(msg.data),
-                replies,
-                is_extended_id=msg.is_extended_id,
-                is_remote_frame=msg.is_remote_frame,
-                is_fd=msg.is_fd,
-            )
-            if not claimed:
-                self.stats.unclaimed += 1
-            self.deliver_frames(replies)
+        lock = self.world.lock
+        if not lock.acquire(blocking=False):
+            if not self._can_hand_over():
+                lock.acquire()
+            else:
+                # The real-time physics thread holds the lock for a whole tick (~0.2 ms).
+                # A sender waiting for it gives up the GIL and must win it back, which
+                # cost the CAN scheduler thread most of its deadlines (bench/). Hand the
+                # frame over instead: the tick puts it on the bus before it releases the
+                # lock, which is when a waiting sender would have got it. (A copy: the
+                # caller may reuse its message once send returns.)
+                self._handed_over.append((sender, copy.copy(msg), timestamp))
+                if not lock.acquire(blocking=False):
+                    return
+                msg = None  # the tick ended meanwhile: the flush below sends it, in order
+        try:
+            self.flush_handed_over()
+            if msg is not None:
+                self._send_locked(sender, msg, timestamp)
+        finally:
+            lock.release()
+
+    def _can_hand_over(self) -> bool:
+        # only to a running physics thread (it flushes every tick), and never a frame that
+        # must raise now (closed, bus-off)
+        return self.world.running and not self.closed and self._state is not can.BusState.ERROR
+
+    def flush_handed_over(self) -> None:
+        """Put the frames handed over during a physics tick on the bus (lock held)."""
+        queue = self._handed_over
+        while queue:
+            sender, msg, timestamp = queue.popleft()
+            with contextlib.suppress(can.CanOperationError):  # bus-off since: lost, counted
+                self._send_locked(sender, msg, timestamp)
+
+    def _send_locked(
+        self, sender: _Endpoint | None, msg: can.Message, timestamp: float | None
+    ) -> None:
+        if self.closed:
+            raise can.CanOperationError(f'rm_sim channel {self.name} is closed')
+        if self._state is can.BusState.ERROR:
+            self.stats.lost += 1
+            raise can.CanOperationError(f'rm_sim channel {self.name} is bus-off (injected)')
+        self.stats.sent += 1
+        stamp = self.world.timestamp() if timestamp is None else timestamp
+        for endpoint in list(self._endpoints):
+            if endpoint is sender and not endpoint.receive_own_messages:
+                continue
+            endpoint._deliver(_copy(msg, stamp, self.name, is_rx=endpoint is not sender))
+        if msg.is_error_frame:
+            self.stats.unclaimed += 1
+            return
+        replies: list[Frame] = []
+        claimed = self._route(
+            msg.arbitration_id,
+            bytes(msg.data),
+            replies,
+            is_extended_id=msg.is_extended_id,
+            is_remote_frame=msg.is_remote_frame,
+            is_fd=msg.is_fd,
+        )
+        if not claimed:
+            self.stats.unclaimed += 1
+        self.deliver_frames(replies)
 
     def _route(
         self,
@@ -631,6 +675,8 @@ class SimWorld:
             frame = imu.poll(now)
             if frame is not None:
                 self._imu_frames.append((imu, frame))
+        for channel in self._channels.values():
+            channel.flush_handed_over()
 
     # The IMU frames of a tick are built under the lock (they read the body) but written
     # to their terminals after it is released: a terminal write is a system call that can

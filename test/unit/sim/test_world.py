@@ -1,6 +1,11 @@
 """SimWorld: building from config, the clock, the registry, the real-time thread."""
 
+import threading
+import time
+
+import can
 import pytest
+from rm_base.hardware.protocols import dji
 from rm_base.sim import (
     SimBus,
     SimConfigError,
@@ -133,6 +138,48 @@ def test_realtime_world_advances_with_the_wall_clock():
         stopped_at = world.time_ns
         world.step()  # stepping is allowed again once the thread is stopped
         assert world.time_ns == stopped_at + world.period_ns
+
+
+def test_when_the_physics_tick_holds_the_lock_expect_send_not_to_wait():
+    # A sender waiting for the world lock gives up the GIL and has to win it back; the
+    # CAN scheduler lost most of its deadlines that way (bench/). The frame is handed to
+    # the tick, which puts it on the bus before it releases the lock.
+    channel = unique_channel()
+    world = SimWorld()
+    world.add_channel(channel, [{'type': 'm3508', 'id': 1, 'name': 'wheel'}])
+    armed, in_tick, release = threading.Event(), threading.Event(), threading.Event()
+    apply_loads = world.body.apply_loads
+
+    def slow_apply_loads():
+        if armed.is_set():
+            in_tick.set()
+            release.wait(5.0)
+        apply_loads()
+
+    world.body.apply_loads = slow_apply_loads
+    sender = SimBus(channel, world=world)  # starts the physics thread
+    listener = SimBus(channel, world=world, can_filters=[{'can_id': 0x200, 'can_mask': 0x7FF}])
+    command = can.Message(
+        arbitration_id=0x200, data=dji.pack_command([1000, 0, 0, 0]), is_extended_id=False
+    )
+    try:
+        armed.set()
+        assert in_tick.wait(5.0)  # the physics thread is in a tick, holding the lock
+        started = time.monotonic()
+        sender.send(command)
+        send_took = time.monotonic() - started
+        on_bus_during_tick = listener.recv(timeout=0)
+        release.set()
+        on_bus_after_tick = listener.recv(timeout=5.0)
+    finally:
+        release.set()
+        listener.shutdown()
+        sender.shutdown()
+        world.close()
+    assert send_took < 1.0  # the tick holds the lock for 5 s
+    assert on_bus_during_tick is None
+    assert on_bus_after_tick is not None and on_bus_after_tick.arbitration_id == 0x200
+    assert world.motor('wheel').command_raw == 1000
 
 
 def test_same_config_gives_the_same_frames(make_world):
