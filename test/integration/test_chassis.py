@@ -220,18 +220,27 @@ class ChassisRig:
         with self.world.lock:
             return tuple(self.world.body.twist)
 
-    def record(self, seconds: float, period: float = 0.01) -> Samples:
+    def mark(self) -> tuple[float, float, int]:
+        """Now, for ``record(origin=...)``: (sim time [s], its lag behind real time [s],
+        the sim's overrun count)."""
+        with self.world.lock:
+            now = self.world.time_ns / 1e9
+            return now, time.monotonic() - now, self.world.overruns
+
+    def record(self, seconds: float, period: float = 0.01,
+               origin: tuple[float, float, int] | None = None) -> Samples:
         """Sample (sim time [s], x, y, yaw, yaw joint, vx, vy, wz) for seconds of sim time.
 
         The result says whether the window was disturbed: the sim's clock moved against
         real time by more than SIM_LAG (a burst to catch up, or a slip), or the plugin
         changed state (e.g. PASSIVE after a stall longer than a timeout; the reasons are
-        kept in ``samples.reasons``).
+        kept in ``samples.reasons``). origin (from ``mark``): the window starts there
+        instead (the moment a command went out, a little before the first sample).
         """
         samples = Samples()
         states = {}
-        lags = []
-        overruns = self.world.overruns
+        lags = [] if origin is None else [origin[1]]
+        overruns = self.world.overruns if origin is None else origin[2]
         with self.world.lock:
             end_ns = self.world.time_ns + round(seconds * 1e9)
         deadline = time.monotonic() + seconds + WAIT
@@ -548,10 +557,11 @@ def from_rest_to(r: ChassisRig, vx: float, seconds: float,
         if kept is not None:
             kept.clear()
         r.since = len(r.history('/chassis_state'))
-        with r.world.lock:
-            r.commanded_at = r.world.time_ns / 1e9  # sim time [s] the command goes out
+        # the sim time [s] the command goes out; a stall from here on disturbs the window
+        origin = r.mark()
+        r.commanded_at = origin[0]
         r.velocity(vx=vx)
-        return r.record(seconds)
+        return r.record(seconds, origin=origin)
 
     return maneuver
 
