@@ -11,6 +11,9 @@ One run = a fresh robot process (:mod:`bench.robot_proc`: bridge + host + rm_sim
    driven: CPU and scheduler timing, with :mod:`bench.canary` measuring the machine's
    own wake-up latency in the same window;
 3. ``latency``: command steps (see :mod:`bench.latency`) with the tap on.
+
+:func:`run_split` repeats the phases with can_bridge (+ rm_sim) and rm_robot in two
+processes, the layout of ``ros2 run`` / a launch file.
 """
 
 from __future__ import annotations
@@ -18,8 +21,10 @@ from __future__ import annotations
 import json
 import os
 import queue
+import shutil
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from dataclasses import dataclass
@@ -80,13 +85,16 @@ class Child:
             raise BenchError(f'{self.name}: {msg["error"]}')
         return msg
 
-    def request(self, line: str, timeout: float) -> dict[str, Any]:
+    def send(self, line: str) -> None:
         assert self.proc.stdin is not None
         try:
             self.proc.stdin.write(line + '\n')
             self.proc.stdin.flush()
         except (BrokenPipeError, OSError) as err:
             raise BenchError(f'{self.name} is gone: {err}') from err
+
+    def request(self, line: str, timeout: float) -> dict[str, Any]:
+        self.send(line)
         return self.wait(timeout)
 
     def close(self, timeout: float = 20.0) -> None:
@@ -211,3 +219,95 @@ def profile(plan: RobotPlan, log_dir: Path, seconds: float) -> dict[str, Any]:
     finally:
         commander.close()
         robot.close()
+
+
+def _merge(bridge: dict[str, Any], host: dict[str, Any]) -> dict[str, Any]:
+    """One phase of the split robot as one result: groups summed over both processes."""
+    merged = dict(bridge)
+    merged['groups'] = {k: bridge['groups'][k] + host['groups'][k] for k in bridge['groups']}
+    merged['projected'] = {
+        k: bridge['projected'][k] + host['projected'][k] for k in bridge['projected']
+    }
+    merged['loops'] = {**bridge['loops'], **host['loops']}
+    merged['threads'] = {
+        **{f'bridge/{k}': v for k, v in bridge['threads'].items()},
+        **{f'host/{k}': v for k, v in host['threads'].items()},
+    }
+    merged['process_pct'] = bridge['process_pct'] + host['process_pct']
+    merged['process_pct_by_role'] = {
+        'bridge': bridge['process_pct'],
+        'host': host['process_pct'],
+    }
+    merged['plugin_overruns'] = host['plugin_overruns']
+    merged['publishers'] = {
+        t: sorted(set(bridge['publishers'][t]) | set(host['publishers'][t]))
+        for t in bridge['publishers']
+    }
+    return merged
+
+
+def _measure_both(
+    bridge: Child, host: Child, phase: str, seconds: float
+) -> tuple[dict[str, Any], dict[str, Any]]:
+    bridge.send(f'measure {phase} {seconds}')
+    host.send(f'measure {phase} {seconds}')
+    return bridge.wait(seconds + 30.0), host.wait(seconds + 30.0)
+
+
+def run_split(plan: RobotPlan, log_dir: Path, tag: str) -> dict[str, Any]:
+    """The same phases with can_bridge (+ rm_sim) and rm_robot in two processes.
+
+    The layout ``ros2 run rm_base can_bridge`` + ``ros2 run rm_base rm_robot`` gives on a
+    robot; the simulator lives in the bridge's process (rm_sim is an in-process bus).
+    """
+    result: dict[str, Any] = {'notes': []}
+    imu_dir = tempfile.mkdtemp(prefix='rm_bench_imu_')
+    common = ['--imu-dir', imu_dir, *_robot_args(plan)]
+    bridge = Child(
+        'bench.robot_proc', ['--role', 'bridge', *common], log_dir / f'split_bridge_{tag}.log'
+    )
+    # all three start at once: the IMU plugin opens the simulator's pty when it appears
+    host = Child('bench.robot_proc', ['--role', 'host', *common], log_dir / f'split_host_{tag}.log')
+    commander = Child('bench.commander', [], log_dir / f'split_commander_{tag}.log')
+    try:
+        t0 = time.monotonic()
+        bridge.wait(90.0)
+        ready = bridge.request('ready 30', 40.0)
+        host.wait(90.0)
+        result['plugins'] = host.request('ready 30', 40.0)['plugins']
+        result['startup_s'] = round(time.monotonic() - t0, 2)
+        offline = [j for j, ok in ready['online'].items() if not ok]
+        if offline:
+            result['notes'].append(f'joints without feedback at start: {offline}')
+        commander.wait(60.0)
+
+        result['idle'] = _merge(*_measure_both(bridge, host, 'idle', plan.idle_s))
+
+        commander.request(f'stream {plan.command_rate_hz}', 30.0)
+        active = bridge.request('wait_active 20 ' + ' '.join(ACTIVE_JOINTS), 30.0)
+        if not active['active']:
+            result['notes'].append(f'not every joint driven under load: {active["holds"]}')
+        canary = Child('bench.canary', [str(plan.load_s)], log_dir / f'split_canary_{tag}.log')
+        try:
+            result['load'] = _merge(*_measure_both(bridge, host, 'load', plan.load_s))
+            result['canary'] = canary.wait(30.0)
+        finally:
+            canary.close()
+        commander.request('stop', 10.0)
+
+        tap = bridge.request('tap_on ' + ' '.join(PROBES), 10.0)
+        duration = plan.steps * (plan.hold_s + plan.rest_s + 0.01) + plan.settle_s
+        steps = commander.request(
+            f'steps {plan.steps} {plan.hold_s} {plan.rest_s} {plan.command_rate_hz} '
+            f'{plan.settle_s}',
+            duration + 60.0,
+        )
+        frames = bridge.request('tap_off', 30.0)
+        result['latency'] = analyse({**tap, **steps, **frames}, int(plan.hold_s * 1e9))
+        for phase in ('idle', 'load'):
+            result['notes'] += _domain_conflict(result[phase])
+    finally:
+        for child in (commander, host, bridge):  # plugins' zero output before the bridge's
+            child.close()
+        shutil.rmtree(imu_dir, ignore_errors=True)
+    return result

@@ -70,7 +70,7 @@ def make_tap_class():
 class Robot:
     """The robot and its measuring hooks (see the module docstring)."""
 
-    def __init__(self, plugins: list[str] | None) -> None:
+    def __init__(self, plugins: list[str] | None, role: str = 'all', imu_dir: str = '') -> None:
         import rclpy
         from rclpy.experimental import EventsExecutor
         from rclpy.signals import SignalHandlerOptions
@@ -84,9 +84,10 @@ class Robot:
         prepare_ros_process()
         self._tmp = tempfile.mkdtemp(prefix='rm_bench_')
         files = parameter_files('standard', None, True)
-        # a private pty for the simulated IMU (the config's path has the domain id only)
+        # a private pty for the simulated IMU (the config's path has the domain id only);
+        # with the robot split over two processes the parent names one for both
         overlay = pathlib.Path(self._tmp) / 'bench_overlay.yaml'
-        imu = os.path.join(self._tmp, 'imu')
+        imu = os.path.join(imu_dir or self._tmp, 'imu')
         host_params: dict[str, Any] = {'imu': {'port': imu}}
         if plugins:
             host_params['plugins'] = plugins
@@ -103,13 +104,15 @@ class Robot:
             args += ['--params-file', str(path)]
         rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
         self.rclpy = rclpy
-        self.bridge = CanBridgeNode()
-        self.host = RobotHost()
+        self.role = role
+        self.bridge = CanBridgeNode() if role in ('all', 'bridge') else None
+        self.host = RobotHost() if role in ('all', 'host') else None
         self.executor = EventsExecutor()
-        self.executor.add_node(self.bridge)
-        self.executor.add_node(self.host)
-        self.hw = self.bridge.hardware
-        self.recorder = TickRecorder(self.hw.scheduler)
+        for node in (self.bridge, self.host):
+            if node is not None:
+                self.executor.add_node(node)
+        self.hw = self.bridge.hardware if self.bridge is not None else None
+        self.recorder = TickRecorder(self.hw.scheduler) if self.hw is not None else None
         self.stop = threading.Event()
         self._taps: list[Any] = []
         self._applied: list[tuple[int, str, float, float]] = []
@@ -126,16 +129,27 @@ class Robot:
     def shutdown(self) -> None:
         for tap in self._taps:
             tap.shutdown()
-        self.host.shutdown()
-        self.bridge.shutdown()
+        nodes = [n for n in (self.host, self.bridge) if n is not None]  # plugins first
+        for node in nodes:
+            node.shutdown()
         self.executor.shutdown()
-        self.host.destroy_node()
-        self.bridge.destroy_node()
+        for node in nodes:
+            node.destroy_node()
         self.rclpy.try_shutdown()
         shutil.rmtree(self._tmp, ignore_errors=True)
 
     # -- commands (control thread) ------------------------------------------------------
+    @property
+    def _node(self) -> Any:
+        return self.bridge if self.bridge is not None else self.host
+
+    @property
+    def _plugins(self) -> list[str]:
+        return self.host.plugin_names if self.host is not None else []
+
     def ready(self, timeout: float) -> dict[str, Any]:
+        if self.hw is None:
+            return {'online': {}, 'plugins': self._plugins, 'joints': []}
         deadline = time.monotonic() + timeout
         while time.monotonic() < deadline:
             if all(s.online for s in self.hw.states()):
@@ -143,7 +157,7 @@ class Robot:
             time.sleep(0.05)
         return {
             'online': {s.name: s.online for s in self.hw.states()},
-            'plugins': self.host.plugin_names,
+            'plugins': self._plugins,
             'joints': self.hw.joint_names,
         }
 
@@ -162,58 +176,67 @@ class Robot:
         }
 
     def _frame_counts(self) -> dict[str, tuple[int, int]]:
+        if self.hw is None:
+            return {}
         return {
             name: (bus.stats().frames_received, bus.stats().frames_sent)
             for name, bus in self.hw.buses.items()
         }
 
     def _publishers(self, topic: str) -> list[str]:
-        return sorted(i.node_name for i in self.bridge.get_publishers_info_by_topic(topic))
+        return sorted(i.node_name for i in self._node.get_publishers_info_by_topic(topic))
 
     def measure(self, name: str, seconds: float) -> dict[str, Any]:
         from bench.cpu import group_percent
         from bench.machine import Window, thread_cpu_percent, thread_cpu_snapshot
         from bench.stats import summary
 
+        hw, host = self.hw, self.host
+        plugins = self._plugins
         frames0 = self._frame_counts()
-        overruns0 = {n: self.host.runner(n).overruns for n in self.host.plugin_names}
-        plugin_ticks0 = {n: self.host.runner(n).ticks for n in self.host.plugin_names}
-        sim_time0 = self.bridge.sim_world.time_ns
+        overruns0 = {n: host.runner(n).overruns for n in plugins}
+        plugin_ticks0 = {n: host.runner(n).ticks for n in plugins}
+        world = self.bridge.sim_world if self.bridge is not None else None
+        physics_ns = array.array('q')
+        sim_time0 = world.time_ns if world is not None else 0
         ru0 = resource.getrusage(resource.RUSAGE_SELF)
         window = Window()
         threads0 = thread_cpu_snapshot()
-        world = self.bridge.sim_world
-        physics_ns = array.array('q')
-        world._tick = _timed(type(world)._tick.__get__(world), physics_ns.append)
-        self.recorder.start()
+        if world is not None:
+            world._tick = _timed(type(world)._tick.__get__(world), physics_ns.append)
+            self.recorder.start()
         time.sleep(seconds)
-        sched = self.recorder.stop()
-        world.__dict__.pop('_tick', None)
+        sched = None
+        if world is not None:
+            sched = self.recorder.stop()
+            world.__dict__.pop('_tick', None)
         threads1 = thread_cpu_snapshot()
         facts = window.close()
         ru1 = resource.getrusage(resource.RUSAGE_SELF)
         frames1 = self._frame_counts()
         elapsed = facts.elapsed_s
         per_thread = thread_cpu_percent(threads0, threads1, elapsed)
-        loops = {
-            'can-scheduler': (self.hw.config.rate_hz, sched['ticks']),
-            'rm_sim-physics': (
+        loops: dict[str, tuple[float, int]] = {}
+        feedback_hz: dict[str, float] = {}
+        if hw is not None:
+            loops['can-scheduler'] = (hw.config.rate_hz, sched['ticks'])
+            loops['rm_sim-physics'] = (
                 1e9 / world.period_ns,
                 (world.time_ns - sim_time0) // world.period_ns,
-            ),
-        }
-        for n in self.host.plugin_names:
-            runner = self.host.runner(n)
+            )
+            feedback_hz = {
+                bus: sum(1000.0 for a in hw.actuators.values() if a.bus_name == bus)
+                for bus in hw.buses
+            }  # every simulated DJI motor answers at 1 kHz
+        for n in plugins:
+            runner = host.runner(n)
             loops[f'plugin:{n}'] = (runner.plugin.rate, runner.ticks - plugin_ticks0[n])
-        feedback_hz = {
-            bus: sum(1000.0 for a in self.hw.actuators.values() if a.bus_name == bus)
-            for bus in self.hw.buses
-        }  # every simulated DJI motor answers at 1 kHz
         process_pct = (
             100.0 * ((ru1.ru_utime - ru0.ru_utime) + (ru1.ru_stime - ru0.ru_stime)) / elapsed
         )
         return {
             'phase': name,
+            'role': self.role,
             'window': facts.as_dict(),
             'threads': {k: round(v, 3) for k, v in sorted(per_thread.items())},
             'groups': {k: round(v, 3) for k, v in group_percent(per_thread).items()},
@@ -222,7 +245,7 @@ class Robot:
             'process_pct': round(process_pct, 3),
             'scheduler': sched,
             # the physics tick runs under the world lock, which every bus send waits for
-            'sim_tick_us': summary(t / 1e3 for t in physics_ns),
+            'sim_tick_us': summary(t / 1e3 for t in physics_ns) if world is not None else None,
             'frames_per_s': {
                 bus: {
                     'received': (frames1[bus][0] - frames0[bus][0]) / elapsed,
@@ -230,10 +253,8 @@ class Robot:
                 }
                 for bus in frames1
             },
-            'plugin_overruns': {
-                n: self.host.runner(n).overruns - overruns0[n] for n in self.host.plugin_names
-            },
-            'holds': {a.name: a.hold_reason.value for a in self.hw.actuators.values()},
+            'plugin_overruns': {n: host.runner(n).overruns - overruns0[n] for n in plugins},
+            'holds': {a.name: a.hold_reason.value for a in hw.actuators.values()} if hw else {},
             'publishers': {
                 topic: self._publishers(topic)
                 for topic in ('/chassis_cmd', '/gimbal_cmd', '/actuator_cmd')
@@ -278,10 +299,12 @@ class Robot:
         from bench.profiling import ThreadProfiles
 
         profiles = ThreadProfiles()
-        targets = [(self.hw.scheduler, 'tick'), (self.bridge, 'publish_states')]
-        targets += [(bus, 'dispatch') for bus in self.hw.buses.values()]
-        targets += [(self.host.plugin(n), 'run') for n in self.host.plugin_names]
-        targets += [(self.bridge.sim_world, '_tick')]
+        targets: list[tuple[Any, str]] = []
+        if self.hw is not None:
+            targets += [(self.hw.scheduler, 'tick'), (self.bridge, 'publish_states')]
+            targets += [(bus, 'dispatch') for bus in self.hw.buses.values()]
+            targets += [(self.bridge.sim_world, '_tick')]
+        targets += [(self.host.plugin(n), 'run') for n in self._plugins]
         for obj, attribute in targets:
             profiles.wrap(obj, attribute)
         profiles.active = True
@@ -394,6 +417,13 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog='bench.robot_proc')
     parser.add_argument('--plugins', default='', help='comma-separated plugin subset')
     parser.add_argument(
+        '--role',
+        choices=('all', 'bridge', 'host'),
+        default='all',
+        help='all: bridge + host (as bringup); bridge: can_bridge + rm_sim; host: rm_robot',
+    )
+    parser.add_argument('--imu-dir', default='', help="folder of the simulated IMU's pty")
+    parser.add_argument(
         '--switch-interval-us',
         type=float,
         default=None,
@@ -402,7 +432,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     plugins = [p for p in args.plugins.split(',') if p] or None
     try:
-        robot = Robot(plugins)
+        robot = Robot(plugins, args.role, args.imu_dir)
     except Exception as err:
         reply({'error': f'robot did not start: {type(err).__name__}: {err}'})
         return 1

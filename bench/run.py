@@ -2,7 +2,7 @@
 
     python bench/run.py                 # everything, 3 runs each (a few minutes)
     python bench/run.py --quick         # sub-second windows, 1 run (smoke test)
-    python bench/run.py --only robot --runs 5
+    python bench/run.py --only robot --only split --runs 5
     make bench BENCH_ARGS='--only throughput'
 
 Prints machine facts and one table (min / median / max over runs, PASS/MISS against the
@@ -34,7 +34,7 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-MEASUREMENTS = ('robot', 'throughput', 'baseline')
+MEASUREMENTS = ('robot', 'throughput', 'baseline', 'split')
 DEFAULT_DOMAIN_ID = 90
 
 
@@ -117,6 +117,7 @@ def main(argv: list[str] | None = None) -> int:
         'robot': lambda i: robot.run_once(robot_plan, log_dir, str(i)),
         'throughput': lambda i: throughput.run_once(tp_plan),
         'baseline': lambda i: baseline.run_once(bl_plan),
+        'split': lambda i: robot.run_split(robot_plan, log_dir, str(i)),
     }
     # Runs interleave the measurements, so a burst of steal or load hits all of them alike.
     for i in range(1, runs + 1):

@@ -57,4 +57,4 @@ def test_when_run_quick_expect_every_row_in_the_table_and_the_json(tmp_path):
     data = json.loads(results[0].read_text())
     assert [r['key'] for r in data['rows']] == [row.key for row in rows]
     # every measurement produced its raw result (not only a printed 'n/a')
-    assert all(len(data['raw'][name]) == 1 for name in ('robot', 'throughput', 'baseline'))
+    assert all(len(data['raw'][name]) == 1 for name in ('robot', 'throughput', 'baseline', 'split'))
