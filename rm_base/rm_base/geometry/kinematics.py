@@ -124,7 +124,7 @@ class WheelKinematics:
     The order of wheel speeds is the order of the wheels given at construction.
     """
 
-    __slots__ = ('_jacobian', '_pseudo_inverse', '_wheels')
+    __slots__ = ('_jacobian', '_pinv_rows', '_pseudo_inverse', '_rows', '_wheels')
 
     def __init__(self, wheels: Sequence[Wheel]) -> None:
         """Build the Jacobian and its pseudo-inverse.
@@ -155,6 +155,9 @@ class WheelKinematics:
         self._wheels = wheels
         self._jacobian = jacobian
         self._pseudo_inverse = pseudo_inverse
+        # Plain floats for the per-tick paths: numpy costs more than it saves on 4 x 3.
+        self._rows = tuple(tuple(row) for row in jacobian.tolist())
+        self._pinv_rows = tuple(tuple(row) for row in pseudo_inverse.tolist())
 
     @property
     def wheels(self) -> tuple[Wheel, ...]:
@@ -189,13 +192,30 @@ class WheelKinematics:
         Raises:
             InputRejectedError: If the count is wrong or a speed is NaN or infinite.
         """
-        vector = np.asarray(wheel_speeds, dtype=float)
-        if vector.shape != (len(self._wheels),) or not np.all(np.isfinite(vector)):
+        speeds = _floats(wheel_speeds)
+        if speeds is None or len(speeds) != len(self._wheels):
             raise InputRejectedError(
                 f'expected {len(self._wheels)} finite wheel speeds, got {wheel_speeds!r}'
             )
-        vx, vy, wz = (self._pseudo_inverse @ vector).tolist()
-        return Twist2D(vx, vy, wz)
+        vx_row, vy_row, wz_row = self._pinv_rows
+        return Twist2D(_dot(vx_row, speeds), _dot(vy_row, speeds), _dot(wz_row, speeds))
+
+    def wheel_speeds(self, twist: Sequence[float]) -> tuple[float, ...]:
+        """Return the wheel speeds [rad/s] that drive the base at twist, as plain floats.
+
+        The same as :meth:`inverse`, for the per-tick paths that need no array.
+
+        Args:
+            twist: (vx [m/s], vy [m/s], wz [rad/s]) in the base frame, e.g. a Twist2D.
+
+        Raises:
+            InputRejectedError: If twist is not 3 finite values.
+        """
+        vector = _floats(twist)
+        if vector is None or len(vector) != 3:
+            raise InputRejectedError(f'twist must be 3 finite values (vx, vy, wz), got {twist!r}')
+        vx, vy, wz = vector
+        return tuple(a * vx + b * vy + c * wz for a, b, c in self._rows)
 
 
 def mecanum_wheels(
@@ -296,6 +316,55 @@ def desaturate(wheel_speeds: ArrayLike, max_speed: ArrayLike) -> NDArray[np.floa
     if ratio > 1.0:
         speeds /= ratio
     return speeds
+
+
+def desaturate_speeds(
+    wheel_speeds: Sequence[float], max_speed: float
+) -> tuple[tuple[float, ...], float]:
+    """Scale wheel speeds by one factor so that none exceeds max_speed; plain floats.
+
+    :func:`desaturate` for one maximum, for the per-tick paths that need no array.
+
+    Args:
+        wheel_speeds: Wheel speeds [rad/s].
+        max_speed: Largest allowed |speed| [rad/s], > 0.
+
+    Returns:
+        The scaled speeds and the factor k in (0, 1] they were scaled by (1: unchanged).
+
+    Raises:
+        InputRejectedError: If a speed is NaN or infinite, or max_speed is not > 0.
+    """
+    speeds = _floats(wheel_speeds)
+    if speeds is None:
+        raise InputRejectedError(f'wheel speeds must be finite, got {wheel_speeds!r}')
+    if not max_speed > 0.0:
+        raise InputRejectedError(f'max_speed must be > 0, got {max_speed!r}')
+    peak = max(map(abs, speeds), default=0.0)
+    ratio = peak / max_speed
+    if not ratio > 1.0:
+        return speeds, 1.0
+    scaled = tuple(v / ratio for v in speeds)
+    return scaled, max(map(abs, scaled)) / peak
+
+
+def _floats(values: Sequence[float]) -> tuple[float, ...] | None:
+    """Return values as a tuple of floats, or None if one is not a finite number."""
+    try:
+        floats = tuple(map(float, values))
+    except (TypeError, ValueError):
+        return None
+    for value in floats:
+        if not -math.inf < value < math.inf:
+            return None
+    return floats
+
+
+def _dot(row: tuple[float, ...], values: tuple[float, ...]) -> float:
+    total = 0.0
+    for a, b in zip(row, values, strict=True):
+        total += a * b
+    return total
 
 
 def _check_twist(twist: Sequence[float], yaw: float) -> tuple[float, float, float]:

@@ -43,14 +43,20 @@ def normalize_quaternion(q: ArrayLike) -> Quaternion:
         InputRejectedError: If q has not 4 finite entries or its squared norm is not
             within 0.01 of 1 (tf2's tolerance).
     """
-    values = np.asarray(q, dtype=float)
-    if values.shape != (4,) or not np.all(np.isfinite(values)):
+    # Plain floats: called per IMU sample and per tick, where numpy's overhead dominates.
+    try:
+        x, y, z, w = map(float, q)
+    except (TypeError, ValueError):
+        finite = False
+    else:
+        finite = math.isfinite(x) and math.isfinite(y) and math.isfinite(z) and math.isfinite(w)
+    if not finite:
         raise InputRejectedError(f'a quaternion needs 4 finite values (x, y, z, w), got {q!r}')
-    norm_squared = float(values @ values)
+    norm_squared = x * x + y * y + z * z + w * w
     if abs(norm_squared - 1.0) > _NORM_SQUARED_TOLERANCE:
         raise InputRejectedError(f'quaternion {q!r} is not a unit quaternion')
-    x, y, z, w = (values / math.sqrt(norm_squared)).tolist()
-    return Quaternion(x, y, z, w)
+    norm = math.sqrt(norm_squared)
+    return Quaternion(x / norm, y / norm, z / norm, w / norm)
 
 
 def _require_finite_angles(**angles: float) -> None:

@@ -12,8 +12,8 @@ One step of :class:`MotionPlanner`:
    chassis-frame twist of the mode (FOLLOW/TWIST PID, GYRO spin, rotation by the yaw
    joint angle); in RAW the commanded wz passes through.
 3. wz is ramp-limited (its own axis; spin-up in GYRO, a FOLLOW step).
-4. Inverse kinematics gives the wheel speeds; ``rm_base.geometry.desaturate`` scales them
-   all by one factor k <= 1 so none exceeds the maximum, keeping the direction of motion.
+4. Inverse kinematics gives the wheel speeds; ``rm_base.geometry.desaturate_speeds`` scales
+   them all by one factor k <= 1 so none exceeds the maximum, keeping the direction of motion.
    The ramps' state is scaled by k too, so a command beyond reach does not wind them up
    (releasing it then brakes at once, from the speed actually commanded).
 
@@ -29,7 +29,6 @@ import math
 from collections.abc import Hashable, Sequence
 from typing import NamedTuple
 
-import numpy as np
 from rm_base.control import (
     ChassisModeController,
     ChassisModeParams,
@@ -38,7 +37,7 @@ from rm_base.control import (
     RampLimits,
 )
 from rm_base.errors import InputRejectedError
-from rm_base.geometry import Twist2D, WheelKinematics, desaturate, world_to_body_twist
+from rm_base.geometry import Twist2D, WheelKinematics, desaturate_speeds, world_to_body_twist
 
 _MAX_UPDATE_DT = 0.05
 """Longest dt [s] the ramps and PIDs integrate in one step; a stalled tick (CPU steal) must
@@ -176,16 +175,14 @@ class MotionPlanner:
                 gimbal_yaw_rate=gimbal_yaw_rate, yaw_joint_rate=yaw_joint_rate,
             )
         (wz,) = self._angular.update((twist.wz,), dt)
-        targets = self._kinematics.inverse((twist.vx, twist.vy, wz))
-        limited = desaturate(targets, self._max_wheel_speed)
-        peak = float(np.max(np.abs(targets)))
-        k = float(np.max(np.abs(limited))) / peak if peak > self._max_wheel_speed else 1.0
+        targets = self._kinematics.wheel_speeds((twist.vx, twist.vy, wz))
+        limited, k = desaturate_speeds(targets, self._max_wheel_speed)
         if k < 1.0:
             self._linear.reset((k * vx, k * vy))
             self._angular.reset((k * wz,))
         out = Twist2D(k * twist.vx, k * twist.vy, k * wz)
         self._chassis_linear = (out.vx, out.vy)
-        return MotionOutput(out, tuple(limited.tolist()), k)
+        return MotionOutput(out, limited, k)
 
     def _set_accel(self, accel: tuple[float | None, ...]) -> None:
         if accel == self._accel:

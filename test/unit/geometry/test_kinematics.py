@@ -11,6 +11,7 @@ from rm_base.geometry import (
     WheelKinematics,
     body_to_world_twist,
     desaturate,
+    desaturate_speeds,
     mecanum_wheels,
     omni_wheels,
     world_to_body_twist,
@@ -177,6 +178,47 @@ def test_when_mecanum_command_desaturated_expect_direction_of_motion_kept():
     speeds = desaturate(MECANUM.inverse((2.0, 1.0, 1.0)), 20.0)
     scale = 20.0 / 33.5
     assert MECANUM.forward(speeds) == pytest.approx((2.0 * scale, scale, scale))
+
+
+def test_when_speeds_desaturated_as_floats_expect_scaled_and_factor():
+    # max |w| / limit = 20 / 10 = 2: every wheel halved, factor 1 / 2
+    speeds, factor = desaturate_speeds([10.0, -20.0, 5.0, 0.0], 10.0)
+    assert speeds == pytest.approx((5.0, -10.0, 2.5, 0.0))
+    assert factor == pytest.approx(0.5)
+
+
+def test_when_speeds_within_limit_as_floats_expect_unchanged_and_factor_one():
+    assert desaturate_speeds((1.0, -2.0, 3.0), 10.0) == ((1.0, -2.0, 3.0), 1.0)
+
+
+@pytest.mark.parametrize(('speeds', 'limit'), [([math.nan], 1.0), ([1.0], 0.0), ([1.0], math.nan)])
+def test_when_desaturate_speeds_input_invalid_expect_rejected(speeds, limit):
+    with pytest.raises(InputRejectedError):
+        desaturate_speeds(speeds, limit)
+
+
+def test_when_wheel_speeds_of_nan_twist_expect_rejected():
+    with pytest.raises(InputRejectedError, match='finite'):
+        MECANUM.wheel_speeds((0.0, math.inf, 0.0))
+
+
+def test_when_forward_given_a_matrix_expect_rejected():
+    with pytest.raises(InputRejectedError, match='expected 4'):
+        MECANUM.forward([[1.0, 2.0], [3.0, 4.0]])
+
+
+@given(twists)
+def test_when_wheel_speeds_as_floats_expect_same_as_inverse(twist):
+    assert MECANUM.wheel_speeds(twist) == pytest.approx(MECANUM.inverse(twist), rel=1e-12)
+
+
+@given(twists, st.floats(min_value=0.1, max_value=100.0))
+def test_when_desaturated_as_floats_expect_same_as_desaturate(twist, limit):
+    speeds = MECANUM.inverse(twist)
+    limited, factor = desaturate_speeds(speeds.tolist(), limit)
+    assert limited == pytest.approx(desaturate(speeds, limit), rel=1e-12)
+    peak = float(np.max(np.abs(speeds)))
+    assert factor == pytest.approx(min(1.0, limit / peak) if peak else 1.0, rel=1e-12)
 
 
 def test_when_body_twist_rotated_to_world_expect_forward_becomes_left():
