@@ -115,6 +115,7 @@ class PluginBase:
         self._enabled = False
         self._lost_reason: str | None = None
         self._last_run_ns: int | None = None
+        self._tick_now: Any = None  # the now of the run() in progress, else None
         self._next_error_log_ns = 0
         self._suppressed_errors = 0
 
@@ -241,6 +242,7 @@ class PluginBase:
             last = self._last_run_ns
             dt = (now_ns - last) / _NS_PER_S if last is not None else 1.0 / self.rate
         self._last_run_ns = now_ns
+        self._tick_now = now
         try:
             reasons = [
                 reason
@@ -259,6 +261,8 @@ class PluginBase:
                 self.update(now, dt)
         except Exception as err:
             self._on_run_error(err, now_ns)
+        finally:
+            self._tick_now = None
 
     # -- framework: state ---------------------------------------------------------------
 
@@ -384,6 +388,9 @@ class PluginBase:
     def send_joint_targets(self, targets: Mapping[str, JointTarget]) -> None:
         """Publish one rm_msgs/ActuatorCmd with targets for some or all of our joints.
 
+        The message is stamped with the ``now`` of the tick in progress (outside ``run``,
+        with the node clock's now).
+
         Raises:
             TargetRejectedError: a joint is not ours, or a target has a NaN/inf field;
                 nothing is published then (``run`` turns the joints off for this tick).
@@ -434,7 +441,11 @@ class PluginBase:
     # -- internals ------------------------------------------------------------------------
 
     def _publish_actuator_cmd(self, msg: Any) -> None:
-        msg.header.stamp = self.node.get_clock().now().to_msg()
+        # Within run() the tick's now, read once per tick: the targets are for that instant.
+        now = self._tick_now
+        if now is None:
+            now = self.node.get_clock().now()
+        msg.header.stamp = now.to_msg()
         self._io.actuator_cmd.publish(msg)
 
     def _on_transition(self, change: Transition) -> None:

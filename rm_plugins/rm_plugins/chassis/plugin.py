@@ -175,6 +175,7 @@ class StandChassis(PluginBase):
             )
         self._chassis_state_pub = self.node.create_publisher(ChassisState, 'chassis_state', 10)
         self._odom_pub = self.node.create_publisher(OdometryMsg, 'odom', 10)
+        self._state_msg, self._odom_msg = _report_messages(cfg)
         self._tf = self._make_tf_broadcaster() if cfg.publish_tf else None
         self._publish_period_ns = round(_NS_PER_S / cfg.publish_rate)
         self._next_publish_ns = 0
@@ -212,7 +213,7 @@ class StandChassis(PluginBase):
             self._passive(decision.state, decision.reason, speeds)
         else:
             self._drive_wheels(now_ns, dt, decision, speeds)
-        self._maybe_publish(now_ns)
+        self._maybe_publish(now)
 
     def on_command_lost(self, now: Any, dt: float) -> None:
         """Zero output while /chassis_cmd is missing; odometry and reports go on."""
@@ -221,7 +222,7 @@ class StandChassis(PluginBase):
         wheels, _ = self._wheel_states(now_ns)
         self._update_odometry(now_ns, wheels)
         self._passive(None, '', None if wheels is None else [w.velocity for w in wheels])
-        self._maybe_publish(now_ns)
+        self._maybe_publish(now)
 
     # -- commands -----------------------------------------------------------------------
 
@@ -464,25 +465,25 @@ class StandChassis(PluginBase):
 
     # -- reports ------------------------------------------------------------------------
 
-    def _maybe_publish(self, now_ns: int) -> None:
+    def _maybe_publish(self, now: Any) -> None:
+        now_ns = now.nanoseconds
         if now_ns < self._next_publish_ns:
             return
         self._next_publish_ns = max(self._next_publish_ns + self._publish_period_ns, now_ns)
-        stamp = self.node.get_clock().now().to_msg()
+        stamp = now.to_msg()
         self._publish_state(stamp)
         self._publish_odometry(stamp)
 
     def _publish_state(self, stamp: Any) -> None:
         cfg, report = self.config, self._report
         state, reason = self.state, self.reason
-        msg = ChassisState()
+        # One message, refilled: publish() serialises it before returning.
+        msg = self._state_msg
         msg.header.stamp = stamp
-        msg.header.frame_id = cfg.base_frame
         msg.state = int(state.value)
         msg.reason = reason
         _set_twist(msg.cmd_vel, report.twist)
         _set_twist(msg.measured_vel, self._odometry.twist)
-        msg.wheel_name = list(cfg.wheel_joints)
         msg.wheel_target = [float(v) for v in report.targets]
         msg.wheel_speed = (
             [float(v) for v in report.speeds] if report.speeds is not None
@@ -496,10 +497,8 @@ class StandChassis(PluginBase):
         cfg = self.config
         pose, twist = self._odometry.pose, self._odometry.twist
         q = quaternion_from_yaw(pose.yaw)
-        msg = OdometryMsg()
+        msg = self._odom_msg
         msg.header.stamp = stamp
-        msg.header.frame_id = cfg.odom_frame
-        msg.child_frame_id = cfg.base_frame
         msg.pose.pose.position.x = pose.x
         msg.pose.pose.position.y = pose.y
         msg.pose.pose.orientation.x = q.x
@@ -507,10 +506,6 @@ class StandChassis(PluginBase):
         msg.pose.pose.orientation.z = q.z
         msg.pose.pose.orientation.w = q.w
         _set_twist(msg.twist.twist, twist)
-        for i, value in enumerate(_POSE_COVARIANCE):
-            msg.pose.covariance[7 * i] = value
-        for i, value in enumerate(_TWIST_COVARIANCE):
-            msg.twist.covariance[7 * i] = value
         self._odom_pub.publish(msg)
         if self._tf is not None:
             tf = TransformStamped()
@@ -548,6 +543,21 @@ class _Report:
                    power_w: float, power_limit_w: float) -> None:
         self.twist, self.targets, self.efforts = twist, targets, efforts
         self.power_w, self.power_limit_w = power_w, power_limit_w
+
+
+def _report_messages(cfg: ChassisConfig) -> tuple[ChassisState, OdometryMsg]:
+    """The /chassis_state and /odom messages with the fields that never change filled in."""
+    state = ChassisState()
+    state.header.frame_id = cfg.base_frame
+    state.wheel_name = list(cfg.wheel_joints)
+    odom = OdometryMsg()
+    odom.header.frame_id = cfg.odom_frame
+    odom.child_frame_id = cfg.base_frame
+    for i, value in enumerate(_POSE_COVARIANCE):
+        odom.pose.covariance[7 * i] = value
+    for i, value in enumerate(_TWIST_COVARIANCE):
+        odom.twist.covariance[7 * i] = value
+    return state, odom
 
 
 def _set_twist(out: Any, twist: Twist2D) -> None:

@@ -148,6 +148,22 @@ def test_with_a_fresh_command_update_runs_and_sends_targets(plugin, sent):
     assert list(sent[-1].velocity) == [3.0]  # gain 2.0 * 1.5 rad/s
 
 
+def test_when_run_sends_targets_expect_them_stamped_with_the_ticks_now(plugin, sent):
+    plugin.enable()
+    command(plugin, 1.5, T0)
+    plugin.run(at(T0 + 10 * MS))
+    # T0 + 10 ms = 1000.010 s: the now given to run(), not the clock's at publish time
+    assert (sent[-1].header.stamp.sec, sent[-1].header.stamp.nanosec) == (1000, 10 * MS)
+
+
+def test_when_disabled_outside_a_tick_expect_zero_output_stamped_by_the_clock(plugin, node, sent):
+    plugin.enable()
+    before = node.get_clock().now().nanoseconds
+    plugin.disable()
+    stamp = sent[-1].header.stamp
+    assert stamp.sec * 1_000_000_000 + stamp.nanosec >= before
+
+
 def test_dt_defaults_to_the_clock_difference_and_to_the_period_first(plugin):
     plugin.enable()
     command(plugin, 1.0, T0)

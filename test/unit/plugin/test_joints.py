@@ -40,6 +40,18 @@ def test_when_a_field_is_not_finite_expect_rejected(field, bad):
         build({'ok': JointTarget.with_velocity(1.0), 'yaw': target})
 
 
+def test_when_a_field_is_not_a_number_expect_rejected():
+    target = JointTarget(ActuatorMode.EFFORT, effort='strong')
+    with pytest.raises(TargetRejectedError, match="effort of joint 'yaw' is not a finite"):
+        build({'yaw': target})
+
+
+@pytest.mark.parametrize('mode', [9, 'velocity', [2]])
+def test_when_mode_is_not_a_mode_value_expect_rejected(mode):
+    with pytest.raises(TargetRejectedError, match="joint 'yaw' has unknown mode"):
+        build({'yaw': JointTarget(mode)})
+
+
 def test_when_mode_is_unknown_expect_rejected():
     with pytest.raises(TargetRejectedError, match="joint 'yaw' has unknown mode 9"):
         build({'yaw': JointTarget(9)})
