@@ -9,7 +9,9 @@ spin_until_shutdown(executor, node.context)
 
 from __future__ import annotations
 
+import signal
 import sys
+import threading
 from collections.abc import Sequence
 
 import rclpy
@@ -61,18 +63,31 @@ def spin_until_shutdown(
     """Spin until Ctrl-C, SIGTERM or context shutdown (or on_tick returns False).
 
     EventsExecutor.spin() ignores SIGINT on rclpy 7.1.6 (ROS_WHEELS.md), so this loops on
-    spin_once with a short timeout instead.
+    spin_once with a short timeout instead. While it spins (in the main thread), SIGINT
+    and SIGTERM only set a flag that the loop reads after each spin_once: a
+    KeyboardInterrupt raised inside a callback the executor was calling from C++ comes
+    out of spin_once as pybind11's "Unable to convert call argument" RuntimeError (seen in
+    1 of 2 Ctrl-C of bringup), not as a clean stop. The previous handlers are back when it
+    returns, so a second Ctrl-C during the shutdown interrupts as usual.
 
     Args:
         executor: the executor with the node(s) added.
         context: the context to watch (default: rclpy's global one).
         on_tick: called after every spin_once; returning False stops the loop.
-        timeout_sec: longest block of one spin_once [s].
+        timeout_sec: longest block of one spin_once [s]; bounds the reaction to a signal.
     """
+    stop = threading.Event()
+    previous = {}
+    if threading.current_thread() is threading.main_thread():
+        for signum in (signal.SIGINT, signal.SIGTERM):
+            previous[signum] = signal.signal(signum, lambda *_: stop.set())
     try:
-        while rclpy.ok(context=context):
+        while not stop.is_set() and rclpy.ok(context=context):
             executor.spin_once(timeout_sec=timeout_sec)
             if on_tick is not None and on_tick() is False:
                 break
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)

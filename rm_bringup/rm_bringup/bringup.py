@@ -15,6 +15,7 @@ bridge sends zero-current frames, then the process exits.
 from __future__ import annotations
 
 import argparse
+import logging
 import os
 import pathlib
 import sys
@@ -23,9 +24,11 @@ import time
 import rclpy
 from rclpy.experimental import EventsExecutor
 from rm_base.bridge import CanBridgeNode
+from rm_base.bridge.node import NODE_NAME as BRIDGE_NODE_NAME
 from rm_base.errors import ConfigError
 from rm_base.host.node import RobotHost
 from rm_base.node_main import init_ros, spin_until_shutdown
+from rm_base.ros_logging import forward_package_logging
 
 from rm_bringup.status import StatusView
 
@@ -121,6 +124,15 @@ def main(argv: list[str] | None = None) -> int:
         ros_args += ['--params-file', str(path)]
     if not init_ros('bringup', ['bringup', *ros_args]):
         return 1
+    # the hardware layer's log lines (offline joints, bus errors) under the bridge's name
+    handler = forward_package_logging(BRIDGE_NODE_NAME)
+    try:
+        return _run(args, files)
+    finally:
+        logging.getLogger('rm_base').removeHandler(handler)
+
+
+def _run(args: argparse.Namespace, files: list[pathlib.Path]) -> int:
     bridge = host = None
     try:
         bridge = CanBridgeNode()

@@ -12,36 +12,13 @@ from rm_base.bridge.node import NODE_NAME, CanBridgeNode
 from rm_base.errors import ConfigError
 from rm_base.hardware import BusError
 from rm_base.node_main import init_ros, spin_until_shutdown
+from rm_base.ros_logging import forward_package_logging
 
 # The 1 kHz scheduler thread shares the GIL with the receive, publisher and executor
 # threads (and the physics thread on rm_sim). A thread that wakes up may wait up to one
 # switch interval (5 ms by default) for a CPU-bound one to yield; 1 ms keeps a tick late
 # by at most about a period.
 _GIL_SWITCH_INTERVAL = 0.001  # [s]
-
-
-class RosLogHandler(logging.Handler):
-    """Forwards Python ``logging`` records (the hardware layer's) to an rclpy logger."""
-
-    def __init__(self, logger: object) -> None:
-        super().__init__()
-        self._logger = logger
-        self.setFormatter(logging.Formatter('%(name)s: %(message)s'))
-
-    def emit(self, record: logging.LogRecord) -> None:
-        """Log the record at the matching rclpy severity."""
-        try:
-            text = self.format(record)
-            if record.levelno >= logging.ERROR:
-                self._logger.error(text)
-            elif record.levelno >= logging.WARNING:
-                self._logger.warning(text)
-            elif record.levelno >= logging.INFO:
-                self._logger.info(text)
-            else:
-                self._logger.debug(text)
-        except Exception:
-            self.handleError(record)
 
 
 def _one_line(err: BaseException) -> str:
@@ -53,11 +30,7 @@ def main(args: list[str] | None = None) -> int:
     if not init_ros(NODE_NAME, args):
         return 1
     sys.setswitchinterval(min(sys.getswitchinterval(), _GIL_SWITCH_INTERVAL))
-    package_logger = logging.getLogger('rm_base')
-    handler = RosLogHandler(rclpy.logging.get_logger(NODE_NAME))
-    package_logger.addHandler(handler)
-    package_logger.setLevel(logging.INFO)
-    package_logger.propagate = False
+    handler = forward_package_logging(NODE_NAME)
     try:
         node = CanBridgeNode()
     except (ConfigError, BusError) as err:
@@ -83,7 +56,7 @@ def main(args: list[str] | None = None) -> int:
         node.destroy_node()
         executor.shutdown()
         rclpy.try_shutdown()
-        package_logger.removeHandler(handler)
+        logging.getLogger('rm_base').removeHandler(handler)
     return 0
 
 

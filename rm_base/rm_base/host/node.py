@@ -15,6 +15,7 @@ from rm_base.host.runner import PluginRunner
 from rm_base.plugin import PluginBase, PluginLoader, PluginParams
 from rm_base.plugin.errors import ParameterError
 from rm_base.plugin.node_io import node_io
+from rm_base.ros_logging import FastLogger
 
 NODE_NAME = 'rm_robot'
 
@@ -72,8 +73,13 @@ class RobotHost(Node):
             the message names the plugin and the key.
     """
 
+    def get_logger(self) -> FastLogger:
+        """The node's logger, cheap enough for its 1 kHz and plugin threads (ros_logging)."""
+        return self._fast_logger
+
     def __init__(self, *, loader: PluginLoader | None = None, **kwargs: Any) -> None:
         super().__init__(NODE_NAME, **kwargs)
+        self._fast_logger = FastLogger(super().get_logger())
         sys.setswitchinterval(min(sys.getswitchinterval(), _GIL_SWITCH_INTERVAL))
         self._runners: dict[str, PluginRunner] = {}
         self._shut_down = False

@@ -47,6 +47,7 @@ from rm_base.plugin.joints import JointStateView, JointTarget, build_actuator_cm
 from rm_base.plugin.node_io import NodeIO, node_io
 from rm_base.plugin.params import PluginParams
 from rm_base.plugin.state_machine import DefaultState, StateMachine, Transition
+from rm_base.ros_logging import FastLogger
 from rm_msgs.msg import PluginState
 
 _NS_PER_S = 1_000_000_000
@@ -141,7 +142,7 @@ class PluginBase:
         params = params if params is not None else PluginParams(node, name, type(self).__name__)
         self.node, self.name, self.params = node, name, params
         self.type_name = params.plugin_type
-        self.logger = node.get_logger().get_child(name)
+        self.logger = FastLogger(node.get_logger()).get_child(name)
         try:
             self.rate = params.double(
                 'rate', 100.0, description='rate at which run() is called', unit='Hz',

@@ -1,0 +1,59 @@
+"""spin_until_shutdown: a signal ends the loop between callbacks, never inside one."""
+
+import os
+import signal
+
+import pytest
+from rm_base.node_main import spin_until_shutdown
+
+
+class AlwaysOk:
+    def ok(self):
+        return True
+
+
+class SignallingExecutor:
+    """Its first spin_once receives a signal midway, as a Ctrl-C during a callback."""
+
+    def __init__(self, signum):
+        self.signum = signum
+        self.started = 0
+        self.finished = 0
+
+    def spin_once(self, timeout_sec):
+        self.started += 1
+        os.kill(os.getpid(), self.signum)
+        sum(range(10_000))  # Python code runs on in the callback: the handler runs here
+        self.finished += 1
+
+
+def _raise_keyboard_interrupt(signum, frame):
+    raise KeyboardInterrupt
+
+
+@pytest.mark.parametrize('signum', [signal.SIGINT, signal.SIGTERM])
+def test_when_a_signal_arrives_during_a_callback_expect_it_to_finish_then_the_loop_to_end(signum):
+    # as prepare_ros_process() leaves them: both raise KeyboardInterrupt
+    previous = {s: signal.signal(s, _raise_keyboard_interrupt)
+                for s in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        executor = SignallingExecutor(signum)
+        spin_until_shutdown(executor, AlwaysOk(), timeout_sec=0.01)
+        assert (executor.started, executor.finished) == (1, 1)
+        # the handlers are back: a signal now interrupts as before
+        assert signal.getsignal(signum) is _raise_keyboard_interrupt
+    finally:
+        for s, handler in previous.items():
+            signal.signal(s, handler)
+
+
+def test_when_on_tick_returns_false_expect_the_loop_to_end():
+    class Idle:
+        calls = 0
+
+        def spin_once(self, timeout_sec):
+            self.calls += 1
+
+    executor = Idle()
+    spin_until_shutdown(executor, AlwaysOk(), on_tick=lambda: executor.calls < 3)
+    assert executor.calls == 3
