@@ -148,7 +148,7 @@ class SimDevice(ABC):
         Returns:
             Reply frames, possibly none.
         """
-        if not self.online or arbitration_id not in self.listen_ids:
+        if (self._faults and not self.online) or arbitration_id not in self.listen_ids:
             return []
         if is_extended_id or is_remote_frame or is_fd:
             self.stats.ignored_frames += 1
@@ -175,11 +175,13 @@ class SimDevice(ABC):
 
     def emit(self, now_ns: int) -> list[Frame]:
         """Return the frames the device sends on its own at this tick (feedback, garbage)."""
-        if not self.online:
+        faults = self._faults  # usually empty: skip the enum lookups then
+        if faults and not self.online:
             return []
         frames = self._periodic(now_ns)
-        self.stats.tx_frames += len(frames)
-        garbage = self._faults.get(FaultKind.GARBAGE)
+        if frames:
+            self.stats.tx_frames += len(frames)
+        garbage = faults.get(FaultKind.GARBAGE) if faults else None
         if garbage is not None and self._garbage is not None and self._garbage.due(now_ns):
             if garbage.can_id is not None:
                 can_id = garbage.can_id
@@ -279,6 +281,7 @@ class DjiDevice(SimDevice):
             None if not command_timeout else round(command_timeout * _NS_PER_S)
         )
         self.command_raw = 0
+        self._voltage_control = spec.command_unit == 'V'
         self._last_command_ns: int | None = None
         self._timed_out = True
         self._feedback = RateSchedule(
@@ -286,6 +289,16 @@ class DjiDevice(SimDevice):
         )
         self._listen = frozenset({self.command_id})
         self._transmit = frozenset({self.feedback_id})
+
+    @property
+    def command_raw(self) -> int:
+        """The last raw value taken from the motor's slot."""
+        return self._command_raw
+
+    @command_raw.setter
+    def command_raw(self, raw: int) -> None:
+        self._command_raw = raw
+        self._command_si = self.spec.si_from_raw(raw)  # in A or V, applied every tick
 
     @property
     def listen_ids(self) -> frozenset[int]:
@@ -304,11 +317,11 @@ class DjiDevice(SimDevice):
         self.command_raw = max(-limit, min(limit, raw))
         self._last_command_ns = now_ns
         self._timed_out = False
-        self._apply(self.spec.si_from_raw(self.command_raw))
+        self._apply(self._command_si)
         return []
 
     def _apply(self, value: float) -> None:
-        if self.spec.command_unit == 'V':
+        if self._voltage_control:
             self.model.command_voltage(value)
         else:
             self.model.command_current(value)
@@ -327,7 +340,7 @@ class DjiDevice(SimDevice):
             self.model.command_current(0.0)
         else:
             # Re-applied each tick: an over-temperature cut-out may have zeroed the output.
-            self._apply(self.spec.si_from_raw(self.command_raw))
+            self._apply(self._command_si)
 
     def _periodic(self, now_ns: int) -> list[Frame]:
         if not self._feedback.due(now_ns):

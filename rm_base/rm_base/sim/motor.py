@@ -268,7 +268,7 @@ class MotorModel:
 
     def __init__(self, params: MotorParams, *, angle: float = 0.0, velocity: float = 0.0):
         """Create a motor at rest (or at the given output angle [rad] and speed [rad/s])."""
-        self.params = params
+        self.params = params  # also derives the per-step constants (setter)
         self.rotor_angle = _finite('angle', angle) * params.gear_ratio
         self.rotor_velocity = _finite('velocity', velocity) * params.gear_ratio
         self.current = 0.0
@@ -282,6 +282,23 @@ class MotorModel:
         self._i0 = 0.0
         self._ki = 0.0
         self._di = 0.0
+
+    @property
+    def params(self) -> MotorParams:
+        """Physical constants; setting them derives the per-step constants again."""
+        return self._params
+
+    @params.setter
+    def params(self, params: MotorParams) -> None:
+        g = params.gear_ratio
+        self._params = params
+        # Rotor-side constants of every step, computed as step() did each time: stepping at
+        # 1 kHz for nine motors, the attribute reads and divisions were a good part of it.
+        self._kt = params.torque_constant / g
+        self._ke = params.back_emf_constant / g
+        self._inertia = params.inertia
+        self._viscous = params.viscous_friction / g**2
+        self._thermal_rc = params.thermal_resistance * params.thermal_capacitance
 
     # -- commands ------------------------------------------------------------------------
 
@@ -395,46 +412,61 @@ class MotorModel:
         """
         if not (math.isfinite(dt) and dt > 0.0):
             raise ValueError(f'dt must be a positive finite number, got {dt}')
-        p = self.params
+        if stator_acceleration != 0.0:
+            stator_acceleration = _finite('stator_acceleration', stator_acceleration)
+        p = self._params
         g = p.gear_ratio
-        kt = p.torque_constant / g
-        ke = p.back_emf_constant / g
-        inertia = p.inertia
-        terms = _StepTerms(
-            dt=dt,
-            kt=kt,
-            inertia=inertia,
-            viscous=p.viscous_friction / g**2,
-            coulomb=(p.coulomb_friction + max(0.0, self.brake_torque)) / g,
-            # Explicit over the step: the applied load and the fictitious torque of an
-            # accelerating stator (the rotor-side angle is relative, the inertia is not).
-            explicit=self.external_torque / g
-            - inertia * g * _finite('stator_acceleration', stator_acceleration),
-        )
+        kt = self._kt
+        inertia = self._inertia
+        viscous = self._viscous
+        coulomb = (p.coulomb_friction + max(0.0, self.brake_torque)) / g
+        # Explicit over the step: the applied load and the fictitious torque of an
+        # accelerating stator (the rotor-side angle is relative, the inertia is not).
+        explicit = self.external_torque / g - inertia * g * stator_acceleration
 
         if self.locked:
             self.rotor_velocity = 0.0
             self.current = self._clamp_current(self._i0 - self._ki * self.rotor_angle, 0.0)
         else:
-            law = (self._i0, self._ki, self._di)
-            omega = self._solve(terms, law)
-            current = self._law_current(law, dt, omega)
-            lo, hi = self._current_bounds(omega)
+            # _solve, _law_current and _current_bounds inlined for the unsaturated step
+            # (the usual one); the saturated one below keeps the helpers.
+            i0, ki, di = self._i0, self._ki, self._di
+            angle = self.rotor_angle
+            denominator = inertia / dt + kt * ki * dt + kt * di + viscous
+            free = (inertia * self.rotor_velocity / dt + kt * (i0 - ki * angle) + explicit) / (
+                denominator
+            )
+            slip = coulomb / denominator
+            if abs(free) <= slip:
+                omega = 0.0
+            else:
+                omega = free - math.copysign(slip, free)
+            current = i0 - ki * (angle + dt * omega) - di * omega
+            back_emf = self._ke * omega
+            i_max = p.max_current
+            lo = max(-i_max, (-p.supply_voltage - back_emf) / p.resistance)
+            hi = min(i_max, (p.supply_voltage - back_emf) / p.resistance)
             if current > hi or current < lo:
+                terms = _StepTerms(dt, kt, inertia, viscous, coulomb, explicit)
                 sign = 1.0 if current > hi else -1.0
                 # Saturated: either the driver's current limit or the voltage limit holds.
                 at_limit = (sign * p.max_current, 0.0, 0.0)
                 omega = self._solve(terms, at_limit)
                 v_lo, v_hi = self._voltage_bounds(omega)
                 if (sign > 0 and p.max_current > v_hi) or (sign < 0 and -p.max_current < v_lo):
-                    at_voltage = (sign * p.supply_voltage / p.resistance, 0.0, ke / p.resistance)
+                    at_voltage = (
+                        sign * p.supply_voltage / p.resistance, 0.0, self._ke / p.resistance
+                    )
                     omega = self._solve(terms, at_voltage)
                     current = self._law_current(at_voltage, dt, omega)
                 else:
                     current = sign * p.max_current
+                current = self._clamp_current(current, omega)
+            else:
+                current = max(lo, min(hi, current))
             self.rotor_velocity = omega
-            self.rotor_angle += dt * omega
-            self.current = self._clamp_current(current, omega)
+            self.rotor_angle = angle + dt * omega
+            self.current = current
 
         self._step_temperature(dt)
 
@@ -477,9 +509,9 @@ class MotorModel:
         if self.temperature_override is not None:
             self.temperature = float(self.temperature_override)
             return
-        p = self.params
+        p = self._params
         # Implicit update of C*dT/dt = I²R - (T - T_amb)/R_th: stable for any dt.
-        rate = dt / (p.thermal_resistance * p.thermal_capacitance)
+        rate = dt / self._thermal_rc
         heat = dt * self.current**2 * p.resistance / p.thermal_capacitance
         self.temperature = (self.temperature + heat + rate * p.ambient_temperature) / (1.0 + rate)
 

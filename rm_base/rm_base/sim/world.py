@@ -56,7 +56,10 @@ class Timing(Enum):
 
 
 class _Endpoint(Protocol):
-    """What a channel needs from an attached bus (implemented by SimBus)."""
+    """What a channel needs from an attached bus (implemented by SimBus).
+
+    An endpoint may also have ``_deliver_all(msgs)``, taking a tick's frames at once.
+    """
 
     receive_own_messages: bool
 
@@ -114,6 +117,10 @@ class SimChannel:
         self._endpoints: list[_Endpoint] = []
         self._state = can.BusState.ACTIVE
         self.closed = False
+        # can id -> the devices listening on it, in device order; built for _routed_count
+        # devices (the list only grows, through SimWorld.add_motor)
+        self._routes: dict[int, tuple[SimDevice, ...]] = {}
+        self._routed_count = 0
         # frames sent while the physics thread held the lock (see send)
         self._handed_over: collections.deque[tuple[_Endpoint | None, can.Message, float | None]] = (
             collections.deque()
@@ -248,13 +255,27 @@ class SimChannel:
         **flags: bool,
     ) -> bool:
         """Hand a frame to every motor (but its sender) listening on its id; collect replies."""
+        if self._routed_count != len(self.devices):
+            self._build_routes()
+        listeners = self._routes.get(can_id)
+        if not listeners:
+            return False
         claimed = False
         now_ns = self.world.time_ns
-        for device in self.devices:
-            if can_id in device.listen_ids and device is not source:
+        for device in listeners:
+            if device is not source:
                 claimed = True
                 replies += device.receive(can_id, data, now_ns, **flags)
         return claimed
+
+    def _build_routes(self) -> None:
+        routes: dict[int, list[SimDevice]] = {}
+        devices = list(self.devices)
+        for device in devices:
+            for can_id in device.listen_ids:
+                routes.setdefault(can_id, []).append(device)
+        self._routes = {can_id: tuple(listeners) for can_id, listeners in routes.items()}
+        self._routed_count = len(devices)
 
     def deliver_frames(self, frames: Iterable[Frame]) -> None:
         """Deliver frames sent by the motors to every attached bus."""
@@ -267,24 +288,37 @@ class SimChannel:
                 return
             self.stats.device_frames += len(frames)
             stamp = self.world.timestamp()
-            for can_id, data in frames:
-                for endpoint in self._endpoints:
-                    endpoint._deliver(
-                        can.Message(
-                            timestamp=stamp,
-                            arbitration_id=can_id,
-                            is_extended_id=False,
-                            data=data,
-                            channel=self.name,
-                            is_rx=True,
-                        )
+            name = self.name
+            for endpoint in self._endpoints:
+                messages = [
+                    can.Message(
+                        timestamp=stamp,
+                        arbitration_id=can_id,
+                        is_extended_id=False,
+                        data=data,
+                        channel=name,
+                        is_rx=True,
                     )
+                    for can_id, data in frames
+                ]
+                # All at once where the bus can take them so (one lock, one wake-up of
+                # its reader per tick instead of one per frame).
+                deliver_all = getattr(endpoint, '_deliver_all', None)
+                if deliver_all is not None:
+                    deliver_all(messages)
+                else:
+                    for msg in messages:
+                        endpoint._deliver(msg)
 
     def _emit(self, now_ns: int) -> None:
         sent: list[tuple[SimDevice, Frame]] = []
         for device in self.devices:
-            sent += [(device, frame) for frame in device.emit(now_ns)]
-        self.deliver_frames(frame for _, frame in sent)
+            frames = device.emit(now_ns)
+            if frames:
+                sent += [(device, frame) for frame in frames]
+        if not sent:
+            return
+        self.deliver_frames([frame for _, frame in sent])
         if self._state is can.BusState.ERROR:
             return
         # Every node hears every frame: a motor's frame can reach another motor (only a

@@ -149,6 +149,45 @@ def test_when_receive_queue_full_expect_new_frames_dropped_and_counted(make_bus)
     assert bus.rx_overflows == 15
 
 
+FOUR_MOTORS = [{'type': 'm3508', 'id': i, 'name': f'wheel{i}'} for i in (1, 2, 3, 4)]
+
+
+def test_when_queue_fills_within_one_tick_expect_the_first_frames_kept_in_order(make_bus):
+    # Four feedback frames a tick (0x201..0x204) into room for six: the second tick's
+    # first two fit, its last two are dropped.
+    bus = make_bus(FOUR_MOTORS, rx_queue_size=6)
+    bus.sim.step(2)
+    ids = [f.arbitration_id for f in drain(bus)]
+    assert ids == [0x201, 0x202, 0x203, 0x204, 0x201, 0x202]
+    assert bus.rx_overflows == 2
+
+
+def test_when_a_subclass_overrides_deliver_expect_every_motor_frame_through_it(make_bus):
+    seen = []
+
+    class Tap(SimBus):
+        def _deliver(self, msg):
+            seen.append(msg.arbitration_id)
+
+    bus = make_bus(FOUR_MOTORS)
+    tap = Tap(bus.channel_id, world=bus.sim)
+    try:
+        bus.sim.step(1)
+    finally:
+        tap.shutdown()
+    assert seen == [0x201, 0x202, 0x203, 0x204]
+
+
+def test_when_a_tick_delivers_four_frames_expect_one_notify_waking_four_readers(make_bus):
+    bus = make_bus(FOUR_MOTORS)
+    wakes = []
+    condition = bus._queue.not_empty
+    notify = condition.notify
+    condition.notify = lambda n=1: (wakes.append(n), notify(n))
+    bus.sim.step(2)
+    assert wakes == [4, 4]  # as four put()s would wake up to four readers, once a tick
+
+
 def test_detect_available_configs_lists_open_channels(make_bus):
     bus = make_bus()
     configs = SimBus._detect_available_configs()
