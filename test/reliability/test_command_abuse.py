@@ -241,6 +241,25 @@ def test_when_a_command_is_stale_or_from_the_future_expect_it_rejected(bridge):
     bridge.assert_safe()
 
 
+def test_when_a_command_arrives_late_expect_its_timeout_counted_from_its_stamp(bridge):
+    # Stamped 70 ms before it is published (a starved sender, a queue): the bridge takes it
+    # with 30 ms of its 100 ms timeout left, not another 100 ms from its arrival. (Should
+    # the transit itself take > 30 ms on a loaded machine, it is rejected as stale; again.)
+    actuator = bridge.node.hardware.actuators['wheel']
+    for _ in range(5):
+        before, stale = actuator.command, bridge.rejected().get('stale', 0)
+        published_ns = time.perf_counter_ns()
+        t = bridge.driver.get_clock().now().nanoseconds - 70_000_000
+        stamp = Time(sec=t // 1_000_000_000, nanosec=t % 1_000_000_000)
+        bridge.pub.publish(cmd('wheel', 1, stamp=stamp, effort=1.0))
+        assert wait_until(lambda b=before, n=stale: actuator.command is not b
+                          or bridge.rejected().get('stale', 0) > n, WAIT)
+        if actuator.command is not before:
+            break
+    assert actuator.command.stamp_ns <= published_ns - 60_000_000
+    bridge.assert_safe()
+
+
 def test_when_commands_flood_at_10_khz_expect_the_node_alive_and_the_wire_safe(bridge):
     # From another process, as a runaway node would: the flood competes with the bridge
     # for DDS and the executor, not for this process's GIL.

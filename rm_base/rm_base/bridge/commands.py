@@ -68,7 +68,7 @@ class JointTarget(NamedTuple):
     kd: float
 
 
-def check_stamp(msg: object, now_ns: int, timeout_s: float) -> None:
+def check_stamp(msg: object, now_ns: int, timeout_s: float) -> int:
     """Reject a message stamped more than ``timeout_s`` before (or after) ``now_ns``.
 
     Args:
@@ -76,18 +76,25 @@ def check_stamp(msg: object, now_ns: int, timeout_s: float) -> None:
         now_ns: the bridge's clock [ns] (the ROS clock the senders stamp with).
         timeout_s: safety.command_timeout_s [s].
 
+    Returns:
+        The message's age [ns]: how long ago it was stamped (0 without a stamp, or for a
+        stamp slightly ahead of ``now_ns``). The command timeout runs from its stamp, not
+        from its arrival: time spent in queues (a busy sender or receiver) counts.
+
     Raises:
         ActuatorCmdRejectedError: ``Rejection.STALE``.
     """
     stamp = getattr(getattr(msg, 'header', None), 'stamp', None)
     if stamp is None or not (stamp.sec or stamp.nanosec):
-        return
-    age_s = (now_ns - (stamp.sec * 1_000_000_000 + stamp.nanosec)) / 1e9
+        return 0
+    age_ns = now_ns - (stamp.sec * 1_000_000_000 + stamp.nanosec)
+    age_s = age_ns / 1e9
     if abs(age_s) > timeout_s:
         when = f'{age_s:.3f} s old' if age_s > 0 else f'{-age_s:.3f} s in the future'
         raise ActuatorCmdRejectedError(
             Rejection.STALE, f'stamp is {when} (command timeout {timeout_s:g} s)'
         )
+    return max(0, age_ns)
 
 
 def parse_actuator_cmd(msg: ActuatorCmdLike, joints: Container[str]) -> list[JointTarget]:

@@ -67,6 +67,8 @@ class BusStats:
         frames_sent: frames handed to the driver successfully.
         frames_received: frames received (data frames).
         frames_unmatched: received frames no handler claimed.
+        frames_late: received frames that had waited more than 1 ms before the receive
+            thread got them (stamped at their arrival; see ``frame_clock``).
         send_errors: failed sends (driver error, buffer full, bus down).
         receive_errors: errors raised by the driver while receiving.
         error_frames: CAN error frames reported by the driver.
@@ -94,6 +96,20 @@ class BusStats:
     load_bps: float
     load_fraction: float | None
     last_error: str | None
+    frames_late: int = 0
+
+
+#: Largest believable age of a received frame [s]: a timestamp older than this (or in the
+#: future) is on a clock of its own, and the frame is stamped at receipt.
+MAX_FRAME_AGE_S = 1.0
+_BACKDATE_NOTED_S = 0.001
+
+
+class _Default:
+    """Marks an argument left at its default."""
+
+
+_DEFAULT = _Default()
 
 
 class _LogSink:
@@ -145,6 +161,7 @@ class ManagedBus:
         *,
         clock_ns: Callable[[], int] = time.perf_counter_ns,
         bus_factory: BusFactory = can.Bus,
+        frame_clock: Callable[[], float] | _Default | None = _DEFAULT,
     ) -> None:
         """Create the bus object; nothing is opened until :meth:`open` or :meth:`start`.
 
@@ -153,10 +170,21 @@ class ManagedBus:
             clock_ns: monotonic clock [ns] used to stamp received frames and for the load
                 estimate (reconnect back-off always runs on real time).
             bus_factory: builds the python-can bus (``can.Bus``; tests pass fakes).
+            frame_clock: the clock of the interface's ``msg.timestamp`` [s]. A frame is
+                stamped at its arrival: the receive time minus its age on this clock
+                (``frame_clock() - msg.timestamp``), if that age is within
+                ``MAX_FRAME_AGE_S``; else (no timestamp, or a clock of its own such as an
+                adapter's hardware timer) at the receive time. Default ``time.time``
+                (socketcan's kernel stamps, rm_sim, python-can's virtual bus) with the
+                default ``clock_ns``, None (receive time) with an injected one.
         """
         self.config = config
         self.name = config.name
         self._clock_ns = clock_ns
+        if isinstance(frame_clock, _Default):
+            frame_clock = time.time if clock_ns is time.perf_counter_ns else None
+        self._frame_clock = frame_clock
+        self.backdated = 0  # frames that waited > 1 ms for the receive thread
         self._factory = bus_factory
         self._bus: can.BusABC | None = None
         self._state = BusState.NEW
@@ -386,7 +414,23 @@ class ManagedBus:
                 self._fail(f'receive failed: {err!r}')
                 continue
             if msg is not None:
-                self.dispatch(msg, self._clock_ns())
+                self.dispatch(msg, self._arrival_ns(msg))
+
+    def _arrival_ns(self, msg: can.Message) -> int:
+        """When msg reached the interface, on ``clock_ns`` (see ``frame_clock``).
+
+        A receive thread that lost the CPU (a busy process) finds frames queued; stamped
+        at receipt, feedback from before the stall would count as fresh.
+        """
+        now_ns = self._clock_ns()
+        if self._frame_clock is None or not msg.timestamp:
+            return now_ns
+        age_s = self._frame_clock() - msg.timestamp
+        if not 0.0 < age_s <= MAX_FRAME_AGE_S:
+            return now_ns
+        if age_s > _BACKDATE_NOTED_S:
+            self.backdated += 1
+        return now_ns - int(age_s * 1e9)
 
     def dispatch(self, msg: can.Message, now_ns: int) -> int:
         """Hand a received frame to its handlers (the receive thread calls this).
@@ -443,4 +487,5 @@ class ManagedBus:
             load_bps=load,
             load_fraction=load / bitrate if bitrate else None,
             last_error=self._last_error,
+            frames_late=self.backdated,
         )

@@ -207,6 +207,7 @@ class CanHardware:
         kp: float = 0.0,
         kd: float = 0.0,
         now_ns: int | None = None,
+        age_ns: int = 0,
     ) -> None:
         """Set one joint's target (ActuatorCmd semantics, output shaft, SI).
 
@@ -218,7 +219,9 @@ class CanHardware:
             effort: [N·m].
             kp: [N·m/rad].
             kd: [N·m·s/rad].
-            now_ns: command time [ns]; default: the clock now.
+            now_ns: receive time [ns]; default: the clock now.
+            age_ns: how long before now_ns the command was issued [ns] (its stamp); the
+                command timeout runs from then.
 
         Raises:
             CommandRejectedError: unknown joint, mode, NaN/inf field or negative gains;
@@ -230,7 +233,7 @@ class CanHardware:
             raise CommandRejectedError(f'unknown joint {name!r}; joints: {self.joint_names}')
         actuator.set_command(
             mode,
-            self._clock_ns() if now_ns is None else now_ns,
+            (self._clock_ns() if now_ns is None else now_ns) - age_ns,
             position=position,
             velocity=velocity,
             effort=effort,

@@ -3,7 +3,7 @@
 import math
 
 import pytest
-from rm_base.bridge.commands import JointTarget, parse_actuator_cmd
+from rm_base.bridge.commands import JointTarget, check_stamp, parse_actuator_cmd
 from rm_base.bridge.errors import ActuatorCmdRejectedError, Rejection
 from rm_base.hardware import Mode
 
@@ -62,3 +62,36 @@ def test_a_malformed_message_is_rejected_whole_with_its_reason(msg, reason, text
     with pytest.raises(ActuatorCmdRejectedError, match=text) as info:
         parse_actuator_cmd(msg, JOINTS)
     assert info.value.reason is reason
+
+
+NOW_NS = 1_800_000_000_000_000_000
+
+
+def stamped(age_s: float) -> ActuatorCmd:
+    msg = ActuatorCmd()
+    stamp_ns = NOW_NS - round(age_s * 1e9)
+    msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp_ns, 1_000_000_000)
+    return msg
+
+
+@pytest.mark.parametrize(
+    ('age_s', 'age_ns'),
+    [
+        (0.06, 60_000_000),  # its timeout runs from the stamp: 40 ms left
+        (0.0, 0),
+        (-0.02, 0),  # slightly ahead (clocks of two processes): counted from now
+    ],
+)
+def test_when_a_stamp_is_within_the_timeout_expect_its_age(age_s, age_ns):
+    assert check_stamp(stamped(age_s), NOW_NS, 0.1) == age_ns
+
+
+def test_when_unstamped_expect_age_zero():
+    assert check_stamp(ActuatorCmd(), NOW_NS, 0.1) == 0
+
+
+@pytest.mark.parametrize(('age_s', 'text'), [(0.2, '0.200 s old'), (-0.2, '0.200 s in the future')])
+def test_when_a_stamp_is_beyond_the_timeout_expect_stale(age_s, text):
+    with pytest.raises(ActuatorCmdRejectedError, match=text) as info:
+        check_stamp(stamped(age_s), NOW_NS, 0.1)
+    assert info.value.reason is Rejection.STALE

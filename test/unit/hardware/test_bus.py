@@ -2,6 +2,7 @@
 
 import logging
 import threading
+import time
 
 import can
 import pytest
@@ -123,6 +124,82 @@ def test_bus_load_is_estimated_from_frame_bits(channel):
     assert stats.load_bps == pytest.approx(111_000)
     assert stats.load_fraction == pytest.approx(0.111)
     assert stats.frames_sent == 1000
+
+
+# --- arrival stamps ---
+class QueuedBus(can.BusABC):
+    """A bus whose receive returns the given frames, then nothing."""
+
+    def __init__(self, frames, **kwargs):
+        super().__init__(channel='queued')
+        self.frames = list(frames)
+
+    def _recv_internal(self, timeout):
+        return (self.frames.pop(0), False) if self.frames else (None, False)
+
+    def send(self, msg, timeout=None):
+        pass
+
+
+WALL = 1_000.0  # [s] the frame clock's "now" in the table below
+
+
+@pytest.mark.parametrize(
+    ('timestamp', 'stamped_ms_before_receipt', 'late'),
+    [
+        (WALL - 0.2, 200.0, 1),  # waited 200 ms in the queue: stamped at its arrival
+        (WALL - 0.0005, 0.5, 0),  # 0.5 ms: backdated, not counted as late
+        (WALL + 0.5, 0.0, 0),  # from the future: the interface's clock is its own
+        (WALL - 10.0, 0.0, 0),  # older than MAX_FRAME_AGE_S: a clock of its own
+        (0.0, 0.0, 0),  # no timestamp
+    ],
+)
+def test_when_a_frame_waited_in_the_queue_expect_it_stamped_at_its_arrival(
+    timestamp, stamped_ms_before_receipt, late
+):
+    clock = FakeClock()
+    received = clock.now_ns
+    msg = can.Message(arbitration_id=0x201, data=bytes(8), is_extended_id=False,
+                      timestamp=timestamp)
+    got = []
+    bus = ManagedBus(fake(), clock_ns=clock, frame_clock=lambda: WALL,
+                     bus_factory=lambda **kw: QueuedBus([msg]))
+    bus.add_handler(0x201, lambda m, now_ns: got.append(now_ns) or True)
+    with bus:
+        bus.start()
+        assert wait_until(lambda: got, TIMEOUT)
+    assert received - got[0] == pytest.approx(stamped_ms_before_receipt * 1e6, abs=1e3)
+    assert bus.stats().frames_late == late
+
+
+def test_when_the_clock_is_injected_expect_frames_stamped_at_receipt():
+    clock = FakeClock()
+    msg = can.Message(arbitration_id=0x201, data=bytes(8), is_extended_id=False,
+                      timestamp=1.0)
+    got = []
+    bus = ManagedBus(fake(), clock_ns=clock, bus_factory=lambda **kw: QueuedBus([msg]))
+    bus.add_handler(0x201, lambda m, now_ns: got.append(now_ns) or True)
+    with bus:
+        bus.start()
+        assert wait_until(lambda: got, TIMEOUT)
+    assert got == [clock.now_ns]
+
+
+def test_when_the_receive_thread_starts_late_expect_queued_frames_stamped_when_sent(channel):
+    got = []
+    with ManagedBus(virtual(channel)) as bus, can.Bus(interface='virtual', channel=channel) as peer:
+        bus.add_handler(0x201, lambda m, now_ns: got.append(now_ns) or True)
+        bus.open()  # joined the virtual bus, no receive thread yet: frames queue
+        sent_ns = time.perf_counter_ns()
+        peer.send(frame(0x201))
+        time.sleep(0.3)
+        bus.start()
+        assert wait_until(lambda: got, TIMEOUT)
+        received_ns = time.perf_counter_ns()
+    # python-can's virtual bus stamps a frame (time.time()) when it is sent
+    assert got[0] == pytest.approx(sent_ns, abs=50e6)
+    assert received_ns - got[0] >= 250e6
+    assert bus.stats().frames_late == 1
 
 
 # --- errors and reconnection ---

@@ -143,6 +143,22 @@ def test_command_timeout_ends_with_zero_current_on_the_wire(rig):
     assert hw.actuators['wheel'].hold_reason is HoldReason.COMMAND_TIMEOUT
 
 
+def test_when_a_command_arrives_late_expect_its_timeout_counted_from_its_stamp(rig):
+    hw, peer, clock = rig
+    fed(hw, peer)
+    # issued 60 ms ago (it sat in queues): 40 ms of the 100 ms timeout left
+    hw.set_command('wheel', MODE_EFFORT, effort=1.0, age_ns=60_000_000)
+    clock.advance_ms(39)
+    fed(hw, peer)
+    hw.tick()
+    assert slots(frames(peer, 3)[0x200])[0] == 2731
+    clock.advance_ms(2)
+    fed(hw, peer)
+    hw.tick()
+    assert slots(frames(peer, 3)[0x200]) == (0, 0, 0, 0)
+    assert hw.actuators['wheel'].hold_reason is HoldReason.COMMAND_TIMEOUT
+
+
 def test_offline_motor_gets_zero_on_the_wire(rig):
     hw, peer, clock = rig
     fed(hw, peer)

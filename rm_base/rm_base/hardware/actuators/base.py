@@ -89,7 +89,8 @@ class JointCommand(NamedTuple):
         effort: [N·m].
         kp: [N·m/rad].
         kd: [N·m·s/rad].
-        stamp_ns: clock time of acceptance [ns].
+        stamp_ns: when the command was issued, on the clock [ns] (its stamp, or its
+            acceptance for a command without one); its timeout runs from here.
     """
 
     mode: Mode
