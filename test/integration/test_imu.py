@@ -10,6 +10,7 @@ import contextlib
 import math
 import os
 import threading
+import time
 import tty
 
 import pytest
@@ -261,6 +262,41 @@ def test_when_frames_stop_expect_no_data_and_no_stale_imu(run, tmp_path, streame
     assert wait_until(lambda: len(h.diagnostics) >= seen + 3, WAIT)
     assert len(h.imu) == count
     assert h.imu_status()['level'] == b'\x01'  # WARN
+
+
+def counted_frame(device_ms):
+    q = quaternion_from_rpy(*RPY)
+    return hipnuc.encode_frame(hipnuc.encode_imusol(
+        acc=ACC, gyr=GYR, mag=(10.0, 0.0, -40.0), euler=RPY, quat=(q.w, q.x, q.y, q.z),
+        system_time_ms=device_ms,
+    ))
+
+
+def test_when_frames_queued_expect_them_stamped_when_the_device_took_them(run, tmp_path):
+    _, make = run
+    path = str(tmp_path / 'imu')
+    h = make(path)
+    port = Pty(path)
+    try:
+        assert wait_until(lambda: h.state() is ImuState.NO_DATA, WAIT)
+        # 0.3 s of frames as they come, 5 ms apart, the counter in real milliseconds...
+        start = time.monotonic()
+        for k in range(60):
+            time.sleep(max(0.0, start + 0.005 * k - time.monotonic()))
+            port.write(counted_frame(round(1e3 * (time.monotonic() - start))))
+        assert wait_until(lambda: len(h.imu) == 60, WAIT)
+        # ...then 20 frames the device took over 100 ms arrive at once (the serial buffer
+        # of a reader that was starved)
+        time.sleep(0.1)
+        last_ms = round(1e3 * (time.monotonic() - start))
+        port.write(b''.join(counted_frame(last_ms - 5 * (19 - k)) for k in range(20)))
+        assert wait_until(lambda: len(h.imu) == 80, WAIT)
+    finally:
+        port.close()
+    stamps = [m.header.stamp.sec + m.header.stamp.nanosec * 1e-9 for m in h.imu[60:]]
+    # 95 ms apart as taken (a few ms off for the writer's own lateness), not all at receipt
+    assert stamps == sorted(stamps)
+    assert stamps[-1] - stamps[0] == pytest.approx(0.095, abs=0.02)
 
 
 def test_when_the_port_vanishes_expect_no_port_then_recovery(run, tmp_path, streamer):

@@ -3,9 +3,13 @@
 A reader thread (``SerialReader``) owns the port while the plugin is enabled: it opens
 the port (a pyserial URL; ``~`` and ``${VAR}`` expanded, so the simulator's
 ``/tmp/rm_sim_${ROS_DOMAIN_ID}/imu`` works), decodes HiPNUC frames (0x91 and the legacy
-items) and publishes every sample at once, stamped with its receive time, so no sample
-waits for a plugin tick. The plugin's ``run()`` only decides the state from what the
-reader reports and publishes the counters on /diagnostics; it never touches the port.
+items) and publishes every sample at once, so no sample waits for a plugin tick. A sample
+is stamped when the device took it: its ``system_time_ms`` counter mapped to ROS time by
+``DeviceClock`` (the offset of the fastest frame of the last 2 s), so frames that queued
+while the reader was starved keep their age instead of looking fresh; a frame without
+a moving counter is stamped at its receipt. The plugin's ``run()`` only decides the
+state from what the reader reports and publishes the counters on /diagnostics; it never
+touches the port.
 
 States (``ImuState``), all decided in ``_decide``:
 
@@ -28,6 +32,7 @@ import threading
 from enum import IntEnum
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rm_base.hardware.device_clock import DeviceClock
 from rm_base.hardware.protocols.hipnuc import ImuSample
 from rm_base.plugin import PluginBase, PluginConfigError
 from sensor_msgs.msg import Imu
@@ -198,7 +203,8 @@ class Hi220(PluginBase):
         self._publisher = self.node.create_publisher(Imu, topic, 10)
         self._diagnostics = self.node.create_publisher(DiagnosticArray, '/diagnostics', 10)
         self._lock = threading.Lock()
-        self._last_sample_ns: int | None = None
+        self._last_sample_ns: int | None = None  # receipt of the latest sample
+        self._device_clock = DeviceClock()
         self._published = 0
         self._next_diagnostics_ns: int | None = None
         self._report_published = 0
@@ -221,6 +227,7 @@ class Hi220(PluginBase):
         """Start the reader thread (it opens the port)."""
         with self._lock:
             self._last_sample_ns = None
+        self._device_clock = DeviceClock()  # the reader thread is not running
         self.reader.start()
 
     def on_disable(self) -> None:
@@ -267,9 +274,12 @@ class Hi220(PluginBase):
             and reading.linear_acceleration is None
         ):
             return  # e.g. a pressure-only frame: nothing for sensor_msgs/Imu
-        now = self._clock.now()
+        now_ns = self._clock.now().nanoseconds
+        stamp_ns = now_ns
+        if sample.system_time_ms is not None:
+            stamp_ns = self._device_clock.stamp_ns(sample.system_time_ms, now_ns)
         msg = Imu()
-        msg.header.stamp = now.to_msg()
+        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp_ns, _NS_PER_S)
         msg.header.frame_id = self.frame_id
         if reading.orientation is not None:
             q = reading.orientation
@@ -292,7 +302,7 @@ class Hi220(PluginBase):
             msg.linear_acceleration_covariance = _NOT_PROVIDED
         self._publisher.publish(msg)
         with self._lock:
-            self._last_sample_ns = now.nanoseconds
+            self._last_sample_ns = now_ns
             self._published += 1
 
     # -- diagnostics ------------------------------------------------------------------------
