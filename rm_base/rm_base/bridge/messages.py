@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import array
 from collections.abc import Sequence
+from typing import NamedTuple
 
 import can
 from builtin_interfaces.msg import Time
@@ -22,15 +23,71 @@ def _doubles(values: Sequence[float] | object) -> array.array:
     return array.array('d', values)  # type: ignore[arg-type]
 
 
-def joint_state_msg(states: Sequence[JointState], stamp: Time) -> JointStateMsg:
-    """sensor_msgs/JointState of every joint: output shaft, SI (rad, rad/s, N·m)."""
+class _Columns(NamedTuple):
+    """The states' fields as columns, in the types the messages take."""
+
+    names: tuple[str, ...]
+    position: array.array
+    velocity: array.array
+    effort: array.array
+    temperature: array.array
+    online: tuple[bool, ...]
+    error_code: array.array
+    mode: array.array
+    command: array.array
+
+
+def _columns(states: Sequence[JointState]) -> _Columns:
+    # The states are named tuples: one zip turns them into columns.
+    if not states:
+        empty = array.array('d')
+        return _Columns((), empty, empty, empty, empty, (), array.array('B'), array.array('B'),
+                        empty)
+    names, position, velocity, effort, temperature, online, error_code, mode, command = zip(
+        *states, strict=True
+    )
+    return _Columns(
+        names,
+        _doubles(position),
+        _doubles(velocity),
+        _doubles(effort),
+        _doubles(temperature),
+        online,
+        # uint8 fields: the error code is a device nibble/byte, the mode 0..4
+        array.array('B', [code & 0xFF for code in error_code]),
+        array.array('B', mode),
+        _doubles(command),
+    )
+
+
+def _joint_state(columns: _Columns, stamp: Time) -> JointStateMsg:
     msg = JointStateMsg()
     msg.header.stamp = stamp
-    msg.name = [s.name for s in states]
-    msg.position = _doubles(s.position for s in states)
-    msg.velocity = _doubles(s.velocity for s in states)
-    msg.effort = _doubles(s.effort for s in states)
+    msg.name = list(columns.names)
+    msg.position = columns.position
+    msg.velocity = columns.velocity
+    msg.effort = columns.effort
     return msg
+
+
+def _actuator_state(columns: _Columns, stamp: Time) -> ActuatorState:
+    msg = ActuatorState()
+    msg.header.stamp = stamp
+    msg.name = list(columns.names)
+    msg.position = columns.position
+    msg.velocity = columns.velocity
+    msg.effort = columns.effort
+    msg.temperature = columns.temperature
+    msg.online = list(columns.online)
+    msg.error_code = columns.error_code
+    msg.mode = columns.mode
+    msg.command = columns.command
+    return msg
+
+
+def joint_state_msg(states: Sequence[JointState], stamp: Time) -> JointStateMsg:
+    """sensor_msgs/JointState of every joint: output shaft, SI (rad, rad/s, N·m)."""
+    return _joint_state(_columns(states), stamp)
 
 
 def actuator_state_msg(states: Sequence[JointState], stamp: Time) -> ActuatorState:
@@ -39,19 +96,15 @@ def actuator_state_msg(states: Sequence[JointState], stamp: Time) -> ActuatorSta
     A joint held safe (offline, over temperature, timed out...) shows ``mode`` MODE_OFF
     and ``command`` 0: the hardware layer reports what it really applies.
     """
-    msg = ActuatorState()
-    msg.header.stamp = stamp
-    msg.name = [s.name for s in states]
-    msg.position = _doubles(s.position for s in states)
-    msg.velocity = _doubles(s.velocity for s in states)
-    msg.effort = _doubles(s.effort for s in states)
-    msg.temperature = _doubles(s.temperature for s in states)
-    msg.online = [s.online for s in states]
-    # uint8 fields: the error code is a device nibble/byte, the mode 0..4
-    msg.error_code = array.array('B', (s.error_code & 0xFF for s in states))
-    msg.mode = array.array('B', (s.mode for s in states))
-    msg.command = _doubles(s.command for s in states)
-    return msg
+    return _actuator_state(_columns(states), stamp)
+
+
+def state_msgs(
+    states: Sequence[JointState], stamp: Time
+) -> tuple[JointStateMsg, ActuatorState]:
+    """``joint_state_msg`` and ``actuator_state_msg`` of the same states, built together."""
+    columns = _columns(states)
+    return _joint_state(columns, stamp), _actuator_state(columns, stamp)
 
 
 def can_frame_msg(bus: str, frame: can.Message, is_rx: bool, stamp: Time) -> CanFrame:

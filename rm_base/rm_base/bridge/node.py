@@ -22,12 +22,7 @@ from rm_base.bridge.commands import check_stamp, parse_actuator_cmd
 from rm_base.bridge.diagnostics import CommandStats, DiagnosticsReporter
 from rm_base.bridge.errors import ActuatorCmdRejectedError, BridgeConfigError, Rejection
 from rm_base.bridge.frames import FrameTap
-from rm_base.bridge.messages import (
-    actuator_state_msg,
-    can_frame_msg,
-    joint_state_msg,
-    time_msg,
-)
+from rm_base.bridge.messages import can_frame_msg, state_msgs, time_msg
 from rm_base.bridge.params import (
     BridgeSettings,
     is_ros_own,
@@ -422,9 +417,9 @@ class CanBridgeNode(Node):
         """Publish joint_states and actuator_states once (the publisher thread's job)."""
         assert self.hardware is not None
         states = self.hardware.states()
-        stamp = self.get_clock().now().to_msg()
-        self._joint_states_pub.publish(joint_state_msg(states, stamp))
-        self._actuator_states_pub.publish(actuator_state_msg(states, stamp))
+        joint_states, actuator_states = state_msgs(states, self.get_clock().now().to_msg())
+        self._joint_states_pub.publish(joint_states)
+        self._actuator_states_pub.publish(actuator_states)
 
     def publish_diagnostics(self) -> None:
         """Publish /diagnostics once (the publisher thread's job)."""

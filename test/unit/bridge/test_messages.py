@@ -4,7 +4,13 @@ import math
 
 import can
 import pytest
-from rm_base.bridge.messages import actuator_state_msg, can_frame_msg, joint_state_msg, time_msg
+from rm_base.bridge.messages import (
+    actuator_state_msg,
+    can_frame_msg,
+    joint_state_msg,
+    state_msgs,
+    time_msg,
+)
 from rm_base.hardware import JointState
 
 STATES = [
@@ -33,6 +39,30 @@ def test_actuator_state_holds_every_field():
     assert list(msg.error_code) == [0, 5]
     assert list(msg.mode) == [2, 0]
     assert list(msg.command) == [0.35, 0.0]
+
+
+def test_state_msgs_build_both_messages_alike():
+    stamp = time_msg(2_000_000_001)
+    joint, actuator = state_msgs(STATES, stamp)
+    expected_joint = joint_state_msg(STATES, stamp)
+    expected_actuator = actuator_state_msg(STATES, stamp)
+    assert joint == expected_joint
+    # NaN != NaN: the temperature column apart
+    assert actuator.temperature[0] == 41.0 and math.isnan(actuator.temperature[1])
+    actuator.temperature = expected_actuator.temperature = [0.0, 0.0]
+    assert actuator == expected_actuator
+
+
+def test_when_no_joints_expect_empty_state_messages():
+    joint, actuator = state_msgs([], time_msg(0))
+    assert list(joint.name) == [] and list(joint.position) == []
+    assert list(actuator.online) == [] and list(actuator.error_code) == []
+
+
+def test_when_an_error_code_exceeds_a_byte_expect_its_low_byte():
+    (state,) = STATES[:1]
+    msg = actuator_state_msg([state._replace(error_code=0x1F3)], time_msg(0))
+    assert list(msg.error_code) == [0xF3]
 
 
 @pytest.mark.parametrize('is_rx', [True, False])
