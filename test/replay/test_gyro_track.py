@@ -68,28 +68,44 @@ def test_when_gyro_spins_expect_more_than_three_and_a_half_turns(replayed):
     assert abs(still[-1].yaw - still[0].yaw) < 0.1, info
 
 
-# Known defect, open: on a loaded machine the aim is lost because the Hi220 plugin stamps
-# a backlog of serial frames as fresh after a stall (heading up to 1.2 rad off at its own
-# stamp) and the one-process robot's single executor delivers /gimbal_cmd late. Passes on a
-# quiet machine (aim p90 0.046-0.128 rad spinning, <= 0.013 rad standing, 10 runs); not
-# strict until the IMU stamps frames at arrival.
-AIM_UNDER_LOAD = pytest.mark.xfail(
-    strict=False, reason='IMU backlog stamped as fresh under load (see comment above)'
-)
+# A starved simulator is not a fault of the plugins: when rm_sim lets its clock slip
+# (``sim_overruns``: it skipped physics to catch up with real time), the wheels moved
+# less than the chassis plugin and the odometry believe, and the odometry keeps the
+# difference as a heading offset (0.09-0.15 rad measured standing after 20-32 overruns at
+# load 3-5). An aim check that fails on such a run is reported as an expected failure
+# saying so; on a run where the simulator kept real time it fails (2 overruns already
+left the spinning aim p90 at 0.14 of its 0.15 rad). (The Hi220 stamps frames
+# when the device took them since 34efcde: a backlog after a stall no longer looks fresh.)
+MAX_SIM_OVERRUNS = 0
 
 
-@AIM_UNDER_LOAD
-def test_when_standing_expect_the_barrel_on_the_point(replayed):
-    result = replayed('gyro_track')
+def judged_on_an_undisturbed_run(check):
+    """Run check(result); excuse its failure only on a run the simulator could not keep."""
+
+    def test(replayed):
+        result = replayed('gyro_track')
+        try:
+            check(result)
+        except AssertionError:
+            if result.sim_overruns > MAX_SIM_OVERRUNS:
+                pytest.xfail(f'machine too loaded: the simulator slipped '
+                             f'{result.sim_overruns} times ({result.summary()})')
+            raise
+
+    test.__name__, test.__doc__ = check.__name__, check.__doc__
+    return test
+
+
+@judged_on_an_undisturbed_run
+def test_when_standing_expect_the_barrel_on_the_point(result):
     info = f'{result.summary()} -> {result.output}'
     errors = [aim_error(s) for s in result.body_between(STATIC_FROM_S, GYRO_START_S)]
     print(f'standing: aim error p90 {p90(errors):.4f} rad, max {max(map(abs, errors)):.4f}')
     assert max(map(abs, errors)) < STATIC_AIM_TOLERANCE, info
 
 
-@AIM_UNDER_LOAD
-def test_when_gyro_spins_expect_the_barrel_kept_on_the_point(replayed):
-    result = replayed('gyro_track')
+@judged_on_an_undisturbed_run
+def test_when_gyro_spins_expect_the_barrel_kept_on_the_point(result):
     info = f'{result.summary()} -> {result.output}'
     window = result.body_between(GYRO_START_S + SETTLE_S, GYRO_END_S)
     errors = [aim_error(s) for s in window]
