@@ -13,6 +13,7 @@ runs on the 1 kHz path.
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import enum
 import logging
@@ -197,6 +198,7 @@ class ManagedBus:
         self._lock = threading.Lock()  # open/close and shutdown
         self._backoff_s = config.reconnect_initial_s
         self._reopen_delay_s = config.reconnect_initial_s
+        self._up_since = 0.0  # when the bus last came up (time.monotonic) [s]
         self._consecutive_send_failures = 0
         self._log_sink = _LogSink(config.log_file, config.name) if config.log_file else None
         # counters (single writer each: the sending thread or the receive thread)
@@ -288,7 +290,7 @@ class ManagedBus:
             self._notify(self._reopen_listeners)
         self._consecutive_send_failures = 0
         self._reopen_requested = False
-        self._backoff_s = cfg.reconnect_initial_s
+        self._up_since = time.monotonic()
         self._bus = bus
         self._generation += 1
         self._state = BusState.UP
@@ -321,6 +323,11 @@ class ManagedBus:
             self._close_locked()
             self._state = BusState.DOWN
             self._notify(self._failure_listeners)
+            # The back-off starts over only for a bus that had stayed up for the longest
+            # wait: a bus that fails as soon as it is open (a persistent bus-off) must not
+            # be reopened every reconnect_initial_s forever.
+            if time.monotonic() - self._up_since >= self.config.reconnect_max_s:
+                self._backoff_s = self.config.reconnect_initial_s
             self._schedule_reopen()
 
     def start(self) -> None:
@@ -386,7 +393,9 @@ class ManagedBus:
         self._sent += 1
         self._bits += frame_bits(msg)
         if self._log_sink is not None:
-            self._log_sink.put(msg)
+            logged = copy.copy(msg)  # the log's own: stamped when sent, marked as sent
+            logged.timestamp, logged.is_rx, logged.channel = time.time(), False, self.name
+            self._log_sink.put(logged)
         return True
 
     # --- receiving ---------------------------------------------------------------------------

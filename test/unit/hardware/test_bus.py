@@ -232,6 +232,50 @@ def test_when_the_adapter_disappears_expect_reopen_with_exponential_backoff(capl
     assert len(failed) == 1  # failed opens while down are not new failures
 
 
+class BrokenAtBirth(FakeBus):
+    """Opens fine, fails at the first receive: a bus that is bus-off for good."""
+
+    def _recv_internal(self, timeout):
+        raise can.CanOperationError('bus off')
+
+
+def reopen_delays(caplog):
+    return [
+        r.getMessage().split('reopening in ')[1]
+        for r in caplog.records
+        if 'reopening in' in r.getMessage()
+    ]
+
+
+def test_when_the_bus_fails_as_soon_as_it_is_open_expect_the_backoff_to_keep_growing(caplog):
+    opened = []
+
+    def factory(**kwargs):
+        opened.append(BrokenAtBirth(**kwargs))
+        return opened[-1]
+
+    caplog.set_level(logging.WARNING, logger='rm_base.hardware.bus')
+    bus = ManagedBus(fake(reconnect_max_s=0.5), bus_factory=factory)
+    with bus:
+        bus.start()
+        assert wait_until(lambda: len(reopen_delays(caplog)) >= 5, TIMEOUT)
+    # each reopen succeeds, and fails at once: the waits double up to the cap regardless
+    assert reopen_delays(caplog)[:5] == ['0.010 s', '0.020 s', '0.040 s', '0.080 s', '0.160 s']
+
+
+def test_when_the_bus_had_stayed_up_expect_the_backoff_to_start_over(caplog):
+    factory = Factory(plan=[True, False, True])
+    caplog.set_level(logging.WARNING, logger='rm_base.hardware.bus')
+    with ManagedBus(fake(reconnect_max_s=0.1), bus_factory=factory) as bus:
+        bus.start()
+        factory.buses[0].broken.set()
+        assert wait_until(lambda: bus.generation == 2, TIMEOUT)  # waited 10 ms, then 20
+        time.sleep(0.2)  # up for longer than the longest wait: recovered
+        factory.buses[1].broken.set()
+        assert wait_until(lambda: bus.generation == 3, TIMEOUT)
+    assert reopen_delays(caplog) == ['0.010 s', '0.020 s', '0.010 s']
+
+
 def test_when_open_fails_at_start_expect_retries_in_the_background():
     factory = Factory(plan=[False, True])
     with ManagedBus(fake(), bus_factory=factory) as bus:
@@ -304,6 +348,7 @@ def test_shutdown_is_idempotent_and_final():
 @pytest.mark.parametrize('suffix', ['.asc', '.csv', '.log', '.blf'])
 def test_frames_are_logged_with_python_can_writers(tmp_path, channel, suffix):
     path = tmp_path / f'can{suffix}'
+    started = time.time()
     bus = ManagedBus(virtual(channel, log_file=str(path)))
     with bus, can.Bus(interface='virtual', channel=channel) as peer:
         bus.add_handler(0x205, lambda msg, now: True)
@@ -312,8 +357,14 @@ def test_frames_are_logged_with_python_can_writers(tmp_path, channel, suffix):
         peer.send(frame(0x205, bytes.fromhex('1fff')))
         assert wait_until(lambda: bus.stats().frames_received == 1, TIMEOUT)
     with can.LogReader(str(path)) as reader:
-        ids = sorted(msg.arbitration_id for msg in reader)
-    assert ids == [0x200, 0x205]
+        logged = sorted(reader, key=lambda m: m.arbitration_id)
+    assert [m.arbitration_id for m in logged] == [0x200, 0x205]
+    # both stamped on the wall clock within the test's run (ASC keeps time since its start)
+    start = 0.0 if suffix == '.asc' else started
+    assert all(start - 1.0 <= m.timestamp <= start + (time.time() - started) + 1.0
+               for m in logged)
+    if suffix in ('.asc', '.blf', '.log'):  # the formats that keep the direction
+        assert [m.is_rx for m in logged] == [False, True]
 
 
 def test_unknown_log_suffix_is_an_error(tmp_path, channel):
