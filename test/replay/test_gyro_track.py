@@ -74,8 +74,8 @@ def test_when_gyro_spins_expect_more_than_three_and_a_half_turns(replayed):
 # difference as a heading offset (0.09-0.15 rad measured standing after 20-32 overruns at
 # load 3-5). An aim check that fails on such a run is reported as an expected failure
 # saying so; on a run where the simulator kept real time it fails (2 overruns already
-left the spinning aim p90 at 0.14 of its 0.15 rad). (The Hi220 stamps frames
-# when the device took them since 34efcde: a backlog after a stall no longer looks fresh.)
+# left the spinning aim p90 at 0.14 of its 0.15 rad). The Hi220 stamps frames when the
+# device took them since 34efcde: a backlog after a stall no longer looks fresh.
 MAX_SIM_OVERRUNS = 0
 
 
