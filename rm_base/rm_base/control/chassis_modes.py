@@ -293,7 +293,7 @@ class ChassisModeController:
         except (TypeError, ValueError) as err:
             raise InputRejectedError(f'command must be (vx, vy, wz), got {command!r}') from err
         values = (vx, vy, wz, yaw_joint, gimbal_yaw_rate)
-        if not all(math.isfinite(value) for value in values) or (
+        if not all(map(math.isfinite, values)) or (
             yaw_joint_rate is not None and not math.isfinite(yaw_joint_rate)
         ):
             raise InputRejectedError(

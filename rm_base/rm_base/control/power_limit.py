@@ -126,7 +126,11 @@ def estimate_power(
     Raises:
         InputRejectedError: If the lengths differ or a value is NaN or infinite.
     """
-    tau_tau, tau_w, w_w = _sums(torques, speeds)
+    return _power(model, _sums(torques, speeds))
+
+
+def _power(model: ChassisPowerModel, sums: tuple[float, float, float]) -> float:
+    tau_tau, tau_w, w_w = sums
     return model.k1 * tau_tau + tau_w + model.k2 * w_w + model.static_power_w
 
 
@@ -153,7 +157,14 @@ def power_limit_scale(
         InputRejectedError: If the lengths differ, a value is NaN or infinite, or the
             limit is negative or NaN.
     """
-    tau_tau, tau_w, w_w = _sums(torques, speeds)
+    return _scale(model, _sums(torques, speeds), power_limit_w)
+
+
+def _scale(
+    model: ChassisPowerModel, sums: tuple[float, float, float], power_limit_w: float
+) -> float:
+    """``power_limit_scale`` from the sums of ``_sums``."""
+    tau_tau, tau_w, w_w = sums
     _check_limit(power_limit_w)
     if tau_tau == 0.0:
         return 1.0  # nothing to scale
@@ -209,12 +220,13 @@ def limit_power(
     Raises:
         InputRejectedError: As :func:`power_limit_scale`.
     """
-    scale = power_limit_scale(model, torques, speeds, power_limit_w)
+    sums = _sums(torques, speeds)  # once for the scale and the requested power
+    scale = _scale(model, sums, power_limit_w)
     scaled = tuple(scale * tau for tau in torques)
     return PowerLimitResult(
         scale=scale,
         torques=scaled,
-        requested_power_w=estimate_power(model, torques, speeds),
+        requested_power_w=_power(model, sums),
         power_w=estimate_power(model, scaled, speeds),
     )
 

@@ -162,6 +162,6 @@ class RampLimiter:
         values = tuple(float(value) for value in values)
         if len(values) != len(self._limits):
             raise InputRejectedError(f'expected {len(self._limits)} ramp values, got {len(values)}')
-        if not all(math.isfinite(value) for value in values):
+        if not all(map(math.isfinite, values)):
             raise InputRejectedError(f'ramp values must be finite, got {values!r}')
         return values

@@ -370,7 +370,7 @@ def _dot(row: tuple[float, ...], values: tuple[float, ...]) -> float:
 def _check_twist(twist: Sequence[float], yaw: float) -> tuple[float, float, float]:
     try:
         vx, vy, wz = (float(value) for value in twist)
-        finite = all(math.isfinite(value) for value in (vx, vy, wz, float(yaw)))
+        finite = all(map(math.isfinite, (vx, vy, wz, float(yaw))))
     except (TypeError, ValueError):
         finite = False
     if not finite:

@@ -75,7 +75,7 @@ def parse_chassis_cmd(msg: Any) -> ChassisRequest:
         )
     raw_accel = (msg.accel.linear.x, msg.accel.linear.y, msg.accel.angular.z)
     numbers = (*raw_accel, msg.power_limit)
-    if not all(math.isfinite(value) for value in numbers):
+    if not all(map(math.isfinite, numbers)):
         raise InputRejectedError(
             f'accel (linear.x, linear.y, angular.z) and power_limit must be finite, got '
             f'{raw_accel} and {msg.power_limit}'
@@ -94,7 +94,7 @@ def parse_vel_cmd(msg: Any) -> tuple[float, float, float]:
         InputRejectedError: vx, vy or wz is NaN or infinite.
     """
     values = (float(msg.linear.x), float(msg.linear.y), float(msg.angular.z))
-    if not all(math.isfinite(value) for value in values):
+    if not all(map(math.isfinite, values)):
         raise InputRejectedError(
             f'/vel_cmd linear.x, linear.y and angular.z must be finite, got {values}'
         )

@@ -155,7 +155,7 @@ class MotionPlanner:
         dt = min(dt, _MAX_UPDATE_DT)
         raw = mode is ChassisMotionMode.RAW
         phi = 0.0 if raw else yaw_joint
-        if not all(math.isfinite(v) for v in (*command, phi, yaw_joint_rate, gimbal_yaw_rate)):
+        if not all(map(math.isfinite, (*command, phi, yaw_joint_rate, gimbal_yaw_rate))):
             raise InputRejectedError(
                 f'command, yaw joint angle and rates must be finite, got {tuple(command)}, '
                 f'{yaw_joint}, {yaw_joint_rate}, {gimbal_yaw_rate}'

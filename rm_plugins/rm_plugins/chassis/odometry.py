@@ -85,7 +85,7 @@ class Odometry:
         absolute yaw sets a new offset.
         """
         x, y, yaw = (float(v) for v in pose)
-        if not all(math.isfinite(v) for v in (x, y, yaw)):
+        if not all(map(math.isfinite, (x, y, yaw))):
             raise InputRejectedError(f'pose must be 3 finite values, got {pose!r}')
         self._pose = Pose2D(x, y, yaw)
         self._twist = Twist2D()

@@ -158,7 +158,7 @@ class WheelSpeedController:
         at = speeds if power_speeds is None else power_speeds
         if len(at) != count:
             raise InputRejectedError(f'need {count} power speeds, got {len(at)}')
-        if not all(math.isfinite(v) for v in (*targets, *speeds, *at)):
+        if not all(map(math.isfinite, (*targets, *speeds, *at))):
             raise InputRejectedError(
                 f'targets and speeds must be finite: {targets}, {speeds}, {at}'
             )

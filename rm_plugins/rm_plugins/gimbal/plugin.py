@@ -272,7 +272,7 @@ class StandGimbal(PluginBase):
         cfg = self.config
         point = cmd.target.point
         frame = cmd.target.header.frame_id
-        if not all(math.isfinite(v) for v in (point.x, point.y, point.z, cmd.bullet_speed)):
+        if not all(map(math.isfinite, (point.x, point.y, point.z, cmd.bullet_speed))):
             return GimbalMode.PASSIVE, 'rejected command: target or bullet speed not finite', None
         px, py, pz = cfg.pivot
         target = (point.x, point.y, point.z)
@@ -478,7 +478,7 @@ class StandGimbal(PluginBase):
         except InputRejectedError as err:
             return f'odometry on {self._odom_topic}: {err}'
         values = (p.x, p.y, p.z, v.x, v.y, w.z)
-        if not all(math.isfinite(x) for x in values):
+        if not all(map(math.isfinite, values)):
             return f'odometry on {self._odom_topic} is not finite'
         pose = PlanarPose(p.x, p.y, yaw).extrapolated(v.x, v.y, w.z, max(age, 0.0))
         return _Odom(pose, p.z, v.x, v.y, w.z)
