@@ -181,8 +181,16 @@ class SimImu:
             ),
         }
 
-    def frame(self, now_ns: int) -> bytes:
-        """One complete 0x91 frame for the current motion, stamped ``now_ns``."""
+    def frame(self, now_ns: int, device_ns: int | None = None) -> bytes:
+        """One complete 0x91 frame for the current motion.
+
+        Args:
+            now_ns: simulation time [ns].
+            device_ns: the device's own clock for ``system_time_ms`` [ns]; default
+                now_ns. A real IMU's counter runs on with real time whatever happens to
+                the simulation's clock (which slips when the machine is starved).
+        """
+        device_ns = now_ns if device_ns is None else device_ns
         s = self.sample()
         payload = hipnuc.encode_imusol(
             acc=s['acc'],
@@ -192,17 +200,20 @@ class SimImu:
             quat=s['quat'],
             temperature=self.temperature,
             pressure=self.pressure,
-            system_time_ms=(now_ns // _NS_PER_MS) & 0xFFFFFFFF,
+            system_time_ms=(device_ns // _NS_PER_MS) & 0xFFFFFFFF,
         )
         return hipnuc.encode_frame(payload)
 
     # -- output ----------------------------------------------------------------------------
 
-    def poll(self, now_ns: int) -> bytes | None:
-        """The frame due at ``now_ns``, or None; the caller writes it (:meth:`write`)."""
+    def poll(self, now_ns: int, device_ns: int | None = None) -> bytes | None:
+        """The frame due at ``now_ns``, or None; the caller writes it (:meth:`write`).
+
+        device_ns: the device clock (see :meth:`frame`).
+        """
         if self._closed or not self._schedule.due(now_ns):
             return None
-        return self.frame(now_ns)
+        return self.frame(now_ns, device_ns)
 
     def tick(self, now_ns: int) -> bool:
         """Write a frame if one is due at ``now_ns``; return whether one was due."""

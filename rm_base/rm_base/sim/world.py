@@ -705,8 +705,10 @@ class SimWorld:
         self.time_ns = now = now + self.period_ns
         for channel in self._channels.values():
             channel._emit(now)
+        # a device's counter runs on real time while the physics runs in real time
+        device_ns = time.perf_counter_ns() if self.running else now
         for imu in self._imus.values():
-            frame = imu.poll(now)
+            frame = imu.poll(now, device_ns)
             if frame is not None:
                 self._imu_frames.append((imu, frame))
         for channel in self._channels.values():

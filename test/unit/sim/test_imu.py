@@ -221,6 +221,28 @@ def test_frame_is_a_valid_hipnuc_frame(imu_path):
     assert sample.temperature == 25
 
 
+def test_frame_carries_the_device_clock_when_given(imu_path):
+    with SimWorld.from_config(robot({'path': imu_path})) as world:
+        frame = world.imu().frame(1234 * 1_000_000, device_ns=98_765 * 1_000_000)
+    assert hipnuc.decode_payload(hipnuc.decode_frame(frame)).system_time_ms == 98_765
+
+
+def test_when_running_in_real_time_expect_the_counter_on_real_time(imu_path):
+    # A real IMU's counter runs on whatever the simulation's clock does (it slips when the
+    # machine is starved): the world hands it the real-time clock.
+    config = robot({'path': imu_path, 'rate_hz': 100})
+    config['timing'] = 'realtime'
+    with SimWorld.from_config(config) as world, \
+            serial.Serial(str(world.imu().path), 115200, timeout=1.0) as port:
+        world.start()
+        samples = read_samples(port, 3)
+        read_ms = time.perf_counter_ns() // 1_000_000
+        sim_ms = world.time_ns // 1_000_000
+    counters = [s.system_time_ms for s in samples]
+    assert all((read_ms - c) % 2**32 <= 5_000 for c in counters), (counters, read_ms)  # uint32
+    assert abs(read_ms - sim_ms) > 10_000  # perf_counter is not the sim's clock here
+
+
 def test_when_closed_expect_symlink_removed(imu_path, tmp_path):
     world = SimWorld.from_config(robot({'path': imu_path}))
     link = tmp_path / 'dev' / 'imu'
