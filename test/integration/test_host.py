@@ -10,6 +10,7 @@ import os
 import pathlib
 import re
 import threading
+import time
 
 import pytest
 import rclpy
@@ -213,6 +214,43 @@ def test_a_slow_plugin_does_not_drag_the_others_rate_down(harness):
     assert rates['hog'] < 50.0 * (1 - RATE_TOLERANCE), rates  # the hog really is slow
     assert h.host.runner('hog').overruns > 0
     assert h.host.runner('hog').skipped > 0
+
+
+def publish_once(h, velocity, topic='echo_cmd'):
+    publisher = h.probe.create_publisher(TwistStamped, topic, 10)
+    assert wait_until(lambda: publisher.get_subscription_count() > 0, WAIT)
+    msg = TwistStamped()
+    msg.header.stamp = h.probe.get_clock().now().to_msg()
+    msg.twist.linear.x = velocity
+    publisher.publish(msg)
+    return time.monotonic()
+
+
+def test_when_a_command_arrives_expect_a_run_at_once_not_at_the_next_tick(harness):
+    # 0.5 Hz: the next deadline is up to 2 s away; the command is on /actuator_cmd at once.
+    h = harness(plugins=['echo'], **echo(rate=0.5, command_timeout=5.0))
+    cmds = h.collect(ActuatorCmd, '/actuator_cmd')
+    h.start()
+    runner = h.host.runner('echo')
+    assert wait_until(lambda: runner.ticks >= 1, WAIT)  # the first run, at enable
+    sent = publish_once(h, 1.5)
+    assert wait_until(lambda: cmds and list(cmds[-1].velocity) == [1.5, 1.5], WAIT)
+    latency = time.monotonic() - sent
+    print(f'command -> /actuator_cmd at 0.5 Hz: {1e3 * latency:.0f} ms; '
+          f'{runner.extra_runs} extra run(s), {runner.ticks} in all')
+    assert runner.extra_runs == 1
+    assert latency < 0.5  # [s] (milliseconds; the next deadline was up to 2 s away)
+
+
+def test_when_run_on_command_is_off_expect_the_next_tick_only(harness):
+    h = harness(plugins=['echo'], **echo(rate=0.5, command_timeout=5.0, run_on_command=False))
+    cmds = h.collect(ActuatorCmd, '/actuator_cmd')
+    h.start()
+    runner = h.host.runner('echo')
+    assert wait_until(lambda: runner.ticks >= 1, WAIT)
+    publish_once(h, 1.5)
+    assert wait_until(lambda: cmds and list(cmds[-1].velocity) == [1.5, 1.5], WAIT)
+    assert runner.extra_runs == 0  # the command went out with a scheduled run
 
 
 def test_when_the_command_stops_expect_passive_with_the_reason_and_zero_output(harness):

@@ -34,7 +34,7 @@ from __future__ import annotations
 
 import time
 import traceback
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from enum import Enum
 from typing import Any, ClassVar
 
@@ -112,6 +112,9 @@ class PluginBase:
         self._machine: StateMachine | None = None
         self._state_pub: Any = None
         self._inputs: list[CommandInput] = []
+        # Called (from the executor thread) when a command input stores a new command and
+        # run_on_command is set: the host's runner wakes up to run at once.
+        self.command_listener: Callable[[], None] | None = None
         self._joints: tuple[str, ...] = ()
         self._enabled = False
         self._lost_reason: str | None = None
@@ -152,6 +155,11 @@ class PluginBase:
                 'command_timeout', 0.1,
                 description='a command older than this is no command (watchdog)', unit='s',
                 gt=0.0,
+            )
+            self.run_on_command = params.boolean(
+                'run_on_command', True,
+                description='run at once when a new command arrives (at most one extra '
+                'run per period), not only at the next tick',
             )
             self._io = node_io(node)
             safe = self.safe_state
@@ -365,7 +373,10 @@ class PluginBase:
         clock = self.node.get_clock()
 
         def on_command(msg: Any) -> None:
-            command.handle(msg, clock.now().nanoseconds)
+            if command.handle(msg, clock.now().nanoseconds) and self.run_on_command:
+                listener = self.command_listener
+                if listener is not None:
+                    listener()
 
         self.node.create_subscription(
             msg_type, topic, on_command, qos if qos is not None else qos_profile_sensor_data
