@@ -1,6 +1,7 @@
 """DJI actuators: feedback -> joint SI, control modes, clamping."""
 
 import math
+import random
 
 import can
 import pytest
@@ -103,6 +104,45 @@ def test_frames_for_other_ids_or_malformed_are_not_taken():
     assert a.handle_frame(bad, T0)  # it is ours, but malformed: counted, not used
     assert a.decode_errors == 1
     assert a.feedback is None
+
+
+@pytest.mark.parametrize(
+    ('type_', 'limit_rpm'),
+    [
+        ('gm6020', 640),  # 2 x 33.5 rad/s no-load
+        ('m3508', 18_338),  # 2 x 50 rad/s x 19.2 at the rotor
+        ('m2006', 35_753),  # beyond int16: every speed a C610 can send is plausible
+    ],
+)
+def test_when_a_frame_reports_an_implausible_speed_expect_it_rejected(type_, limit_rpm):
+    # No checksum on DJI frames: a corrupted one can carry any speed, which a GM6020 in
+    # voltage mode would turn into a back-EMF term far beyond its torque limit.
+    a = make(type_)
+    assert a.max_rotor_rpm == limit_rpm
+    if limit_rpm < dji.INT16_MAX:
+        feed(a, T0, ticks=100, rpm=-limit_rpm, temperature=40)
+        good = a.feedback
+        msg = can.Message(arbitration_id=a.feedback_id, is_extended_id=False,
+                          data=dji.encode_feedback(5000, limit_rpm + 1, 0, 90))
+        assert a.handle_frame(msg, T0 + MS)  # ours, counted, not used
+        assert a.decode_errors == 1
+        assert a.feedback is good
+
+
+def test_when_garbage_comes_on_a_gm6020_id_expect_the_voltage_command_within_its_limit():
+    rng = random.Random(7)
+    a = make('gm6020')  # voltage mode, max_effort 1.2 N·m
+    limit_v = a.max_rotor_rpm * dji.RAD_PER_S_PER_RPM * a.back_emf_constant
+    for k in range(2000):
+        data = bytes(rng.getrandbits(8) for _ in range(8))
+        a.handle_frame(can.Message(arbitration_id=a.feedback_id, data=data,
+                                   is_extended_id=False), T0 + k * MS)
+        fb = a.feedback
+        if fb is not None:
+            # every speed the actuator believes keeps the back-EMF term within twice the
+            # no-load voltage
+            assert abs(fb.device_velocity * a.back_emf_constant) <= limit_v
+    assert a.decode_errors > 1900  # ~98 % of random frames rejected
 
 
 # --- control modes ---

@@ -30,6 +30,8 @@ from rm_base.hardware.errors import HardwareConfigError, ValueRangeError
 from rm_base.hardware.protocols import dji
 
 _RPM_TO_RAD_S = dji.RAD_PER_S_PER_RPM
+#: Feedback faster than this times the type's no-load speed is implausible.
+_PLAUSIBLE_SPEED_FACTOR = 2.0
 _TAU = 2.0 * math.pi
 
 #: GM6020 speed constant 13.33 rpm/V -> back-EMF constant [V·s/rad].
@@ -67,6 +69,14 @@ class DjiActuator(Actuator):
         self._kt_rotor = self.torque_constant / self.gear_ratio
         self._unwrapper = EncoderUnwrapper(dji.ENCODER_TICKS_PER_REV)
         self._has_temperature = self.spec.has_temperature
+        # A DJI frame has no checksum: a corrupted one (or another device on the id) can
+        # carry any rotor speed, and a GM6020 in voltage mode turns a wrong speed into a
+        # wrong back-EMF term, i.e. a torque far beyond its limit. Twice the motor's
+        # no-load speed is more than it ever turns; beyond it the frame is rejected.
+        self.max_rotor_rpm = round(
+            _PLAUSIBLE_SPEED_FACTOR * self.defaults.max_velocity * self.defaults.gear_ratio
+            / _RPM_TO_RAD_S
+        )
         #: Raw command for the group, computed by update().
         self.command_raw = 0
 
@@ -75,6 +85,11 @@ class DjiActuator(Actuator):
 
     def _decode(self, msg: can.Message) -> tuple[float, float, float, float | None, int]:
         fb = dji.decode_feedback(msg.data, self._has_temperature)
+        if abs(fb.rotor_rpm) > self.max_rotor_rpm:
+            raise ValueRangeError(
+                f'rotor speed {fb.rotor_rpm} rpm beyond twice the no-load speed '
+                f'(+-{self.max_rotor_rpm} rpm): a corrupted frame'
+            )
         angle = self._unwrapper.update(fb.angle_ticks)  # rotor, multi-turn, exact ticks
         torque = fb.current_raw * self.spec.feedback_amps_per_raw * self._kt_rotor
         return angle, fb.rotor_rpm * _RPM_TO_RAD_S, torque, fb.temperature_c, 0
