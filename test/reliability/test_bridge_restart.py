@@ -109,8 +109,12 @@ def test_when_the_bridge_restarts_expect_the_shooter_safe_meanwhile_and_no_shot_
     while time.monotonic() < restarted + 1.5:  # long enough for a 3 rad move at 12 rad/s
         assert trigger_angle(robot) < 2.5 * SLOT, 'the trigger moved on without a command'
         time.sleep(0.01)
-    # in between the joint states were stale: the shooter was safe (PASSIVE) and said why
+    # The shooter noticed, and said why: the joint states went stale in between (PASSIVE
+    # naming the trigger), or, when the new bridge answered within the joint timeout, the
+    # trigger was far from its hold (FEED again; in 2 of 6 runs, which before 2026-11-21
+    # drove the new trigger ~2-3 rad back towards the old hold in 8 of 19).
     states = robot.history('/shooter_state')[mark:]
-    passive = [s for s in states if s.state == ShooterState.PASSIVE]
-    assert passive, [(s.state, s.reason) for s in states[:5]]
-    assert any('trigger' in s.reason for s in passive), {s.reason for s in passive}
+    noticed = [s.reason for s in states
+               if (s.state == ShooterState.PASSIVE and 'trigger' in s.reason)
+               or 'from its hold' in s.reason]
+    assert noticed, [(s.state, s.reason) for s in states[:10]]

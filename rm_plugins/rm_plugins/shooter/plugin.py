@@ -383,6 +383,15 @@ class StandShooter(PluginBase):
         cfg = self.config
         if self._hold is None:
             self._hold = trigger.position
+        # Far from where it was held (half a slot; a step spans one): the reference is
+        # lost, e.g. a bridge that restarted between two joint states with the encoders back
+        # near zero. Driving the disc back to the old hold would turn it without a command.
+        off = abs(trigger.position - self._hold)
+        if off > cfg.slot_angle * (1.5 if self._step_target is not None else 0.5):
+            self._hold = self._step_target = None
+            self._enter(S.FEED, f'trigger {off:.2f} rad from its hold: feeding again')
+            self._detector.reset()
+            return JointTarget.with_velocity(0.0)
         burst = self._burst
         if self._step_target is not None:  # a step in progress
             if self._jammed(trigger, dt):
