@@ -228,7 +228,7 @@ def publish_once(h, velocity, topic='echo_cmd'):
 
 def test_when_a_command_arrives_expect_a_run_at_once_not_at_the_next_tick(harness):
     # 0.5 Hz: the next deadline is up to 2 s away; the command is on /actuator_cmd at once.
-    h = harness(plugins=['echo'], **echo(rate=0.5, command_timeout=5.0))
+    h = harness(plugins=['echo'], **echo(rate=0.5, command_timeout=5.0, run_on_command=True))
     cmds = h.collect(ActuatorCmd, '/actuator_cmd')
     h.start()
     runner = h.host.runner('echo')
@@ -243,7 +243,7 @@ def test_when_a_command_arrives_expect_a_run_at_once_not_at_the_next_tick(harnes
 
 
 def test_when_run_on_command_is_off_expect_the_next_tick_only(harness):
-    h = harness(plugins=['echo'], **echo(rate=0.5, command_timeout=5.0, run_on_command=False))
+    h = harness(plugins=['echo'], **echo(rate=0.5, command_timeout=5.0))  # off by default
     cmds = h.collect(ActuatorCmd, '/actuator_cmd')
     h.start()
     runner = h.host.runner('echo')

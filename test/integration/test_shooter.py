@@ -240,11 +240,11 @@ def test_when_the_same_push_command_repeats_expect_no_second_burst(rig):
     angle = r.trigger_angle()
     mark = r.mark()
     # The same command keeps coming at 50 Hz; over the next 25 states (0.5 s at 50 Hz) not
-    # one more shot, and the trigger holds (it may still creep the last few hundredths of
-    # a rad onto its hold against friction; another step would be 0.785 rad).
+    # one more shot, and the trigger holds (it may still creep back onto its hold against
+    # friction: up to 0.19 rad seen after an overshoot; another step would be 0.785 rad).
     assert wait_until(lambda: r.mark() >= mark + 25, WAIT)
     assert {s.shots_fired for s in r.states_since(mark)} == {2}
-    assert abs(r.trigger_angle() - angle) < 0.1
+    assert abs(r.trigger_angle() - angle) < 0.3
     # A new burst_id fires again.
     r.send(ShootCmd.PUSH, speed=15.0, hz=10.0, num=1, burst_id=8)
     assert wait_until(lambda: shots(r) >= 3, WAIT)

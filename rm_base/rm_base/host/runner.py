@@ -10,9 +10,10 @@ ends more than a period late skips the missed deadlines instead of bursting to c
 A new command (``PluginBase.command_listener``, when the plugin's ``run_on_command`` is
 set) wakes the runner to run at once instead of at the next deadline, and the schedule
 goes on a period after that run: the command reaches the motors up to a period sooner
-(5 ms at 200 Hz). Runs stay at least a quarter period (at most 2 ms) apart, so a
-command flood cannot raise the rate above four times the plugin's own (500 Hz for slow
-plugins), and no run sees a dt below that.
+(5 ms at 200 Hz). Runs stay at least a quarter period (at most 2 ms) apart, so a command
+flood cannot raise the rate above four times the plugin's own (500 Hz for slow plugins),
+and no run sees a dt below that. Off by default: each extra run costs a tick's CPU, which
+a 2-core machine running the whole robot in one interpreter does not have to spare.
 
 One ``threading.Condition`` per runner serialises ``run()`` with ``enable()`` and
 ``disable()`` (which arrive on the ROS executor thread through services), and wakes a

@@ -157,9 +157,9 @@ class PluginBase:
                 gt=0.0,
             )
             self.run_on_command = params.boolean(
-                'run_on_command', True,
-                description='run at once when a new command arrives (at most one extra '
-                'run per period), not only at the next tick',
+                'run_on_command', False,
+                description='also run at once when a new command arrives (up to a period '
+                'less latency, more CPU: extra runs)',
             )
             self._io = node_io(node)
             safe = self.safe_state
