@@ -27,6 +27,7 @@ import sys
 import tempfile
 import threading
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -157,6 +158,45 @@ def _robot_args(plan: RobotPlan) -> list[str]:
     return args
 
 
+def _measure_phases(
+    plan: RobotPlan,
+    result: dict[str, Any],
+    commander: Child,
+    bridge: Child,
+    measure: Callable[[str, float], dict[str, Any]],
+    canary_log: Path,
+) -> None:
+    """The idle, load (with the canary) and latency phases into result.
+
+    bridge: the process with can_bridge (its joints, its frame tap); measure(phase,
+    seconds): one phase's result over every robot process.
+    """
+    result['idle'] = measure('idle', plan.idle_s)
+    commander.request(f'stream {plan.command_rate_hz}', 30.0)
+    active = bridge.request('wait_active 20 ' + ' '.join(ACTIVE_JOINTS), 30.0)
+    if not active['active']:
+        result['notes'].append(f'not every joint driven under load: {active["holds"]}')
+    canary = Child('bench.canary', [str(plan.load_s)], canary_log)
+    try:
+        result['load'] = measure('load', plan.load_s)
+        result['canary'] = canary.wait(30.0)
+    finally:
+        canary.close()
+    commander.request('stop', 10.0)
+
+    tap = bridge.request('tap_on ' + ' '.join(PROBES), 10.0)
+    duration = plan.steps * (plan.hold_s + plan.rest_s + 0.01) + plan.settle_s
+    steps = commander.request(
+        f'steps {plan.steps} {plan.hold_s} {plan.rest_s} {plan.command_rate_hz} '
+        f'{plan.settle_s}',
+        duration + 60.0,
+    )
+    frames = bridge.request('tap_off', 30.0)
+    result['latency'] = analyse({**tap, **steps, **frames}, int(plan.hold_s * 1e9))
+    for phase in ('idle', 'load'):
+        result['notes'] += _domain_conflict(result[phase])
+
+
 def run_once(plan: RobotPlan, log_dir: Path, tag: str) -> dict[str, Any]:
     """One robot run (see the module docstring); returns the raw phase results."""
     result: dict[str, Any] = {'notes': []}
@@ -173,31 +213,11 @@ def run_once(plan: RobotPlan, log_dir: Path, tag: str) -> dict[str, Any]:
         result['plugins'] = ready['plugins']
         commander.wait(60.0)
 
-        result['idle'] = robot.request(f'measure idle {plan.idle_s}', plan.idle_s + 30.0)
-
-        commander.request(f'stream {plan.command_rate_hz}', 30.0)
-        active = robot.request('wait_active 20 ' + ' '.join(ACTIVE_JOINTS), 30.0)
-        if not active['active']:
-            result['notes'].append(f'not every joint driven under load: {active["holds"]}')
-        canary = Child('bench.canary', [str(plan.load_s)], log_dir / f'canary_{tag}.log')
-        try:
-            result['load'] = robot.request(f'measure load {plan.load_s}', plan.load_s + 30.0)
-            result['canary'] = canary.wait(30.0)
-        finally:
-            canary.close()
-        commander.request('stop', 10.0)
-
-        tap = robot.request('tap_on ' + ' '.join(PROBES), 10.0)
-        duration = plan.steps * (plan.hold_s + plan.rest_s + 0.01) + plan.settle_s
-        steps = commander.request(
-            f'steps {plan.steps} {plan.hold_s} {plan.rest_s} {plan.command_rate_hz} '
-            f'{plan.settle_s}',
-            duration + 60.0,
+        _measure_phases(
+            plan, result, commander, robot,
+            lambda phase, seconds: robot.request(f'measure {phase} {seconds}', seconds + 30.0),
+            log_dir / f'canary_{tag}.log',
         )
-        frames = robot.request('tap_off', 30.0)
-        result['latency'] = analyse({**tap, **steps, **frames}, int(plan.hold_s * 1e9))
-        for phase in ('idle', 'load'):
-            result['notes'] += _domain_conflict(result[phase])
     finally:
         commander.close()
         robot.close()
@@ -281,31 +301,11 @@ def run_split(plan: RobotPlan, log_dir: Path, tag: str) -> dict[str, Any]:
             result['notes'].append(f'joints without feedback at start: {offline}')
         commander.wait(60.0)
 
-        result['idle'] = _merge(*_measure_both(bridge, host, 'idle', plan.idle_s))
-
-        commander.request(f'stream {plan.command_rate_hz}', 30.0)
-        active = bridge.request('wait_active 20 ' + ' '.join(ACTIVE_JOINTS), 30.0)
-        if not active['active']:
-            result['notes'].append(f'not every joint driven under load: {active["holds"]}')
-        canary = Child('bench.canary', [str(plan.load_s)], log_dir / f'split_canary_{tag}.log')
-        try:
-            result['load'] = _merge(*_measure_both(bridge, host, 'load', plan.load_s))
-            result['canary'] = canary.wait(30.0)
-        finally:
-            canary.close()
-        commander.request('stop', 10.0)
-
-        tap = bridge.request('tap_on ' + ' '.join(PROBES), 10.0)
-        duration = plan.steps * (plan.hold_s + plan.rest_s + 0.01) + plan.settle_s
-        steps = commander.request(
-            f'steps {plan.steps} {plan.hold_s} {plan.rest_s} {plan.command_rate_hz} '
-            f'{plan.settle_s}',
-            duration + 60.0,
+        _measure_phases(
+            plan, result, commander, bridge,
+            lambda phase, seconds: _merge(*_measure_both(bridge, host, phase, seconds)),
+            log_dir / f'split_canary_{tag}.log',
         )
-        frames = bridge.request('tap_off', 30.0)
-        result['latency'] = analyse({**tap, **steps, **frames}, int(plan.hold_s * 1e9))
-        for phase in ('idle', 'load'):
-            result['notes'] += _domain_conflict(result[phase])
     finally:
         for child in (commander, host, bridge):  # plugins' zero output before the bridge's
             child.close()
