@@ -185,7 +185,7 @@ class ManagedBus:
         if isinstance(frame_clock, _Default):
             frame_clock = time.time if clock_ns is time.perf_counter_ns else None
         self._frame_clock = frame_clock
-        self.backdated = 0  # frames that waited > 1 ms for the receive thread
+        self._late = 0  # frames that waited > 1 ms for the receive thread
         self._factory = bus_factory
         self._bus: can.BusABC | None = None
         self._state = BusState.NEW
@@ -438,7 +438,7 @@ class ManagedBus:
         if not 0.0 < age_s <= MAX_FRAME_AGE_S:
             return now_ns
         if age_s > _BACKDATE_NOTED_S:
-            self.backdated += 1
+            self._late += 1
         return now_ns - int(age_s * 1e9)
 
     def dispatch(self, msg: can.Message, now_ns: int) -> int:
@@ -496,5 +496,5 @@ class ManagedBus:
             load_bps=load,
             load_fraction=load / bitrate if bitrate else None,
             last_error=self._last_error,
-            frames_late=self.backdated,
+            frames_late=self._late,
         )
