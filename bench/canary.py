@@ -15,7 +15,7 @@ import array
 import sys
 import time
 
-from bench.robot_proc import reply
+from bench.protocol import reply
 from bench.scheduler_timing import tick_summary
 
 PERIOD_NS = 1_000_000

@@ -27,7 +27,7 @@ import threading
 import time
 from typing import Any
 
-from bench.robot_proc import reply
+from bench.protocol import reply, serve
 
 #: The latency steps: chassis RAW with acceleration limits far above the defaults (so the
 #: first plugin tick after the step already asks for the full wheel effort) and a power
@@ -205,32 +205,13 @@ def main() -> int:
         return 1
     reply({'started': True})
     try:
-        for line in sys.stdin:
-            words = line.split()
-            if not words:
-                continue
-            cmd, args = words[0], words[1:]
-            try:
-                if cmd == 'stream':
-                    reply(commander.start_stream(float(args[0])))
-                elif cmd == 'stop':
-                    reply(commander.stop_stream())
-                elif cmd == 'steps':
-                    reply(
-                        commander.steps(
-                            int(args[0]),
-                            float(args[1]),
-                            float(args[2]),
-                            float(args[3]),
-                            *(float(a) for a in args[4:5]),
-                        )
-                    )
-                elif cmd == 'quit':
-                    break
-                else:
-                    reply({'error': f'unknown command {cmd!r}'})
-            except Exception as err:
-                reply({'error': f'{type(err).__name__}: {err}'})
+        serve({
+            'stream': lambda a: commander.start_stream(float(a[0])),
+            'stop': lambda a: commander.stop_stream(),
+            'steps': lambda a: commander.steps(
+                int(a[0]), float(a[1]), float(a[2]), float(a[3]), *(float(x) for x in a[4:5])
+            ),
+        })
     finally:
         commander.close()
     return 0

@@ -33,7 +33,7 @@ from pathlib import Path
 from typing import Any
 
 from bench.latency import PROBES, analyse
-from bench.robot_proc import PREFIX
+from bench.protocol import PREFIX
 
 ROOT = Path(__file__).resolve().parents[1]
 ACTIVE_JOINTS = ('wheel_fl', 'yaw', 'friction_l')

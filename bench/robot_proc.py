@@ -34,15 +34,7 @@ import threading
 import time
 from typing import Any
 
-PREFIX = '@@BENCH '
-
-
-def reply(obj: dict[str, Any]) -> None:
-    try:
-        sys.stdout.write(PREFIX + json.dumps(obj) + '\n')
-        sys.stdout.flush()
-    except (BrokenPipeError, ValueError):
-        pass  # the parent is gone; stdin's end of file stops this process
+from bench.protocol import reply, serve
 
 
 def make_tap_class():
@@ -387,30 +379,14 @@ def control_loop(robot: Robot) -> None:
 
 
 def _serve(robot: Robot) -> None:
-    for line in sys.stdin:
-        words = line.split()
-        if not words:
-            continue
-        cmd, args = words[0], words[1:]
-        try:
-            if cmd == 'ready':
-                reply(robot.ready(float(args[0])))
-            elif cmd == 'wait_active':
-                reply(robot.wait_active(float(args[0]), args[1:]))
-            elif cmd == 'measure':
-                reply(robot.measure(args[0], float(args[1])))
-            elif cmd == 'profile':
-                reply(robot.profile(float(args[0]), args[1]))
-            elif cmd == 'tap_on':
-                reply(robot.tap_on(args))
-            elif cmd == 'tap_off':
-                reply(robot.tap_off())
-            elif cmd == 'quit':
-                break
-            else:
-                reply({'error': f'unknown command {cmd!r}'})
-        except Exception as err:
-            reply({'error': f'{type(err).__name__}: {err}'})
+    serve({
+        'ready': lambda a: robot.ready(float(a[0])),
+        'wait_active': lambda a: robot.wait_active(float(a[0]), a[1:]),
+        'measure': lambda a: robot.measure(a[0], float(a[1])),
+        'profile': lambda a: robot.profile(float(a[0]), a[1]),
+        'tap_on': robot.tap_on,
+        'tap_off': lambda a: robot.tap_off(),
+    })
 
 
 def main(argv: list[str] | None = None) -> int:
