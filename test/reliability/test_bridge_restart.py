@@ -20,7 +20,7 @@ import time
 
 import pytest
 from rm_base.bridge import CanBridgeNode
-from support.robot import SimRobot, _parameter
+from support.robot import SHOOTER_SIM_LOADS, SimRobot, _parameter
 from support.ros import wait_until
 
 from rm_msgs.msg import ShootCmd, ShooterState
@@ -29,16 +29,6 @@ pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
 WAIT = 10.0  # [s] longest wait for a condition
 SLOT = 2.0 * math.pi / 8  # shooter.slots = 8
-
-# As test/integration/test_shooter.py: a friction wheel's inertia on its rotor, the
-# rotor's own top speed, and the trigger disc with balls.
-BRIDGE = {
-    'joints.friction_l.sim.load_inertia': 4.5e-5,
-    'joints.friction_r.sim.load_inertia': 4.5e-5,
-    'joints.friction_l.max_velocity': 1000.0,
-    'joints.friction_r.max_velocity': 1000.0,
-    'joints.trigger.sim.load_inertia': 2e-4,
-}
 
 
 def restart_bridge(robot: SimRobot) -> None:
@@ -63,7 +53,7 @@ def shooter_robot():
     robot = SimRobot(
         'standard',
         plugins=['gpio', 'shooter'],
-        overrides={'can_bridge': BRIDGE, 'rm_robot': {'shooter.command_timeout': 0.5}},
+        overrides={'can_bridge': SHOOTER_SIM_LOADS, 'rm_robot': {'shooter.command_timeout': 0.5}},
     )
     robot.subscribe('/shooter_state', ShooterState, keep_history=True)
     yield robot

@@ -29,7 +29,7 @@ import pytest
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Twist
 from rm_base.sim import Fault
-from support.robot import SimRobot
+from support.robot import SHOOTER_SIM_LOADS, SimRobot
 
 from reliability.rigs import WireWatch, hardware_config
 from reliability.wire import check_actuator_states, max_efforts
@@ -52,20 +52,12 @@ WAIT = 10.0  # [s] longest wait for a condition
 # asserted in lockstep (test_hardware_faults.py); the effort limits here have no grace.
 GRACE = 0.25
 
-# As test/integration/test_shooter.py: friction wheel and trigger loads and rotor speeds.
-BRIDGE = {
-    'joints.friction_l.sim.load_inertia': 4.5e-5,
-    'joints.friction_r.sim.load_inertia': 4.5e-5,
-    'joints.friction_l.max_velocity': 1000.0,
-    'joints.friction_r.max_velocity': 1000.0,
-    'joints.trigger.sim.load_inertia': 2e-4,
-}
 HOST = {'shooter.command_timeout': 0.5}
 
 
 @pytest.fixture(scope='module')
 def robot():
-    r = SimRobot('standard', overrides={'can_bridge': BRIDGE, 'rm_robot': HOST})
+    r = SimRobot('standard', overrides={'can_bridge': SHOOTER_SIM_LOADS, 'rm_robot': HOST})
     for topic, cls in (
         ('/chassis_state', ChassisState),
         ('/gimbal_state', GimbalState),

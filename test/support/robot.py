@@ -41,6 +41,18 @@ from support.ros import wait_until
 CONFIG_DIR = pathlib.Path(__file__).resolve().parents[2] / 'rm_bringup' / 'config'
 
 
+#: can_bridge overrides for a shooter that behaves like the real one (the values are
+#: derived in test/integration/test_shooter.py): a friction wheel's inertia on its rotor, the
+#: rotor's own top speed, and the trigger disc with balls.
+SHOOTER_SIM_LOADS = {
+    'joints.friction_l.sim.load_inertia': 4.5e-5,
+    'joints.friction_r.sim.load_inertia': 4.5e-5,
+    'joints.friction_l.max_velocity': 1000.0,
+    'joints.friction_r.max_velocity': 1000.0,
+    'joints.trigger.sim.load_inertia': 2e-4,
+}
+
+
 def flatten(tree: Mapping[str, Any], prefix: str = '') -> dict[str, Any]:
     """Nested parameter mapping -> {'a.b.c': value}, as rcl reads a parameter file."""
     flat: dict[str, Any] = {}
