@@ -13,11 +13,9 @@ runs on the 1 kHz path.
 
 from __future__ import annotations
 
-import copy
 import dataclasses
 import enum
 import logging
-import queue
 import threading
 import time
 from collections.abc import Callable
@@ -25,6 +23,7 @@ from typing import Any
 
 import can
 
+from rm_base.hardware.can_log import CanLog
 from rm_base.hardware.config import BusConfig
 from rm_base.hardware.errors import BusError
 
@@ -113,34 +112,6 @@ class _Default:
 _DEFAULT = _Default()
 
 
-class _LogSink:
-    """Writes frames to a python-can writer from its own thread."""
-
-    def __init__(self, path: str, name: str) -> None:
-        try:
-            self._writer = can.Logger(path)
-        except (ValueError, OSError) as err:
-            raise BusError(f'bus {name}: cannot open CAN log {path!r}: {err}') from err
-        self._queue: queue.SimpleQueue[can.Message | None] = queue.SimpleQueue()
-        self._thread = threading.Thread(target=self._run, name=f'canlog-{name}', daemon=True)
-        self._thread.start()
-
-    def put(self, msg: can.Message) -> None:
-        self._queue.put(msg)
-
-    def _run(self) -> None:
-        while (msg := self._queue.get()) is not None:
-            try:
-                self._writer.on_message_received(msg)
-            except Exception:
-                _log.exception('CAN log writer failed; frame dropped')
-
-    def stop(self) -> None:
-        self._queue.put(None)
-        self._thread.join(timeout=5.0)
-        self._writer.stop()
-
-
 class ManagedBus:
     """One CAN bus with a receive thread, dispatch by arbitration id and reconnection.
 
@@ -200,7 +171,7 @@ class ManagedBus:
         self._reopen_delay_s = config.reconnect_initial_s
         self._up_since = 0.0  # when the bus last came up (time.monotonic) [s]
         self._consecutive_send_failures = 0
-        self._log_sink = _LogSink(config.log_file, config.name) if config.log_file else None
+        self._log_sink = CanLog(config.log_file, config.name) if config.log_file else None
         # counters (single writer each: the sending thread or the receive thread)
         self._sent = 0
         self._received = 0
@@ -393,9 +364,7 @@ class ManagedBus:
         self._sent += 1
         self._bits += frame_bits(msg)
         if self._log_sink is not None:
-            logged = copy.copy(msg)  # the log's own: stamped when sent, marked as sent
-            logged.timestamp, logged.is_rx, logged.channel = time.time(), False, self.name
-            self._log_sink.put(logged)
+            self._log_sink.sent(msg, self.name)
         return True
 
     # --- receiving ---------------------------------------------------------------------------
@@ -453,7 +422,7 @@ class ManagedBus:
         self._received += 1
         self._bits += frame_bits(msg)
         if self._log_sink is not None:
-            self._log_sink.put(msg)
+            self._log_sink.received(msg)
         claimed = 0
         for handler in self._handlers.get(msg.arbitration_id, ()):
             try:
