@@ -383,11 +383,12 @@ class StandShooter(PluginBase):
         cfg = self.config
         if self._hold is None:
             self._hold = trigger.position
-        # Far from where it was held (half a slot; a step spans one): the reference is
-        # lost, e.g. a bridge that restarted between two joint states with the encoders back
-        # near zero. Driving the disc back to the old hold would turn it without a command.
+        # Over a slot from where it was held (two during a step, which spans one): the
+        # reference is lost, e.g. a bridge that restarted between two joint states with the
+        # encoders back near zero. Driving the disc back to the old hold would turn it
+        # without a command.
         off = abs(trigger.position - self._hold)
-        if off > cfg.slot_angle * (1.5 if self._step_target is not None else 0.5):
+        if off > cfg.slot_angle * (2.0 if self._step_target is not None else 1.0):
             self._hold = self._step_target = None
             self._enter(S.FEED, f'trigger {off:.2f} rad from its hold: feeding again')
             self._detector.reset()
