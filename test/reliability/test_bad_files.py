@@ -24,7 +24,7 @@ import threading
 import uuid
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 from rclpy.parameter import Parameter
 from rm_base.bridge import CanBridgeNode
@@ -125,6 +125,8 @@ def test_a_bag_truncated_anywhere_is_read_or_one_clear_error(
     storage=st.sampled_from(['mcap', 'sqlite3']),
     edits=st.lists(st.tuples(st.floats(0.0, 1.0), st.binary(min_size=1, max_size=64)), max_size=4),
 )
+# found in CI: a NULL timestamp in a sqlite3 row reached the play loop as None
+@example(storage='sqlite3', edits=[(0.533803397596652, b'\x00')])
 def test_a_bag_with_bytes_overwritten_is_read_or_one_clear_error(
     bags, tmp_path, capsys, storage, edits
 ):

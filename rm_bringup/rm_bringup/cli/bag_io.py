@@ -95,4 +95,8 @@ def read_messages(
             return
         except Exception as err:
             raise BagError(f'cannot read bag {_describe(Path(path))}: {_reason(err)}') from None
+        if not isinstance(item[1], int) or not isinstance(item[2], bytes | bytearray | memoryview):
+            # a damaged sqlite3 row comes back with NULL columns, not as an error
+            raise BagError(f'cannot read bag {_describe(Path(path))}: a message without '
+                           f'{"timestamp" if not isinstance(item[1], int) else "data"}')
         yield item
