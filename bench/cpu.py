@@ -3,11 +3,13 @@
 ``bringup`` runs can_bridge, rm_robot and rm_sim in one process, so the split is by
 thread (names from :func:`bench.machine.thread_cpu_snapshot`):
 
-* **bridge**: ``can-scheduler`` (update, pack, send at 1 kHz), ``canrx-<bus>`` (decode and
-  dispatch of feedback), ``can_bridge-publish`` (joint/actuator states, diagnostics),
+* **bridge**: ``can-scheduler`` (the one loop: in the one-process robot it also runs the
+  plugins; update, pack, send at 1 kHz), ``canrx-<bus>`` (decode and dispatch of
+  feedback), ``can_bridge-publish`` (joint/actuator states, diagnostics),
   ``canlog-<bus>``. On rm_sim the scheduler's ``send`` also runs the simulated motors'
   command decoding (the sim delivers synchronously), which a socketcan send does not.
-* **host**: ``plugin:<name>`` (one per plugin) and the IMU reader ``hipnuc ...``.
+* **host**: ``rm_robot-loop`` (the plugins' loop when rm_robot runs alone),
+  ``rm_robot-publish`` (the plugins' messages) and the IMU reader ``hipnuc ...``.
 * **ROS (shared)**: ``MainThread`` (the EventsExecutor: every subscription callback of
   both nodes) and the native threads (DDS, rclpy's C++ side); shared by host and bridge.
 * **sim**: ``rm_sim-physics`` (motor physics, feedback frames, the IMU's pty frames).
@@ -26,7 +28,7 @@ def classify(thread_name: str) -> str:
     """The component group of one thread name (see the module docstring)."""
     if thread_name.startswith(('can-scheduler', 'canrx-', 'can_bridge-', 'canlog-')):
         return 'bridge'
-    if thread_name.startswith(('plugin:', 'hipnuc')):
+    if thread_name.startswith(('rm_robot-', 'hipnuc')):
         return 'host'
     if thread_name.startswith('rm_sim-'):
         return 'sim'

@@ -98,7 +98,9 @@ class Robot:
         self.rclpy = rclpy
         self.role = role
         self.bridge = CanBridgeNode() if role in ('all', 'bridge') else None
-        self.host = RobotHost() if role in ('all', 'host') else None
+        # the one-process robot runs its plugins in the bridge's loop, as bringup does
+        hardware = self.bridge.hardware if self.bridge is not None else None
+        self.host = RobotHost(hardware=hardware) if role in ('all', 'host') else None
         self.executor = EventsExecutor()
         for node in (self.bridge, self.host):
             if node is not None:
@@ -186,8 +188,8 @@ class Robot:
         hw, host = self.hw, self.host
         plugins = self._plugins
         frames0 = self._frame_counts()
-        overruns0 = {n: host.runner(n).overruns for n in plugins}
-        plugin_ticks0 = {n: host.runner(n).ticks for n in plugins}
+        overruns0 = {n: host.task(n).skipped for n in plugins}
+        plugin_ticks0 = {n: host.task(n).ticks for n in plugins}
         world = self.bridge.sim_world if self.bridge is not None else None
         physics_ns = array.array('q')
         sim_time0 = world.time_ns if world is not None else 0
@@ -221,8 +223,8 @@ class Robot:
                 for bus in hw.buses
             }  # every simulated DJI motor answers at 1 kHz
         for n in plugins:
-            runner = host.runner(n)
-            loops[f'plugin:{n}'] = (runner.plugin.rate, runner.ticks - plugin_ticks0[n])
+            task = host.task(n)
+            loops[f'plugin:{n}'] = (task.plugin.rate, task.ticks - plugin_ticks0[n])
         process_pct = (
             100.0 * ((ru1.ru_utime - ru0.ru_utime) + (ru1.ru_stime - ru0.ru_stime)) / elapsed
         )
@@ -245,7 +247,7 @@ class Robot:
                 }
                 for bus in frames1
             },
-            'plugin_overruns': {n: host.runner(n).overruns - overruns0[n] for n in plugins},
+            'plugin_overruns': {n: host.task(n).skipped - overruns0[n] for n in plugins},
             'holds': {a.name: a.hold_reason.value for a in hw.actuators.values()} if hw else {},
             'publishers': {
                 topic: self._publishers(topic)

@@ -7,9 +7,11 @@
 The robot config is a ROS parameter file with a ``can_bridge`` and an ``rm_robot``
 section (rm_bringup/config/<robot>.yaml); ``--sim`` loads its simulation overlay
 (<robot>_sim.yaml) after it, as a second --params-file, so every bus runs on rm_sim.
-Both nodes share one EventsExecutor (the plugins and the 1 kHz CAN loop run in threads of
-their own). On Ctrl-C (or SIGTERM) every plugin commands zero output first, then the
-bridge sends zero-current frames, then the process exits.
+The plugins run inside the bridge's 1 kHz CAN loop (one thread: feedback, due plugins,
+actuator updates, pack, send), setting joint targets on the actuators directly; both
+nodes' ROS callbacks share one EventsExecutor at the edge. On Ctrl-C (or SIGTERM) every
+plugin commands zero output first, then the bridge sends zero-current frames, then the
+process exits.
 """
 
 from __future__ import annotations
@@ -136,7 +138,7 @@ def _run(args: argparse.Namespace, files: list[pathlib.Path]) -> int:
     bridge = host = None
     try:
         bridge = CanBridgeNode()
-        host = RobotHost()
+        host = RobotHost(hardware=bridge.hardware)
     except ConfigError as err:
         print(f'[bringup] configuration error: {err}', file=sys.stderr)
         for node in (host, bridge):
@@ -171,7 +173,7 @@ def _run(args: argparse.Namespace, files: list[pathlib.Path]) -> int:
     finally:
         if printer is not None:
             printer.finish()
-        # Plugins first (zero targets on /actuator_cmd), then the bridge's zero frames.
+        # Plugins first (zero targets on their joints), then the bridge's zero frames.
         host.shutdown()
         bridge.shutdown()
         executor.shutdown()

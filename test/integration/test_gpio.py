@@ -188,8 +188,8 @@ def test_when_disabled_expect_the_outputs_back_at_their_initial_values(gpio):
     h = gpio()
     h.send(laser=1, cover=0.2)
     assert wait_until(lambda: h.value('laser') == 1.0, WAIT)
-    h.host.runner('gpio').disable('test')
-    h.host.runner('gpio').enable()
+    h.host.task('gpio').disable('test')
+    h.host.task('gpio').enable()
     assert wait_until(lambda: h.value('laser') == 0.0 and h.value('cover') == 0.075, WAIT)
 
 

@@ -1,6 +1,7 @@
 """The bridge goes away and comes back while rm_robot keeps running (whole robot, in-process).
 
-SimRobot (test/support/robot.py) runs can_bridge on rm_sim and rm_robot in this process.
+SimRobot (test/support/robot.py) runs can_bridge on rm_sim and rm_robot in this process,
+split as two processes would be (rm_robot's own loop, DDS joint I/O).
 Here the bridge node is shut down and a new one (new simulated world: every motor starts
 again at angle 0, as real motors' single-turn encoders restart near zero with a new
 bridge) is started with the same parameters, while the plugins keep ticking. The host must
@@ -54,6 +55,7 @@ def shooter_robot():
         'standard',
         plugins=['gpio', 'shooter'],
         overrides={'can_bridge': SHOOTER_SIM_LOADS, 'rm_robot': {'shooter.command_timeout': 0.5}},
+        split=True,  # rm_robot outlives the bridge only when they talk over DDS
     )
     robot.subscribe('/shooter_state', ShooterState, keep_history=True)
     yield robot

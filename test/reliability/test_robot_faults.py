@@ -277,6 +277,10 @@ def test_when_plugin_commands_are_invalid_or_stale_expect_every_plugin_passive(r
 
 
 def test_when_plugin_commands_are_huge_expect_outputs_within_every_limit(robot):
+    # A burst left by an earlier test (its command still within its timeout when the
+    # faults were cleared) may fire after it: count from a shooter that has let go.
+    assert robot.wait_until(lambda: state_of(robot, '/shooter_state') == ShooterState.PASSIVE, WAIT)
+    shots_before = robot.latest('/shooter_state').shots_fired
     vel = Twist()
     vel.linear.x, vel.linear.y, vel.angular.z = 1e9, -1e12, 1e300
     robot.publish('/chassis_cmd', ChassisCmd(mode=ChassisCmd.RAW), rate_hz=50.0)
@@ -295,5 +299,4 @@ def test_when_plugin_commands_are_huge_expect_outputs_within_every_limit(robot):
     limits = {j.name: j.max_effort for j in robot.bridge.hardware.actuators.values()}
     for name, limit in limits.items():
         assert robot.watch.checker.stats(name).max_effort_seen <= limit * 1.01 + 1e-3, name
-    shooter = robot.latest('/shooter_state')
-    assert shooter.shots_fired <= 2 + robot.history('/shooter_state')[0].shots_fired + 2
+    assert robot.latest('/shooter_state').shots_fired <= shots_before + 2  # num=2

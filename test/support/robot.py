@@ -90,6 +90,9 @@ class SimRobot:
         plugins: plugin instances to load (default: all of the config).
         overrides: ``{'can_bridge' | 'rm_robot': {flat parameter: value}}`` applied last.
         settle_timeout: how long to wait for the first joint states [s].
+        split: run the plugins in rm_robot's own loop with /actuator_cmd and
+            /actuator_states between the nodes, as two processes would (default: in the
+            bridge's loop, as bringup does).
     """
 
     def __init__(
@@ -99,6 +102,7 @@ class SimRobot:
         plugins: list[str] | None = None,
         overrides: Mapping[str, Mapping[str, Any]] | None = None,
         settle_timeout: float = 20.0,
+        split: bool = False,
     ) -> None:
         files = [CONFIG_DIR / f'{config}.yaml', CONFIG_DIR / f'{config}_sim.yaml']
         params = load_parameters(f for f in files if f.exists())
@@ -136,6 +140,7 @@ class SimRobot:
                 parameter_overrides=[_parameter(k, v) for k, v in bridge.items()],
             )
             self.host = RobotHost(
+                hardware=None if split else self.bridge.hardware,
                 context=self.context,
                 parameter_overrides=[_parameter(k, v) for k, v in host.items()],
             )

@@ -169,6 +169,8 @@ class ManagedBus:
         self._lock = threading.Lock()  # open/close and shutdown
         self._backoff_s = config.reconnect_initial_s
         self._reopen_delay_s = config.reconnect_initial_s
+        self._reopen_at = 0.0  # [s] monotonic; poll() reopens a failed bus from then on
+        self._polled = False
         self._up_since = 0.0  # when the bus last came up (time.monotonic) [s]
         self._consecutive_send_failures = 0
         self._log_sink = CanLog(config.log_file, config.name) if config.log_file else None
@@ -274,6 +276,7 @@ class ManagedBus:
 
     def _schedule_reopen(self) -> None:
         self._reopen_delay_s = self._backoff_s
+        self._reopen_at = time.monotonic() + self._backoff_s
         _log.warning('bus %s down; reopening in %.3f s', self.name, self._backoff_s)
         self._backoff_s = min(self._backoff_s * 2.0, self.config.reconnect_max_s)
 
@@ -301,13 +304,20 @@ class ManagedBus:
                 self._backoff_s = self.config.reconnect_initial_s
             self._schedule_reopen()
 
-    def start(self) -> None:
+    def start(self, *, receive_thread: bool = True) -> None:
         """Open the bus (if possible) and start the receive thread. Idempotent.
+
+        Args:
+            receive_thread: False: no thread; the control loop calls :meth:`poll` each
+                tick instead (feedback taken in the loop, in lockstep too).
 
         Raises:
             BusError: the bus was shut down.
         """
         self.open()
+        if not receive_thread:
+            self._polled = True
+            return
         if self._thread is None:
             self._thread = threading.Thread(
                 target=self._run, name=f'canrx-{self.name}', daemon=True
@@ -368,6 +378,38 @@ class ManagedBus:
         return True
 
     # --- receiving ---------------------------------------------------------------------------
+    def poll(self) -> int:
+        """Dispatch every frame received so far, without waiting (the loop's feedback stage).
+
+        Also does what the receive thread does between frames: a failed bus is closed and
+        reopened with back-off.
+
+        Returns:
+            Number of frames dispatched.
+        """
+        bus = self._bus
+        if bus is not None and self._reopen_requested:
+            self._fail('too many consecutive send failures')
+            return 0
+        if bus is None:
+            if time.monotonic() >= self._reopen_at:
+                with self._lock:
+                    if self._state is not BusState.CLOSED and self._bus is None:
+                        self._open_locked()
+            return 0
+        count = 0
+        while True:
+            try:
+                msg = bus.recv(0.0)
+            except (can.CanError, OSError, ValueError) as err:
+                self._receive_errors += 1
+                self._fail(f'receive failed: {err!r}')
+                return count
+            if msg is None:
+                return count
+            self.dispatch(msg, self._arrival_ns(msg))
+            count += 1
+
     def _run(self) -> None:
         stop = self._stop
         timeout = self.config.receive_timeout_s

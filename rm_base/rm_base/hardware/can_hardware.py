@@ -9,7 +9,10 @@ This is the whole CAN layer behind one object; the ROS bridge node is a thin wra
     hw.diagnostics()                       # bus load/errors, overruns, period stats
     hw.shutdown()                          # zero frames, then close (idempotent)
 
-Tests drive it without the scheduler thread: ``hw.open()`` then ``hw.tick(now_ns)``.
+Tests drive it without the scheduler thread: ``hw.open()`` then ``hw.tick(now_ns)``;
+with ``receive_in_loop`` the buses have no receive threads and each tick begins by taking
+every frame received since the last one (the ``feedback`` stage), which makes the whole
+tick deterministic on a simulated clock (lockstep).
 The simulator plugs in as ``interface: rm_sim`` in a bus config (``virtual`` works too).
 """
 
@@ -50,6 +53,7 @@ class CanHardware:
         clock_ns: Callable[[], int] = time.perf_counter_ns,
         bus_factory: BusFactory = can.Bus,
         on_error: Callable[[Exception], bool] | None = None,
+        receive_in_loop: bool = False,
     ) -> None:
         """Build everything; nothing is opened until :meth:`open` or :meth:`start`.
 
@@ -60,6 +64,8 @@ class CanHardware:
             bus_factory: builds python-can buses (``can.Bus``).
             on_error: scheduler error hook (return True to go on); the default logs, counts
                 and goes on.
+            receive_in_loop: take received frames in the loop (first stage of every tick)
+                instead of a receive thread per bus.
 
         Raises:
             HardwareConfigError: anything wrong in the config, naming where.
@@ -103,6 +109,9 @@ class CanHardware:
             on_error=on_error if on_error is not None else self._log_and_go_on,
             clock_ns=clock_ns,
         )
+        self.receive_in_loop = receive_in_loop
+        if receive_in_loop:
+            self.scheduler.add_stage(_FeedbackStage(tuple(self.buses.values())))
 
     def _check_ids(self, own_frames: list[Actuator]) -> None:
         sent: dict[tuple[str, int], str] = {
@@ -147,7 +156,7 @@ class CanHardware:
         A bus that cannot be opened is retried in the background; see diagnostics().
         """
         for bus in self.buses.values():
-            bus.start()
+            bus.start(receive_thread=not self.receive_in_loop)
 
     def start(self) -> None:
         """Open the buses and start the scheduler thread. Idempotent."""
@@ -266,3 +275,17 @@ class CanHardware:
             'joints': {name: a.diagnostics() for name, a in self.actuators.items()},
             'unknown_joint_commands': self._unknown_joint_commands,
         }
+
+
+class _FeedbackStage:
+    """The loop's first stage with ``receive_in_loop``: every frame received so far."""
+
+    name = 'feedback'
+
+    def __init__(self, buses: tuple[ManagedBus, ...]) -> None:
+        self._buses = buses
+
+    def __call__(self, now_ns: int, dt: float) -> bool:
+        for bus in self._buses:
+            bus.poll()
+        return True

@@ -1,18 +1,24 @@
-"""The control scheduler: update every actuator, then pack every frame, then send.
+"""The robot's one control loop: inputs, then update, then pack, then send.
 
 One dedicated thread sleeps to absolute deadlines on ``time.perf_counter_ns`` (1 kHz by
 default) and runs :meth:`Scheduler.tick`; tests call ``tick(now_ns)`` themselves, with no
-thread, for deterministic steps. Each tick is strictly three phases:
+thread, for deterministic (lockstep) steps. Each tick runs, in this fixed order:
 
-1. ``update(now_ns, dt)`` on every actuator (control laws, safety),
-2. ``pack_command()`` on every packer (actuators with their own frame, command groups),
-3. ``send(msg)`` of every packed frame, each through the send function (bus) paired with
+1. the *input stages* (:meth:`Scheduler.add_stage`): the received feedback, then each
+   plugin that is due, which sets joint targets on the actuators directly,
+2. ``update(now_ns, dt)`` on every actuator (control laws, safety),
+3. the *output stages* (``add_stage(..., after_update=True)``): group stages such as a
+   power limit that scales a group's efforts,
+4. ``pack_command()`` on every packer (actuators with their own frame, command groups),
+5. ``send(msg)`` of every packed frame, each through the send function (bus) paired with
    its packer.
 
-Missed deadlines are counted as overruns and skipped, never caught up in a burst. Period
-statistics are cheap: count, running max, mean and a fixed histogram of the start-time
-error. An exception escaping a tick goes to ``on_error(exc)``, which decides whether to go
-on (as python-can's ``ThreadBasedCyclicSendTask``); without a hook the loop stops.
+Missed deadlines are counted as overruns and skipped, never caught up in a burst. The loop
+measures itself: start lateness and the duration of every component (each stage, the
+actuator updates, packing, sending) as p50 / p99 / max (:mod:`rm_base.hardware.timing`),
+and logs the window every ``report_period_s`` with the three most expensive components.
+An exception escaping a tick goes to ``on_error(exc)``, which decides whether to go on (as
+python-can's ``ThreadBasedCyclicSendTask``); without a hook the loop stops.
 """
 
 from __future__ import annotations
@@ -27,6 +33,7 @@ from typing import Protocol
 import can
 
 from rm_base.hardware.errors import HardwareConfigError
+from rm_base.hardware.timing import DurationHistogram, DurationSummary
 
 _log = logging.getLogger(__name__)
 
@@ -48,6 +55,23 @@ class Packer(Protocol):
         """Return this tick's frame, or None."""
 
 
+class Stage(Protocol):
+    """A component of the loop besides the actuators (feedback, a plugin, a power limit).
+
+    Attributes:
+        name: component name in the timing statistics (``plugin chassis``).
+    """
+
+    name: str
+
+    def __call__(self, now_ns: int, dt: float) -> bool:
+        """Do this tick's work; return False if there was none (then it is not timed)."""
+
+
+#: Names of the loop's own components in :meth:`Scheduler.component_stats`.
+ACTUATORS, PACK, SEND = 'actuators', 'pack', 'send'
+
+
 @dataclasses.dataclass(frozen=True)
 class PeriodStats:
     """Timing of the scheduler loop.
@@ -61,8 +85,10 @@ class PeriodStats:
         mean_error_us: mean |start - deadline| [µs].
         histogram: counts per bucket of |start - deadline|; bucket i holds errors below
             ``HISTOGRAM_EDGES_US[i]`` µs, the last one the rest.
-        max_tick_us: longest tick (update + pack + send) [µs].
+        max_tick_us: longest tick (stages + update + pack + send) [µs].
         errors: exceptions passed to on_error.
+        lateness: start lateness (start - deadline) since start.
+        components: duration of each component since start, by name, in loop order.
     """
 
     period_ns: int
@@ -74,6 +100,8 @@ class PeriodStats:
     histogram: tuple[int, ...]
     max_tick_us: float
     errors: int
+    lateness: DurationSummary = dataclasses.field(default_factory=DurationSummary.empty)
+    components: tuple[tuple[str, DurationSummary], ...] = ()
 
 
 class Scheduler:
@@ -88,6 +116,8 @@ class Scheduler:
         on_error: Callable[[Exception], bool] | None = None,
         clock_ns: Callable[[], int] = time.perf_counter_ns,
         sleep: Callable[[float], None] = time.sleep,
+        report_period_s: float = 5.0,
+        thread_name: str = 'can-scheduler',
     ) -> None:
         """Create a stopped scheduler.
 
@@ -99,8 +129,10 @@ class Scheduler:
             rate_hz: tick rate [Hz].
             on_error: called with an exception escaping a tick; return True to go on.
                 None stops the loop at the first exception (it is logged).
-            clock_ns: monotonic clock [ns].
+            clock_ns: monotonic clock [ns] of the ticks (a simulated one in lockstep).
             sleep: sleep function [s] (tests may replace it).
+            report_period_s: the thread logs its timing window this often [s].
+            thread_name: name of the loop thread.
 
         Raises:
             HardwareConfigError: rate_hz not positive.
@@ -109,6 +141,14 @@ class Scheduler:
             raise HardwareConfigError(f'scheduler rate must be > 0 Hz, got {rate_hz!r}')
         self._actuators = tuple(actuators)
         self._packers = tuple(packers)
+        self._inputs: tuple[Stage, ...] = ()
+        self._outputs: tuple[Stage, ...] = ()
+        self._report_period_ns = round(report_period_s * 1e9)
+        self._thread_name = thread_name
+        self._lateness = DurationHistogram()
+        self._durations: dict[str, DurationHistogram] = {}
+        for name in (ACTUATORS, PACK, SEND):
+            self._durations[name] = DurationHistogram()
         self.period_ns = round(1e9 / rate_hz)
         self._period_s = self.period_ns / 1e9
         self.on_error = on_error
@@ -131,9 +171,42 @@ class Scheduler:
         self._histogram = [0] * (len(HISTOGRAM_EDGES_US) + 1)
         self._edges_ns = tuple(e * 1000 for e in HISTOGRAM_EDGES_US)
 
+    # --- composition ---
+    def add_stage(self, stage: Stage, *, after_update: bool = False) -> None:
+        """Add a component: before the actuators' update (inputs), or after it (outputs).
+
+        Stages run in the order added; a stage added while the loop runs joins at its
+        next tick (the stage tuple is swapped whole, never changed in place).
+
+        Raises:
+            HardwareConfigError: a component of that name exists already.
+        """
+        names = {s.name for s in self._inputs + self._outputs} | {ACTUATORS, PACK, SEND}
+        if stage.name in names:
+            raise HardwareConfigError(f'the loop has a component named {stage.name!r} already')
+        self._durations.setdefault(stage.name, DurationHistogram())
+        if after_update:
+            self._outputs += (stage,)
+        else:
+            self._inputs += (stage,)
+
+    def remove_stage(self, name: str) -> bool:
+        """Remove the stage of that name from the loop (from its next tick on).
+
+        Returns:
+            Whether there was one. A tick in progress in the loop thread may still be
+            running it: the caller must wait for it by its own means (a lock).
+        """
+        inputs = tuple(s for s in self._inputs if s.name != name)
+        outputs = tuple(s for s in self._outputs if s.name != name)
+        found = len(inputs) + len(outputs) < len(self._inputs) + len(self._outputs)
+        # Its timing stays: a tick in progress may still record into it.
+        self._inputs, self._outputs = inputs, outputs
+        return found
+
     # --- one cycle ---
     def tick(self, now_ns: int) -> int:
-        """Run one cycle: update all, then pack all, then send all.
+        """Run one cycle: input stages, update all, output stages, pack all, send all.
 
         Args:
             now_ns: the tick time [ns] on the actuators' clock.
@@ -144,18 +217,38 @@ class Scheduler:
         last = self._last_tick_ns
         dt = (now_ns - last) / 1e9 if last is not None and now_ns > last else self._period_s
         self._last_tick_ns = now_ns
+        timer = time.perf_counter_ns  # durations are real CPU-side time, even in lockstep
+        durations = self._durations
+        t = self._run_stages(self._inputs, now_ns, dt, timer())
         for actuator in self._actuators:
             actuator.update(now_ns, dt)
+        t1 = timer()
+        durations[ACTUATORS].record(t1 - t)
+        t = self._run_stages(self._outputs, now_ns, dt, t1)
         frames = self._frames
         frames.clear()
         for packer, send in self._packers:
             msg = packer.pack_command()
             if msg is not None:
                 frames.append((send, msg))
+        t1 = timer()
+        durations[PACK].record(t1 - t)
         for send, msg in frames:
             send(msg)
+        durations[SEND].record(timer() - t1)
         self._ticks += 1
         return len(frames)
+
+    def _run_stages(self, stages: tuple[Stage, ...], now_ns: int, dt: float, t: int) -> int:
+        """Run stages from timer time t [ns], recording each one that worked; return the end."""
+        durations, timer = self._durations, time.perf_counter_ns
+        for stage in stages:
+            worked = stage(now_ns, dt) is not False
+            t1 = timer()
+            if worked:
+                durations[stage.name].record(t1 - t)
+            t = t1
+        return t
 
     # --- the thread ---
     @property
@@ -174,7 +267,7 @@ class Scheduler:
             return
         self._final = final
         self._stop.clear()
-        self._thread = threading.Thread(target=self._run, name='can-scheduler', daemon=True)
+        self._thread = threading.Thread(target=self._run, name=self._thread_name, daemon=True)
         self._thread.start()
 
     def stop(self, timeout_s: float = 5.0) -> None:
@@ -190,10 +283,14 @@ class Scheduler:
         clock = self._clock_ns
         period = self.period_ns
         deadline = clock()
+        next_report = deadline + self._report_period_ns
         try:
             while not self._stop.is_set():
                 start = clock()
                 self._record_start(start - deadline)
+                if start >= next_report:
+                    next_report = start + self._report_period_ns
+                    self._log_window()
                 try:
                     self.tick(start)
                 except Exception as exc:
@@ -220,7 +317,25 @@ class Scheduler:
                 except Exception:
                     _log.exception('scheduler final callback failed')
 
+    def _log_window(self) -> None:
+        lateness = self._lateness.take_window()
+        windows = [(name, h.take_window()) for name, h in self._durations.items()]
+        top = sorted(windows, key=lambda item: item[1].p99_us, reverse=True)[:3]
+        _log.info(
+            'loop: %d ticks, %d skipped in all; lateness p50 %.0f / p99 %.0f / max %.0f us; '
+            'most expensive (p99): %s',
+            lateness.count, self._skipped, lateness.p50_us, lateness.p99_us, lateness.max_us,
+            ', '.join(f'{name} {s.p99_us:.0f} us' for name, s in top),
+        )
+
+    def component_stats(self) -> tuple[tuple[str, DurationSummary], ...]:
+        """Duration of each component since start, in loop order."""
+        order = [s.name for s in self._inputs] + [ACTUATORS]
+        order += [s.name for s in self._outputs] + [PACK, SEND]
+        return tuple((name, self._durations[name].total()) for name in order)
+
     def _record_start(self, error_ns: int) -> None:
+        self._lateness.record(error_ns)
         error_ns = abs(error_ns)
         self._timed += 1
         self._sum_error_ns += error_ns
@@ -245,4 +360,6 @@ class Scheduler:
             histogram=tuple(self._histogram),
             max_tick_us=self._max_tick_ns / 1e3,
             errors=self._errors,
+            lateness=self._lateness.total(),
+            components=self.component_stats(),
         )

@@ -1,9 +1,10 @@
-"""RobotHost: the rm_robot node, which loads the robot's plugins and runs each at its rate."""
+"""RobotHost: the rm_robot node, which loads the robot's plugins and runs them in one loop."""
 
 from __future__ import annotations
 
 import re
 import sys
+from collections.abc import Callable
 from enum import Enum
 from typing import Any
 
@@ -11,10 +12,12 @@ from rclpy.duration import Duration
 from rclpy.node import Node
 from std_srvs.srv import SetBool
 
-from rm_base.host.runner import PluginRunner
+from rm_base.hardware import CanHardware, Scheduler
+from rm_base.host.plugin_task import PluginTask, TickInputs
 from rm_base.plugin import PluginBase, PluginLoader, PluginParams
 from rm_base.plugin.errors import ParameterError
-from rm_base.plugin.node_io import node_io
+from rm_base.plugin.node_io import DdsJointIO, node_io, use_local_io
+from rm_base.plugin.outbox import Outbox
 from rm_base.ros_logging import FastLogger
 
 NODE_NAME = 'rm_robot'
@@ -22,18 +25,13 @@ NODE_NAME = 'rm_robot'
 # A plugin name becomes a parameter prefix and a topic/service name token.
 _PLUGIN_NAME = re.compile(r'[A-Za-z][A-Za-z0-9_]*')
 
-# Plugin threads share the GIL: whenever a runner wakes up, a CPU-bound plugin may keep
-# the GIL for up to the interpreter's switch interval (5 ms by default) before it yields.
-# Measured here: a 200 Hz plugin beside one burning 30 ms per tick overran 278 of 600 ticks
-# at 5 ms, 5 of 600 at 1 ms (its rate held at 200 Hz both times).
-_GIL_SWITCH_INTERVAL = 0.001  # [s]
+# The loop shares the interpreter with the ROS edge (executor, outbox); a thread that
+# wakes waits for the GIL up to the switch interval (5 ms by default) behind a busy one
+# (docs/PERFORMANCE.md).
+_GIL_SWITCH_INTERVAL = 0.0005  # [s]
 
 # How long shutdown waits for reliable readers (the bridge) to acknowledge zero output [s].
 _ACK_TIMEOUT = 0.5
-
-
-# Overruns above this share of a plugin's ticks (per state period) are logged as warnings.
-_OVERRUN_WARN_SHARE = 0.05
 
 
 class ExecutorKind(Enum):
@@ -44,7 +42,7 @@ class ExecutorKind(Enum):
 
 
 class RobotHost(Node):
-    """rm_robot: hosts the mechanism plugins of one robot.
+    """rm_robot: hosts the mechanism plugins of one robot in the control loop.
 
     - Reads the robot config from parameters: ``plugins`` (instance names), and per
       plugin ``<name>.type`` (e.g. ``rm_plugins/StandChassis``), ``<name>.enabled``, plus
@@ -52,20 +50,30 @@ class RobotHost(Node):
       the plugin's own keys under ``<name>.``.
     - Loads every plugin by type name from the ament index (``PluginLoader``), so a
       plugin package installed beside rm_base works without changing it.
-    - Runs each plugin in its own thread at its own rate (``PluginRunner``); ROS callbacks
-      run on the executor that ``main`` spins, and only hand data over through the
-      plugins' thread-safe inputs.
+    - Runs every plugin as a stage of one loop thread (``PluginTask``), each at its own
+      rate and at the next tick after a new command. Given the CAN hardware (the
+      one-process robot), that loop is the hardware's own 1 kHz loop and plugins set
+      joint targets on the actuators directly; without it (rm_robot as a process of its
+      own) the host runs a loop of plugins only, at ``loop_rate``, and joint targets go
+      out on /actuator_cmd.
+    - ROS stays at the edge: subscriptions (on the executor ``main`` spins) store the
+      latest command for the loop; every message a plugin publishes goes through an
+      outbox thread, never from the loop thread.
     - Services: ``~/<name>/enable`` (std_srvs/SetBool) per plugin and
       ``~/enable_all`` (std_srvs/SetBool, true = enable all, false = disable all).
     - Publishes each plugin's rm_msgs/PluginState on ``~/<name>/state`` (latched) at
-      every transition and every ``state_period`` seconds, and warns about overruns then.
-    - ``shutdown()`` (also run by ``destroy_node``) stops the runners, then disables
-      every plugin, so zero output is published before the node goes away.
-    - Lowers the interpreter's GIL switch interval to 1 ms (process-wide) so a CPU-bound
-      plugin delays the others' ticks by at most about that much.
+      every transition and every ``state_period`` seconds.
+    - ``shutdown()`` (also run by ``destroy_node``) takes the plugins out of the loop,
+      then disables every plugin, so zero output is sent before the node goes away.
+    - Lowers the interpreter's GIL switch interval to 0.5 ms (process-wide) so a busy
+      ROS thread delays a loop tick by at most about that much.
 
     Args:
         loader: plugin loader; default searches AMENT_PREFIX_PATH.
+        hardware: the CAN hardware to drive in-process (its loop runs the plugins);
+            None: DDS joint I/O and a loop of the host's own.
+        now: the plugins' clock (default: the node clock's ``now``; lockstep tests pass
+            a simulated one).
         **kwargs: passed to ``rclpy.node.Node`` (``context``, ``parameter_overrides``, ...).
 
     Raises:
@@ -77,19 +85,39 @@ class RobotHost(Node):
         """The node's logger, cheap enough for its 1 kHz and plugin threads (ros_logging)."""
         return self._fast_logger
 
-    def __init__(self, *, loader: PluginLoader | None = None, **kwargs: Any) -> None:
+    def __init__(
+        self,
+        *,
+        loader: PluginLoader | None = None,
+        hardware: CanHardware | None = None,
+        now: Callable[[], Any] | None = None,
+        **kwargs: Any,
+    ) -> None:
         super().__init__(NODE_NAME, **kwargs)
         self._fast_logger = FastLogger(super().get_logger())
         sys.setswitchinterval(min(sys.getswitchinterval(), _GIL_SWITCH_INTERVAL))
-        self._runners: dict[str, PluginRunner] = {}
+        self._tasks: dict[str, PluginTask] = {}
         self._shut_down = False
-        self._reported_overruns: dict[str, int] = {}
+        self._outbox = Outbox(f'{NODE_NAME}-publish')
+        if hardware is not None:
+            io = use_local_io(self, hardware)
+            self.loop = hardware.scheduler
+            self._own_loop = False
+            inputs = TickInputs(now or self.get_clock().now, io.refresh)
+        else:
+            io = node_io(self)
+            self.loop = None  # built in _configure, once loop_rate is read
+            self._own_loop = True
+            inputs = TickInputs(now or self.get_clock().now)
+        io.outbox = self._outbox
+        self._io = io
+        self._outbox.start()
         try:
-            self._configure(loader or PluginLoader(warn=self.get_logger().warning))
+            self._configure(loader or PluginLoader(warn=self.get_logger().warning), inputs)
         except BaseException:
             self._shut_down = True
-            for runner in self._runners.values():
-                runner.stop()
+            self._leave_loop()
+            self._outbox.stop()
             super().destroy_node()
             raise
 
@@ -98,38 +126,44 @@ class RobotHost(Node):
     @property
     def plugin_names(self) -> list[str]:
         """Instance names, in config order."""
-        return list(self._runners)
+        return list(self._tasks)
 
     def plugin(self, name: str) -> PluginBase:
         """Return the plugin instance name."""
-        return self._runners[name].plugin
+        return self._tasks[name].plugin
 
-    def runner(self, name: str) -> PluginRunner:
-        """Return the runner of plugin name (tick and overrun counters)."""
-        return self._runners[name]
+    def task(self, name: str) -> PluginTask:
+        """Return the loop task of plugin name (run and skip counters)."""
+        return self._tasks[name]
 
     def shutdown(self, reason: str = 'shutting down') -> None:
-        """Stop every runner, then disable every plugin (zero output). Idempotent."""
+        """Take the plugins out of the loop, then disable each (zero output). Idempotent."""
         if self._shut_down:
             return
         self._shut_down = True
-        for runner in self._runners.values():
-            if not runner.stop():
-                self.get_logger().error(
-                    f"plugin '{runner.name}' did not finish its tick; disabling it anyway"
-                )
-        for runner in self._runners.values():
+        self._leave_loop()
+        for task in self._tasks.values():
             try:
-                runner.plugin.disable(reason)
+                task.disable(reason)  # waits for a run in progress, through the lock
             except Exception as err:  # keep turning the others off
-                self.get_logger().error(f"disabling plugin '{runner.name}' failed: {err}")
-        if self._runners:
+                self.get_logger().error(f"disabling plugin '{task.plugin.name}' failed: {err}")
+        self._outbox.stop()
+        if self._tasks and isinstance(self._io, DdsJointIO):
             # Give reliable readers (the bridge) the chance to receive the zero output
             # before the publisher disappears.
             try:
-                node_io(self).actuator_cmd.wait_for_all_acked(Duration(seconds=_ACK_TIMEOUT))
+                self._io.actuator_cmd.wait_for_all_acked(Duration(seconds=_ACK_TIMEOUT))
             except Exception as err:  # e.g. the context is already shut down
                 self.get_logger().error(f'zero output may not have been delivered: {err}')
+
+    def _leave_loop(self) -> None:
+        if self.loop is None:
+            return
+        if self._own_loop:
+            self.loop.stop()
+        else:
+            for task in self._tasks.values():
+                self.loop.remove_stage(task.name)
 
     def destroy_node(self) -> None:
         """Shut the plugins down (zero output), then destroy the node."""
@@ -138,7 +172,7 @@ class RobotHost(Node):
 
     # -- set-up -------------------------------------------------------------------------
 
-    def _configure(self, loader: PluginLoader) -> None:
+    def _configure(self, loader: PluginLoader, inputs: TickInputs) -> None:
         node_params = PluginParams(self, '', prefix='')
         names = node_params.string_array(
             'plugins',
@@ -167,6 +201,17 @@ class RobotHost(Node):
             ExecutorKind.EVENTS,
             description='executor for subscriptions, services and timers',
         )
+        loop_rate = node_params.double(
+            'loop_rate',
+            1000.0,
+            description='rate of the plugin loop when rm_robot runs as a process of its own '
+            '(in the one-process robot the CAN loop, scheduler.rate_hz, runs the plugins)',
+            unit='Hz',
+            gt=0.0,
+            le=10000.0,
+        )
+        if self._own_loop:
+            self.loop = Scheduler([], [], rate_hz=loop_rate, thread_name=f'{NODE_NAME}-loop')
 
         start_enabled = {}
         for name in names:
@@ -179,90 +224,60 @@ class RobotHost(Node):
             )
             plugin = loader.create(type_name, plugin=name)
             plugin.init(self, name, PluginParams(self, name, type_name))
-            self._runners[name] = PluginRunner(
-                plugin, self.get_clock().now, on_error=self._on_runner_error
-            )
+            self._tasks[name] = PluginTask(plugin, inputs)
 
-        for name, runner in self._runners.items():
+        for name, task in self._tasks.items():
             self.create_service(
                 SetBool,
                 f'~/{name}/enable',
-                lambda request, response, runner=runner: self._on_enable(runner, request, response),
+                lambda request, response, task=task: self._on_enable(task, request, response),
             )
         self.create_service(SetBool, '~/enable_all', self._on_enable_all)
-        self._state_period = state_period
         self.create_timer(state_period, self._on_state_timer)
 
-        for name, runner in self._runners.items():
-            plugin = runner.plugin
+        for name, task in self._tasks.items():
+            plugin = task.plugin
             if start_enabled[name]:
-                runner.enable()
+                task.enable()
             self.get_logger().info(
                 f"plugin '{name}' ({plugin.type_name}) at {plugin.rate:g} Hz, "
                 f'{"enabled" if plugin.enabled else "disabled"}'
                 + (f', joints: {", ".join(plugin.joints)}' if plugin.joints else '')
             )
-            runner.start()
+            self.loop.add_stage(task)
+        if self._own_loop:
+            self.loop.start()
 
     # -- callbacks (executor thread) ----------------------------------------------------
 
     def _on_enable(
-        self, runner: PluginRunner, request: SetBool.Request, response: SetBool.Response
+        self, task: PluginTask, request: SetBool.Request, response: SetBool.Response
     ) -> SetBool.Response:
-        response.success, response.message = self._set_enabled(runner, request.data)
+        response.success, response.message = self._set_enabled(task, request.data)
         return response
 
     def _on_enable_all(
         self, request: SetBool.Request, response: SetBool.Response
     ) -> SetBool.Response:
-        results = [self._set_enabled(runner, request.data) for runner in self._runners.values()]
+        results = [self._set_enabled(task, request.data) for task in self._tasks.values()]
         response.success = all(ok for ok, _ in results)
         response.message = '; '.join(message for _, message in results)
         return response
 
-    def _set_enabled(self, runner: PluginRunner, enable: bool) -> tuple[bool, str]:
+    def _set_enabled(self, task: PluginTask, enable: bool) -> tuple[bool, str]:
+        name = task.plugin.name
         if self._shut_down:
-            return False, f'{runner.name}: shutting down'
+            return False, f'{name}: shutting down'
         if not enable:
-            runner.disable('disabled by service call')
-            return True, f'{runner.name}: disabled'
+            task.disable('disabled by service call')
+            return True, f'{name}: disabled'
         try:
-            changed = runner.enable()
+            changed = task.enable()
         except Exception as err:
-            self.get_logger().error(f"enabling plugin '{runner.name}' failed: {err}")
-            return False, f'{runner.name}: enable failed: {type(err).__name__}: {err}'
-        return True, f'{runner.name}: {"enabled" if changed else "already enabled"}'
+            self.get_logger().error(f"enabling plugin '{name}' failed: {err}")
+            return False, f'{name}: enable failed: {type(err).__name__}: {err}'
+        return True, f'{name}: {"enabled" if changed else "already enabled"}'
 
     def _on_state_timer(self) -> None:
-        for name, runner in self._runners.items():
-            runner.plugin.publish_state()
-            overruns = runner.overruns
-            new = overruns - self._reported_overruns.get(name, 0)
-            if new > 0:
-                self._reported_overruns[name] = overruns
-                # A late tick now and then is normal on a loaded machine; warn only when a
-                # plugin misses a noticeable share of its ticks, so the warning means
-                # something (and does not drown the operator's status line).
-                share = new / max(1.0, runner.plugin.rate * self._state_period)
-                log = (
-                    self.get_logger().warning
-                    if share > _OVERRUN_WARN_SHARE
-                    else (self.get_logger().debug)
-                )
-                log(
-                    f"plugin '{name}' overran its {runner.plugin.rate:g} Hz period {new} "
-                    f'time(s) ({100 * share:.1f} % of its ticks) since the last report '
-                    f'({runner.skipped} deadlines skipped in all)'
-                )
-
-    def _on_runner_error(self, runner: PluginRunner, err: Exception) -> bool:
-        # Something outside plugin.run() failed (e.g. the clock after the context went
-        # away): turn the plugin off and end its thread.
-        self.get_logger().error(
-            f"runner of plugin '{runner.name}' failed, stopping it: {type(err).__name__}: {err}"
-        )
-        try:
-            runner.plugin.disable(f'runner failed: {err}')
-        except Exception as inner:
-            self.get_logger().error(f"disabling plugin '{runner.name}' failed: {inner}")
-        return False
+        for task in self._tasks.values():
+            task.plugin.publish_state()

@@ -43,7 +43,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, qos_profile_sensor_data
 from rm_base.errors import ConfigError
 from rm_base.plugin.commands import CommandInput
 from rm_base.plugin.errors import PluginConfigError, PluginInitError, TargetRejectedError
-from rm_base.plugin.joints import JointStateView, JointTarget, build_actuator_cmd
+from rm_base.plugin.joints import JointStateView, JointTarget
 from rm_base.plugin.node_io import NodeIO, node_io
 from rm_base.plugin.params import PluginParams
 from rm_base.plugin.state_machine import DefaultState, StateMachine, Transition
@@ -80,8 +80,9 @@ class PluginBase:
         command_timeout: default timeout of command inputs [s].
 
     The host calls ``run``, ``enable`` and ``disable`` one at a time (under a lock per
-    plugin); subscription callbacks only touch the thread-safe command inputs and the
-    joint-state view.
+    plugin; the loop only tries it and runs the plugin at a later tick when it is held);
+    subscription callbacks only touch the thread-safe command inputs and the joint-state
+    view.
     """
 
     State: ClassVar[type[Enum]] = DefaultState
@@ -113,7 +114,7 @@ class PluginBase:
         self._state_pub: Any = None
         self._inputs: list[CommandInput] = []
         # Called (from the executor thread) when a command input stores a new command and
-        # run_on_command is set: the host's runner wakes up to run at once.
+        # run_on_command is set: the host's loop runs the plugin at its next tick.
         self.command_listener: Callable[[], None] | None = None
         self._joints: tuple[str, ...] = ()
         self._enabled = False
@@ -157,9 +158,9 @@ class PluginBase:
                 gt=0.0,
             )
             self.run_on_command = params.boolean(
-                'run_on_command', False,
-                description='also run at once when a new command arrives (up to a period '
-                'less latency, more CPU: extra runs)',
+                'run_on_command', True,
+                description='also run at the next loop tick when a new command arrives, '
+                'not only at the own rate (up to a period less latency)',
             )
             self._io = node_io(node)
             safe = self.safe_state
@@ -167,7 +168,7 @@ class PluginBase:
                 self.State, safe, safe=safe, allowed=self.TRANSITIONS,
                 listener=self._on_transition, initial_reason='loaded',
             )
-            self._state_pub = node.create_publisher(PluginState, f'~/{name}/state', STATE_QOS)
+            self._state_pub = self._io.create_publisher(PluginState, f'~/{name}/state', STATE_QOS)
             self.on_init()
         except PluginConfigError as err:
             if not err.plugin:  # raised by the plugin's own code: say whose it is
@@ -384,6 +385,15 @@ class PluginBase:
         self._inputs.append(command)
         return command
 
+    def create_publisher(self, msg_type: type, topic: str, qos: Any) -> Any:
+        """Create a publisher for this plugin's own topics (states, odometry).
+
+        Use this, not ``node.create_publisher``: hosted in the control loop, a plugin's
+        messages are published by the ROS edge's thread, never by the loop itself.
+        """
+        self._require_init()
+        return self._io.create_publisher(msg_type, topic, qos)
+
     def claim_joints(self, joints: Iterable[str]) -> tuple[str, ...]:
         """Declare the joints this plugin drives (zero output turns them off).
 
@@ -398,14 +408,16 @@ class PluginBase:
         return claimed
 
     def send_joint_targets(self, targets: Mapping[str, JointTarget]) -> None:
-        """Publish one rm_msgs/ActuatorCmd with targets for some or all of our joints.
+        """Send targets for some or all of our joints, as one coordinated set.
 
-        The message is stamped with the ``now`` of the tick in progress (outside ``run``,
-        with the node clock's now).
+        In the one-process robot they are set on the actuators directly; with rm_robot
+        as a process of its own they go out as one rm_msgs/ActuatorCmd stamped with the
+        ``now`` of the tick in progress (outside ``run``, the node clock's now).
 
         Raises:
-            TargetRejectedError: a joint is not ours, or a target has a NaN/inf field;
-                nothing is published then (``run`` turns the joints off for this tick).
+            TargetRejectedError: a joint is not ours, or a target has a NaN/inf field or
+                a negative gain; nothing is sent then (``run`` turns the joints off for
+                this tick).
         """
         self._require_init()
         foreign = [joint for joint in targets if joint not in self._joints]
@@ -414,15 +426,13 @@ class PluginBase:
                 f"plugin '{self.name}' does not drive joint(s) {', '.join(foreign)} "
                 f"(claimed: {', '.join(self._joints) or 'none'})"
             )
-        msg = build_actuator_cmd(targets)
-        self._publish_actuator_cmd(msg)
+        self._send(targets)
 
     def zero_output(self) -> None:
         """Command MODE_OFF (zero output, limp) on every joint this plugin drives."""
         self._require_init()
         if self._joints:
-            off = JointTarget.off()
-            self._publish_actuator_cmd(build_actuator_cmd(dict.fromkeys(self._joints, off)))
+            self._send(dict.fromkeys(self._joints, JointTarget.off()))
 
     # -- hooks ----------------------------------------------------------------------------
 
@@ -452,13 +462,12 @@ class PluginBase:
 
     # -- internals ------------------------------------------------------------------------
 
-    def _publish_actuator_cmd(self, msg: Any) -> None:
+    def _send(self, targets: Mapping[str, JointTarget]) -> None:
         # Within run() the tick's now, read once per tick: the targets are for that instant.
         now = self._tick_now
         if now is None:
             now = self.node.get_clock().now()
-        msg.header.stamp = now.to_msg()
-        self._io.actuator_cmd.publish(msg)
+        self._io.send(targets, now)
 
     def _on_transition(self, change: Transition) -> None:
         if change.previous == change.current:

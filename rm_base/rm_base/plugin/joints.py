@@ -84,21 +84,21 @@ _TARGET_FLOATS = tuple(f.name for f in fields(JointTarget) if f.name != 'mode')
 _MODE_VALUES = {int(mode): int(mode) for mode in ActuatorMode}
 
 
-def build_actuator_cmd(targets: Mapping[str, JointTarget]) -> ActuatorCmd:
-    """Return one ActuatorCmd holding targets (header left for the caller to stamp).
+#: One validated joint target: (joint, mode, position, velocity, effort, kp, kd).
+CheckedTarget = tuple[str, int, float, float, float, float, float]
+
+
+def check_targets(targets: Mapping[str, JointTarget]) -> list[CheckedTarget]:
+    """Validate joint targets where they enter, once; return them as plain tuples.
 
     Raises:
-        TargetRejectedError: a target is not a JointTarget, has an unknown mode, or has a
-            NaN/infinite field. Nothing is built then: all joints or none.
+        TargetRejectedError: a target is not a JointTarget, has an unknown mode, a
+            NaN/infinite field or a negative MIT gain. Nothing is returned then: all
+            joints or none.
     """
-    # Runs every tick of every plugin: plain lists, one pass, the message built once.
+    # Runs every tick of every plugin: plain tuples, one pass.
     isfinite = math.isfinite
-    modes: list[int] = []
-    position: list[float] = []
-    velocity: list[float] = []
-    effort: list[float] = []
-    kp: list[float] = []
-    kd: list[float] = []
+    checked: list[CheckedTarget] = []
     for joint, target in targets.items():
         if not isinstance(target, JointTarget):
             raise TargetRejectedError(f'target of joint {joint!r} is not a JointTarget: {target!r}')
@@ -117,14 +117,27 @@ def build_actuator_cmd(targets: Mapping[str, JointTarget]) -> ActuatorCmd:
             _reject_fields(joint, target)
         if not (isfinite(p) and isfinite(v) and isfinite(e) and isfinite(k) and isfinite(d)):
             _reject_fields(joint, target)
-        modes.append(mode)
-        position.append(p)
-        velocity.append(v)
-        effort.append(e)
-        kp.append(k)
-        kd.append(d)
+        if k < 0.0 or d < 0.0:
+            raise TargetRejectedError(
+                f'MIT gains of joint {joint!r} must be >= 0, got kp={k}, kd={d}'
+            )
+        checked.append((joint, mode, p, v, e, k, d))
+    return checked
+
+
+def build_actuator_cmd(targets: Mapping[str, JointTarget]) -> ActuatorCmd:
+    """Return one ActuatorCmd holding targets (header left for the caller to stamp).
+
+    Raises:
+        TargetRejectedError: as :func:`check_targets`; nothing is built then.
+    """
+    checked = check_targets(targets)
+    names, modes, position, velocity, effort, kp, kd = (
+        (list(column) for column in zip(*checked, strict=True)) if checked
+        else ([] for _ in range(7))
+    )
     return ActuatorCmd(
-        name=list(targets), mode=modes, position=position, velocity=velocity, effort=effort,
+        name=names, mode=modes, position=position, velocity=velocity, effort=effort,
         kp=kp, kd=kd,
     )
 
@@ -241,6 +254,11 @@ class JointStateView:
             merged.update(update)
             self._joints = MappingProxyType(merged)
         return True
+
+    def replace(self, states: Mapping[str, JointState]) -> None:
+        """Take the state of every joint at once (the loop feeding the view in-process)."""
+        with self._write_lock:
+            self._joints = MappingProxyType(dict(states))
 
     def get(self, joint: str) -> JointState | None:
         """Return the state of joint, or None if never seen."""

@@ -1,24 +1,43 @@
-"""What all plugins on one node share: actuator I/O and the record of who drives what.
+"""What all plugins on one node share: joint I/O, publishers and who drives which joint.
 
-That is the /actuator_cmd publisher, the joint-state view fed from /actuator_states, and
-the record of which plugin drives which joint.
+Joint I/O comes in two kinds, chosen by the host before any plugin is initialised:
 
-Created on first use per node (the host node, or a test's node) and kept as long as the
-node lives, so plugins never create duplicate publishers or subscriptions. The plugin layer
+- :class:`DdsJointIO` (``rm_robot`` as a process of its own): targets go out on
+  /actuator_cmd and joint states come in on /actuator_states, to and from a can_bridge
+  process.
+- :class:`LocalJointIO` (the one-process robot): targets are set on the actuators
+  directly and the view is filled from them by the control loop, with no DDS hop and no
+  message in between (docs/ARCHITECTURE.md, "One loop").
+
+A host may also give the I/O an :class:`~rm_base.plugin.outbox.Outbox`: then every
+publisher a plugin creates through :meth:`NodeIO.create_publisher` hands its messages to
+the outbox's thread, so the control loop never publishes itself.
+
+Created on first use per node (``node_io(node)``: DDS) or by the host
+(``use_local_io(node, hardware)``), and kept as long as the node lives. The plugin layer
 uses rclpy only through the node object it is given (plus rclpy's QoS value types).
 """
 
 from __future__ import annotations
 
+import abc
 import threading
 import weakref
-from collections.abc import Iterable
-from typing import Any
+from collections.abc import Iterable, Mapping
+from typing import Any, Protocol
 
 from rclpy.qos import qos_profile_sensor_data
 
-from rm_base.plugin.errors import JointClaimError
-from rm_base.plugin.joints import JointStateView
+from rm_base.plugin.errors import JointClaimError, TargetRejectedError
+from rm_base.plugin.joints import (
+    ActuatorMode,
+    JointState,
+    JointStateView,
+    JointTarget,
+    build_actuator_cmd,
+    check_targets,
+)
+from rm_base.plugin.outbox import Outbox
 from rm_msgs.msg import ActuatorCmd, ActuatorState
 
 ACTUATOR_CMD_TOPIC = 'actuator_cmd'
@@ -32,25 +51,38 @@ ACTUATOR_STATES_TOPIC = 'actuator_states'
 ACTUATOR_CMD_QOS_DEPTH = 10
 
 
-class NodeIO:
-    """Shared plugin I/O of one node. Use ``node_io(node)``, not the constructor."""
+class JointBackend(Protocol):
+    """The part of the CAN hardware layer that local joint I/O uses (CanHardware)."""
 
-    def __init__(self, node: Any) -> None:
-        self.actuator_cmd = node.create_publisher(
-            ActuatorCmd, ACTUATOR_CMD_TOPIC, ACTUATOR_CMD_QOS_DEPTH
-        )
-        self.joint_states = JointStateView(node.get_logger())
-        clock = node.get_clock()
+    def set_command(self, name: str, mode: int, **values: float) -> None:
+        """Set one joint's target (output shaft, SI)."""
 
-        def on_actuator_states(msg: ActuatorState) -> None:
-            self.joint_states.handle(msg, clock.now().nanoseconds)
+    def states(self) -> list[Any]:
+        """Every joint's state: named tuples with ``name`` and ActuatorState fields."""
 
-        # Best effort matches a reliable or a best-effort bridge; an old state is worthless.
-        self._subscription = node.create_subscription(
-            ActuatorState, ACTUATOR_STATES_TOPIC, on_actuator_states, qos_profile_sensor_data
-        )
+
+class NodeIO(abc.ABC):
+    """Shared plugin I/O of one node; see the subclasses. Use ``node_io(node)``."""
+
+    def __init__(self, node: Any, joint_states: JointStateView) -> None:
+        self.node = node
+        self.joint_states = joint_states
+        self.outbox: Outbox | None = None
         self._claims: dict[str, str] = {}
         self._lock = threading.Lock()
+
+    @abc.abstractmethod
+    def send(self, targets: Mapping[str, JointTarget], now: Any) -> None:
+        """Apply one coordinated set of joint targets (all or none), stamped now.
+
+        Raises:
+            TargetRejectedError: a target is invalid (``check_targets``); nothing is sent.
+        """
+
+    def create_publisher(self, msg_type: type, topic: str, qos: Any) -> Any:
+        """A publisher for a plugin: through the outbox if there is one."""
+        publisher = self.node.create_publisher(msg_type, topic, qos)
+        return publisher if self.outbox is None else self.outbox.wrap(publisher)
 
     def claim(self, plugin: str, joints: Iterable[str]) -> tuple[str, ...]:
         """Record that plugin drives joints; return them as a tuple.
@@ -82,15 +114,92 @@ class NodeIO:
             return dict(self._claims)
 
 
+class DdsJointIO(NodeIO):
+    """Joint targets on /actuator_cmd, joint states from /actuator_states."""
+
+    def __init__(self, node: Any) -> None:
+        super().__init__(node, JointStateView(node.get_logger()))
+        self.actuator_cmd = node.create_publisher(
+            ActuatorCmd, ACTUATOR_CMD_TOPIC, ACTUATOR_CMD_QOS_DEPTH
+        )
+        clock = node.get_clock()
+
+        def on_actuator_states(msg: ActuatorState) -> None:
+            self.joint_states.handle(msg, clock.now().nanoseconds)
+
+        # Best effort matches a reliable or a best-effort bridge; an old state is worthless.
+        self._subscription = node.create_subscription(
+            ActuatorState, ACTUATOR_STATES_TOPIC, on_actuator_states, qos_profile_sensor_data
+        )
+
+    def send(self, targets: Mapping[str, JointTarget], now: Any) -> None:
+        """Publish targets as one rm_msgs/ActuatorCmd stamped now."""
+        msg = build_actuator_cmd(targets)
+        msg.header.stamp = now.to_msg()
+        self.actuator_cmd.publish(msg)
+
+
+class LocalJointIO(NodeIO):
+    """Joint targets set on the actuators directly; the loop refreshes the view."""
+
+    def __init__(self, node: Any, hardware: JointBackend) -> None:
+        super().__init__(node, JointStateView(node.get_logger()))
+        self._hardware = hardware
+        self._modes = {int(m): m for m in ActuatorMode}
+
+    def send(self, targets: Mapping[str, JointTarget], now: Any) -> None:
+        """Set targets on the actuators (the hardware clock stamps them)."""
+        set_command = self._hardware.set_command
+        for joint, mode, p, v, e, kp, kd in check_targets(targets):
+            try:
+                set_command(
+                    joint, mode, position=p, velocity=v, effort=e, kp=kp, kd=kd
+                )
+            except Exception as err:  # an unknown joint: checked targets are otherwise valid
+                raise TargetRejectedError(f'joint {joint!r}: {err}') from err
+
+    def refresh(self, stamp_ns: int) -> None:
+        """Fill the view from the actuators (the loop, before plugins run).
+
+        Args:
+            stamp_ns: the tick's time on the plugins' clock [ns], the states' stamp.
+        """
+        modes = self._modes
+        self.joint_states.replace(
+            {
+                s.name: JointState(
+                    s.position, s.velocity, s.effort, s.temperature, s.online,
+                    s.error_code, modes.get(int(s.mode), ActuatorMode.OFF), s.command,
+                    stamp_ns,
+                )
+                for s in self._hardware.states()
+            }
+        )
+
+
 _BY_NODE: weakref.WeakKeyDictionary[Any, NodeIO] = weakref.WeakKeyDictionary()
 _BY_NODE_LOCK = threading.Lock()
 
 
 def node_io(node: Any) -> NodeIO:
-    """Return the shared plugin I/O of node, creating it on first use."""
+    """Return the shared plugin I/O of node, creating DDS joint I/O on first use."""
     with _BY_NODE_LOCK:
         io = _BY_NODE.get(node)
         if io is None:
-            io = NodeIO(node)
+            io = DdsJointIO(node)
             _BY_NODE[node] = io
+        return io
+
+
+def use_local_io(node: Any, hardware: JointBackend) -> LocalJointIO:
+    """Give node's plugins local joint I/O on hardware (before any plugin is initialised).
+
+    Raises:
+        RuntimeError: node has plugin I/O already.
+    """
+    with _BY_NODE_LOCK:
+        if node in _BY_NODE:
+            raise RuntimeError('the node has plugin I/O already: choose it before init()')
+        io = LocalJointIO(node, hardware)
+        _BY_NODE[node] = io
         return io

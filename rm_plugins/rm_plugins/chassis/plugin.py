@@ -173,8 +173,8 @@ class StandChassis(PluginBase):
                 lambda msg: self._imu.put(msg, clock.now().nanoseconds),
                 qos_profile_sensor_data,
             )
-        self._chassis_state_pub = self.node.create_publisher(ChassisState, 'chassis_state', 10)
-        self._odom_pub = self.node.create_publisher(OdometryMsg, 'odom', 10)
+        self._chassis_state_pub = self.create_publisher(ChassisState, 'chassis_state', 10)
+        self._odom_pub = self.create_publisher(OdometryMsg, 'odom', 10)
         self._state_msg, self._odom_msg = _report_messages(cfg)
         self._tf = self._make_tf_broadcaster() if cfg.publish_tf else None
         self._publish_period_ns = round(_NS_PER_S / cfg.publish_rate)

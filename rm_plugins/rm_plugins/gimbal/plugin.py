@@ -182,7 +182,7 @@ class StandGimbal(PluginBase):
             lambda m: self._odom.put(m, clock.now().nanoseconds),
             qos_profile_sensor_data,
         )
-        self._gimbal_state_pub = self.node.create_publisher(GimbalState, cfg.state_topic, 10)
+        self._gimbal_state_pub = self.create_publisher(GimbalState, cfg.state_topic, 10)
         self._imu_topic = self.node.resolve_topic_name(cfg.imu_topic)
         self._odom_topic = self.node.resolve_topic_name(cfg.odom_topic)
         self._yaw_loop = AxisLoop(cfg.yaw.angle_pid, cfg.yaw.max_joint_velocity)

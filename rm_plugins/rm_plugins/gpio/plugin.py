@@ -97,7 +97,7 @@ class UpboardGpio(PluginBase):
         self._overflowed = 0
         self._next_log_ns = 0
         self._suppressed = 0
-        self.state_pub = self.node.create_publisher(GpioState, STATE_TOPIC, STATE_QOS_DEPTH)
+        self.state_pub = self.create_publisher(GpioState, STATE_TOPIC, STATE_QOS_DEPTH)
         self.node.create_subscription(GpioCmd, COMMAND_TOPIC, self._on_command, COMMAND_QOS)
         self.logger.info(
             f'{backend_kind.value} backend: '

@@ -147,7 +147,7 @@ class StandShooter(PluginBase):
             lambda msg: self._switch.handle(msg, clock.now().nanoseconds),
             qos_profile_sensor_data,
         )
-        self.state_pub = self.node.create_publisher(ShooterState, STATE_TOPIC, STATE_QOS_DEPTH)
+        self.state_pub = self.create_publisher(ShooterState, STATE_TOPIC, STATE_QOS_DEPTH)
         self._state_period_ns = round(_NS_PER_S / cfg.state_rate)
         self._detector = JamDetector(cfg.jam)
         # A joint state this old is no state: the bridge stopped publishing (it may come

@@ -382,3 +382,34 @@ def test_bus_config_errors():
             'b', {'interface': 'virtual', 'reconnect_initial_s': 1.0, 'reconnect_max_s': 0.5}
         )
     assert BusConfig.from_dict('can0', {'interface': 'socketcan'}).channel == 'can0'
+
+
+# --- no receive thread: the loop polls ---
+def test_when_polled_expect_every_queued_frame_dispatched_at_once_and_no_thread(channel):
+    got = []
+    with ManagedBus(virtual(channel)) as bus, can.Bus(interface='virtual', channel=channel) as peer:
+        bus.add_handler(0x201, lambda msg, now: got.append(msg.data[0]) or True)
+        bus.start(receive_thread=False)
+        assert bus.poll() == 0
+        for i in range(3):
+            peer.send(frame(0x201, bytes([i])))
+        assert bus.poll() == 3  # everything received so far, without waiting
+        assert got == [0, 1, 2]
+        assert bus.poll() == 0
+        assert not [t for t in threading.enumerate() if t.name == 'canrx-vcan']
+
+
+def test_when_a_polled_bus_fails_expect_it_reopened_after_the_backoff():
+    opened = []
+
+    def factory(**kwargs):
+        opened.append(BrokenAtBirth(**kwargs))
+        return opened[-1]
+
+    with ManagedBus(fake(), bus_factory=factory) as bus:
+        bus.start(receive_thread=False)
+        assert bus.poll() == 0  # the receive fails: closed, reopen scheduled in 10 ms
+        assert bus.state is BusState.DOWN
+        assert len(opened) == 1
+        bus.poll()  # within the back-off: nothing
+        assert wait_until(lambda: bus.poll() == 0 and len(opened) >= 2, TIMEOUT)

@@ -181,3 +181,59 @@ def test_real_thread_runs_and_stops_idempotently():
     assert not scheduler.running
     ticks = scheduler.stats().ticks
     assert scheduler.stats().ticks == ticks  # stopped means stopped
+
+
+class Stage:
+    def __init__(self, events, name, works=True):
+        self.events = events
+        self.name = name
+        self.works = works
+
+    def __call__(self, now_ns, dt):
+        self.events.append(('stage', self.name, now_ns))
+        return self.works
+
+
+def test_stages_run_before_and_after_the_update_in_the_order_added():
+    events = []
+    scheduler, _ = make(events)
+    scheduler.add_stage(Stage(events, 'feedback'))
+    scheduler.add_stage(Stage(events, 'plugin chassis'))
+    scheduler.add_stage(Stage(events, 'power limit'), after_update=True)
+    scheduler.tick(T0)
+    order = [e[:2] for e in events if e[0] in ('stage', 'update')] + [events[-1][:1]]
+    assert order == [
+        ('stage', 'feedback'),
+        ('stage', 'plugin chassis'),
+        ('update', 'a'),
+        ('update', 'bb'),
+        ('stage', 'power limit'),
+        ('send',),
+    ]
+    # the output stage runs before anything is packed
+    assert events.index(('stage', 'power limit', T0)) < events.index(('pack', 'ggg'))
+
+
+def test_every_component_is_timed_and_an_idle_stage_is_not_counted():
+    events = []
+    scheduler, _ = make(events)
+    scheduler.add_stage(Stage(events, 'plugin busy'))
+    scheduler.add_stage(Stage(events, 'plugin idle', works=False))
+    for i in range(3):
+        scheduler.tick(T0 + i * MS)
+    counts = {name: s.count for name, s in scheduler.component_stats()}
+    assert counts == {'plugin busy': 3, 'plugin idle': 0, 'actuators': 3, 'pack': 3, 'send': 3}
+    assert [name for name, _ in scheduler.stats().components] == list(counts)
+
+
+def test_a_removed_stage_no_longer_runs_and_a_name_cannot_be_taken_twice():
+    events = []
+    scheduler, _ = make(events)
+    scheduler.add_stage(Stage(events, 'plugin x'))
+    with pytest.raises(HardwareConfigError, match="component named 'plugin x' already"):
+        scheduler.add_stage(Stage(events, 'plugin x'))
+    assert scheduler.remove_stage('plugin x')
+    assert not scheduler.remove_stage('plugin x')
+    scheduler.tick(T0)
+    assert not [e for e in events if e[0] == 'stage']
+    scheduler.add_stage(Stage(events, 'plugin x'))  # the name is free again

@@ -1,0 +1,103 @@
+"""Outbox: messages built in the control loop, published by a thread of the ROS edge.
+
+rclpy's publish serialises the message and hands it to DDS; on the 1 kHz loop thread
+that would put DDS inside the robot (docs/ARCHITECTURE.md, "ROS at the edge"). A plugin's
+publisher is wrapped instead (:meth:`Outbox.wrap`): ``publish(msg)`` appends to a queue and
+wakes the outbox thread, which publishes in order. Appending never blocks. The queue is
+bounded: if the edge falls behind, the oldest messages are dropped and counted (a state
+message is superseded by the next one anyway).
+"""
+
+from __future__ import annotations
+
+import collections
+import logging
+import threading
+from typing import Any
+
+_log = logging.getLogger(__name__)
+
+#: Messages held at most before the oldest are dropped.
+MAX_QUEUED = 1000
+
+
+class _EdgePublisher:
+    """Stands in for an rclpy publisher: ``publish`` goes through the outbox."""
+
+    def __init__(self, outbox: Outbox, publisher: Any) -> None:
+        self._outbox = outbox
+        self.publisher = publisher
+        self.topic_name = publisher.topic_name
+
+    def publish(self, msg: Any) -> None:
+        self._outbox.put(self.publisher, msg)
+
+    def get_subscription_count(self) -> int:
+        return self.publisher.get_subscription_count()
+
+    def wait_for_all_acked(self, *args: Any, **kwargs: Any) -> bool:
+        self._outbox.flush()
+        return self.publisher.wait_for_all_acked(*args, **kwargs)
+
+
+class Outbox:
+    """A queue of (publisher, message) and the thread that publishes them.
+
+    Args:
+        name: thread name.
+        max_queued: messages held at most before the oldest are dropped.
+    """
+
+    def __init__(self, name: str = 'ros-edge-publish', max_queued: int = MAX_QUEUED) -> None:
+        self._queue: collections.deque[tuple[Any, Any]] = collections.deque(maxlen=max_queued)
+        self._wake = threading.Event()
+        self._stop = False
+        self._publish_lock = threading.Lock()  # flush() and the thread publish in order
+        self.published = 0
+        self.dropped = 0
+        self.errors = 0
+        self._thread = threading.Thread(target=self._run, name=name, daemon=True)
+
+    def wrap(self, publisher: Any) -> _EdgePublisher:
+        """Return a publisher whose messages go through this outbox."""
+        return _EdgePublisher(self, publisher)
+
+    def put(self, publisher: Any, msg: Any) -> None:
+        """Queue msg for publisher (any thread; never blocks)."""
+        queue = self._queue
+        if len(queue) == queue.maxlen:
+            self.dropped += 1
+        queue.append((publisher, msg))
+        self._wake.set()
+
+    def start(self) -> None:
+        """Start the publishing thread."""
+        self._thread.start()
+
+    def flush(self) -> None:
+        """Publish everything queued now, in the calling thread."""
+        with self._publish_lock:
+            queue = self._queue
+            while queue:
+                publisher, msg = queue.popleft()
+                try:
+                    publisher.publish(msg)
+                    self.published += 1
+                except Exception as err:  # e.g. the context is shutting down
+                    self.errors += 1
+                    if self.errors == 1:
+                        _log.error('publishing %s failed: %r', publisher.topic_name, err)
+
+    def stop(self, timeout_s: float = 2.0) -> None:
+        """Publish what is queued, then end the thread. Idempotent."""
+        self._stop = True
+        self._wake.set()
+        if self._thread.is_alive():
+            self._thread.join(timeout_s)
+        self.flush()
+
+    def _run(self) -> None:
+        while not self._stop:
+            self._wake.wait()
+            self._wake.clear()
+            self.flush()

@@ -1,0 +1,60 @@
+"""LocalJointIO: plugin targets set on the actuators directly, the view filled from them."""
+
+import math
+
+import pytest
+from rm_base.hardware.actuators.base import JointState as HwState
+from rm_base.plugin.errors import TargetRejectedError
+from rm_base.plugin.joints import ActuatorMode, JointTarget
+from rm_base.plugin.node_io import LocalJointIO
+
+
+class FakeHardware:
+    def __init__(self):
+        self.commands = []
+
+    def set_command(self, name, mode, **values):
+        if name not in ('wheel_l', 'wheel_r'):
+            raise KeyError(name)
+        self.commands.append((name, mode, values))
+
+    def states(self):
+        return [HwState('wheel_l', 1.0, 2.0, 0.5, math.nan, True, 0, 2, 0.4)]
+
+
+class FakeNode:
+    def get_logger(self):
+        return None
+
+
+def test_targets_go_to_the_actuators_as_validated_values():
+    hw = FakeHardware()
+    io = LocalJointIO(FakeNode(), hw)
+    io.send({'wheel_l': JointTarget.with_velocity(3.0), 'wheel_r': JointTarget.off()}, now=None)
+    assert hw.commands == [
+        ('wheel_l', 2, {'position': 0.0, 'velocity': 3.0, 'effort': 0.0, 'kp': 0.0, 'kd': 0.0}),
+        ('wheel_r', 0, {'position': 0.0, 'velocity': 0.0, 'effort': 0.0, 'kp': 0.0, 'kd': 0.0}),
+    ]
+
+
+@pytest.mark.parametrize(
+    ('target', 'message'),
+    [
+        (JointTarget.with_velocity(math.nan), 'velocity of joint .wheel_r. is not a finite'),
+        (JointTarget.with_mit(0.0, 0.0, 0.0, -1.0, 0.0), 'MIT gains of joint .wheel_r.'),
+    ],
+)
+def test_when_one_target_is_bad_expect_nothing_set(target, message):
+    hw = FakeHardware()
+    io = LocalJointIO(FakeNode(), hw)
+    with pytest.raises(TargetRejectedError, match=message):
+        io.send({'wheel_l': JointTarget.with_velocity(1.0), 'wheel_r': target}, now=None)
+    assert hw.commands == []
+
+
+def test_the_view_holds_every_joint_stamped_with_the_tick():
+    io = LocalJointIO(FakeNode(), FakeHardware())
+    io.refresh(123)
+    state = io.joint_states.get('wheel_l')
+    assert (state.position, state.velocity, state.command, state.stamp_ns) == (1.0, 2.0, 0.4, 123)
+    assert state.mode is ActuatorMode.VELOCITY and state.online
