@@ -436,13 +436,48 @@ def test_stepped_world_moves_only_when_stepped(ros_context):
     try:
         world = bridge.sim_world
         assert world.timing is Timing.STEPPED and not world.running
+        assert not bridge.hardware.scheduler.running  # the loop runs only in step()
         actuator = bridge.hardware.actuators['wheel']
         assert actuator.feedback is None  # a motor sends feedback only when the world ticks
-        world.step(5)
+        bridge.step(5)
         assert world.time_ns == 5 * 1_000_000
-        assert wait_until(lambda: actuator.feedback is not None, WAIT)
+        assert bridge.hardware.scheduler.stats().ticks == 5
+        # the feedback sent at a tick is taken by the loop tick right after it
+        assert actuator.feedback is not None
+        assert actuator.feedback.stamp_ns == 5 * 1_000_000
     finally:
         bridge.destroy_node()
+
+
+def test_when_stepped_with_a_command_expect_the_same_wheel_speeds_on_every_run(ros_context):
+    def run(tag):
+        params = {
+            'sim': True,
+            'sim.timing': 'stepped',
+            'buses.can0.channel': f'rm-bridge-lockstep-{tag}-{uuid.uuid4().hex[:8]}',
+            **wheel(),
+            # the standard robot's wheel loop (rm_bringup/config/standard.yaml)
+            'joints.wheel.velocity_pid.kp': 0.6,
+            'joints.wheel.velocity_pid.ki': 4.0,
+            'joints.wheel.velocity_pid.output_limit': 4.0,
+        }
+        bridge = CanBridgeNode(
+            context=ros_context,
+            parameter_overrides=[Parameter(k, value=v) for k, v in params.items()],
+        )
+        try:
+            speeds = []
+            for _ in range(200):
+                bridge.hardware.set_command('wheel', 2, velocity=10.0)  # MODE_VELOCITY
+                bridge.step(1)
+                speeds.append(bridge.hardware.actuators['wheel'].state().velocity)
+            return speeds
+        finally:
+            bridge.destroy_node()
+
+    first, second = run('a'), run('b')
+    assert first[-1] > 5.0  # [rad/s] on its way to 10 rad/s within 0.2 s
+    assert first == second  # bit for bit: nothing depends on the machine's timing
 
 
 # --- safety: every fault ends with zero current on the wire, and the node runs on -----------
@@ -528,3 +563,19 @@ def test_bus_error_recovers_with_zero_output_until_a_fresh_command(make_rig):
     assert int(rig.values('bus can0')['reopen_count']) >= reopens
     rig.command = velocity_cmd({'wheel': TARGET})
     assert wait_until(lambda: rig.wire_drives() and rig.spinning(), WAIT)
+
+
+def test_when_the_simulator_runs_in_real_time_expect_step_refused(ros_context):
+    params = {
+        'sim': True,
+        'buses.can0.channel': f'rm-bridge-realtime-{uuid.uuid4().hex[:8]}',
+        **wheel(),
+    }
+    bridge = CanBridgeNode(
+        context=ros_context, parameter_overrides=[Parameter(k, value=v) for k, v in params.items()]
+    )
+    try:
+        with pytest.raises(ConfigError, match=r'step\(\) needs sim: true and sim.timing: stepped'):
+            bridge.step()
+    finally:
+        bridge.destroy_node()

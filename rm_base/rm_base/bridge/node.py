@@ -150,7 +150,17 @@ class CanBridgeNode(Node):
             names = {(b.interface, str(b.channel)): b.name for b in settings.hardware_config.buses}
             self._frame_tap = FrameTap(names, bus_factory)
             bus_factory = self._frame_tap.factory
-        self.hardware = hw = CanHardware(hardware, bus_factory=bus_factory)
+        world = self.sim_world
+        self.stepped = world is not None and world.timing is Timing.STEPPED
+        if self.stepped:
+            # Lockstep: the loop runs only in step(), on the world's clock, and takes the
+            # feedback itself, so every tick is the same on every run.
+            self.hardware = hw = CanHardware(
+                hardware, bus_factory=bus_factory, clock_ns=lambda: world.time_ns,
+                receive_in_loop=True,
+            )
+        else:
+            self.hardware = hw = CanHardware(hardware, bus_factory=bus_factory)
         self._joints = frozenset(hw.joint_names)
         self._command_timeout_s = settings.hardware_config.safety.command_timeout_s
         self._diagnostics = DiagnosticsReporter(
@@ -177,7 +187,10 @@ class CanBridgeNode(Node):
             self._create_sim_services()
         self.add_on_set_parameters_callback(self._on_set_parameters)
 
-        hw.start()
+        if self.stepped:
+            hw.open()
+        else:
+            hw.start()
         self._publisher_thread = threading.Thread(
             target=self._run_publisher, name='can_bridge-publish', daemon=True
         )
@@ -406,6 +419,29 @@ class CanBridgeNode(Node):
             reason=f'{NODE_NAME} reads its parameters once at start-up; restart it to change '
             f'{names}',
         )
+
+    # --- lockstep ---------------------------------------------------------------------------
+    def step(self, ticks: int = 1) -> None:
+        """Advance the stepped simulator and the control loop together, tick by tick.
+
+        Each tick: the world moves one period (motors answer), then one loop tick runs at
+        the world's new time (feedback, due plugins, update, pack, send).
+
+        Raises:
+            BridgeConfigError: the bridge does not run a stepped simulator
+                (``sim.timing: stepped``), or its period differs from the loop's.
+        """
+        world, hw = self.sim_world, self.hardware
+        if not self.stepped or world is None or hw is None:
+            raise BridgeConfigError('step() needs sim: true and sim.timing: stepped')
+        if world.period_ns != hw.scheduler.period_ns:
+            raise BridgeConfigError(
+                f'the simulator ticks every {world.period_ns} ns and the loop every '
+                f'{hw.scheduler.period_ns} ns; lockstep needs the same period'
+            )
+        for _ in range(ticks):
+            world.step(1)
+            hw.tick(world.time_ns)
 
     # --- publishing (own thread) -----------------------------------------------------------
     def command_stats(self) -> CommandStats:
