@@ -76,6 +76,42 @@ def load_parameters(files: Iterable[pathlib.Path]) -> dict[str, dict[str, Any]]:
     return nodes
 
 
+def robot_parameters(
+    config: str,
+    tmp: str,
+    plugins: list[str] | None = None,
+    overrides: Mapping[str, Mapping[str, Any]] | None = None,
+) -> tuple[dict[str, Any], dict[str, Any]]:
+    """The (can_bridge, rm_robot) parameters of a robot config on rm_sim, for a test.
+
+    As `bringup --sim` loads them, with every bus on a channel of its own (rm_sim's channel
+    registry is process-wide) and the simulated IMU's terminal in the folder tmp.
+
+    Args:
+        config: robot config name in rm_bringup/config.
+        tmp: a private folder.
+        plugins: plugin instances to load (default: all of the config).
+        overrides: ``{'can_bridge' | 'rm_robot': {flat parameter: value}}`` applied last.
+    """
+    files = [CONFIG_DIR / f'{config}.yaml', CONFIG_DIR / f'{config}_sim.yaml']
+    params = load_parameters(f for f in files if f.exists())
+    bridge, host = params.get('can_bridge', {}), params.get('rm_robot', {})
+    tag = uuid.uuid4().hex[:8]
+    for key in [k for k in bridge if k.startswith('buses.') and k.endswith('.interface')]:
+        bus = key.split('.')[1]
+        bridge[f'buses.{bus}.channel'] = f'{bus}-{tag}'
+    imu_path = os.path.join(tmp, 'imu')
+    if 'sim.imu.path' in bridge:
+        bridge['sim.imu.path'] = imu_path
+    if 'imu.port' in host:
+        host['imu.port'] = imu_path
+    if plugins is not None:
+        host['plugins'] = list(plugins)
+    for node, values in (overrides or {}).items():
+        {'can_bridge': bridge, 'rm_robot': host}[node].update(values)
+    return bridge, host
+
+
 def _parameter(name: str, value: Any) -> Parameter:
     if isinstance(value, str):
         value = os.path.expandvars(value)
@@ -104,23 +140,8 @@ class SimRobot:
         settle_timeout: float = 20.0,
         split: bool = False,
     ) -> None:
-        files = [CONFIG_DIR / f'{config}.yaml', CONFIG_DIR / f'{config}_sim.yaml']
-        params = load_parameters(f for f in files if f.exists())
-        bridge, host = params.get('can_bridge', {}), params.get('rm_robot', {})
         self._tmp = tempfile.mkdtemp(prefix='rm_simrobot_')
-        tag = uuid.uuid4().hex[:8]
-        for key in [k for k in bridge if k.startswith('buses.') and k.endswith('.interface')]:
-            bus = key.split('.')[1]
-            bridge[f'buses.{bus}.channel'] = f'{bus}-{tag}'
-        imu_path = os.path.join(self._tmp, 'imu')
-        if 'sim.imu.path' in bridge:
-            bridge['sim.imu.path'] = imu_path
-        if 'imu.port' in host:
-            host['imu.port'] = imu_path
-        if plugins is not None:
-            host['plugins'] = list(plugins)
-        for node, values in (overrides or {}).items():
-            {'can_bridge': bridge, 'rm_robot': host}[node].update(values)
+        bridge, host = robot_parameters(config, self._tmp, plugins, overrides)
         self.bridge_parameters, self.host_parameters = bridge, host
 
         self.context = Context()

@@ -72,8 +72,9 @@ class RobotHost(Node):
         loader: plugin loader; default searches AMENT_PREFIX_PATH.
         hardware: the CAN hardware to drive in-process (its loop runs the plugins);
             None: DDS joint I/O and a loop of the host's own.
-        now: the plugins' clock (default: the node clock's ``now``; lockstep tests pass
-            a simulated one).
+        now: the plugins' clock (default: the node clock's ``now``).
+        deliver_locally: hand every message a plugin publishes at once to the plugins
+            that subscribe its topic (lockstep: no executor spins, nothing waits on DDS).
         **kwargs: passed to ``rclpy.node.Node`` (``context``, ``parameter_overrides``, ...).
 
     Raises:
@@ -91,6 +92,7 @@ class RobotHost(Node):
         loader: PluginLoader | None = None,
         hardware: CanHardware | None = None,
         now: Callable[[], Any] | None = None,
+        deliver_locally: bool = False,
         **kwargs: Any,
     ) -> None:
         super().__init__(NODE_NAME, **kwargs)
@@ -110,6 +112,8 @@ class RobotHost(Node):
             self._own_loop = True
             inputs = TickInputs(now or self.get_clock().now)
         io.outbox = self._outbox
+        if deliver_locally:
+            self._outbox.loopback = io.inject
         self._io = io
         self._outbox.start()
         try:
@@ -131,6 +135,21 @@ class RobotHost(Node):
     def plugin(self, name: str) -> PluginBase:
         """Return the plugin instance name."""
         return self._tasks[name].plugin
+
+    def inject(self, topic: str, msg: Any) -> int:
+        """Hand msg to the plugins subscribed to topic as if it had arrived now.
+
+        The same callbacks the subscriptions run; for lockstep tests and tools that drive
+        the robot without DDS. Returns the number of callbacks that got it.
+        """
+        return self._io.inject(topic, msg)
+
+    def add_local_handler(self, topic: str, callback: Callable[[Any, int], Any]) -> None:
+        """Also give callback(msg, receive_ns) what ``inject`` hands to topic's plugins.
+
+        With ``deliver_locally`` that includes every message the plugins publish on it.
+        """
+        self._io.add_handler(self.resolve_topic_name(topic), callback)
 
     def task(self, name: str) -> PluginTask:
         """Return the loop task of plugin name (run and skip counters)."""

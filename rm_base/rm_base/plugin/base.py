@@ -371,19 +371,41 @@ class PluginBase:
             self.logger,
             watchdog=watchdog,
         )
-        clock = self.node.get_clock()
 
-        def on_command(msg: Any) -> None:
-            if command.handle(msg, clock.now().nanoseconds) and self.run_on_command:
+        def on_command(msg: Any, receive_ns: int) -> None:
+            if command.handle(msg, receive_ns) and self.run_on_command:
                 listener = self.command_listener
                 if listener is not None:
                     listener()
 
-        self.node.create_subscription(
-            msg_type, topic, on_command, qos if qos is not None else qos_profile_sensor_data
-        )
+        self.subscribe(topic, msg_type, on_command, qos)
         self._inputs.append(command)
         return command
+
+    def subscribe(
+        self, topic: str, msg_type: type, callback: Callable[[Any, int], Any], qos: Any = None
+    ) -> None:
+        """Subscribe to a topic; ``callback(msg, receive_ns)`` must only store the message.
+
+        Use this, not ``node.create_subscription``: the host can then also deliver
+        messages to the callback itself (``RobotHost.inject``: lockstep, in-process
+        topics), through the same code a subscription runs.
+
+        Args:
+            topic: topic name (relative names follow the node's namespace).
+            msg_type: message class.
+            callback: takes the message and its receive time on the node's clock [ns].
+            qos: subscription QoS; default best effort, depth 5 (matches any publisher).
+        """
+        self._require_init()
+        clock = self.node.get_clock()
+        self.node.create_subscription(
+            msg_type,
+            topic,
+            lambda msg: callback(msg, clock.now().nanoseconds),
+            qos if qos is not None else qos_profile_sensor_data,
+        )
+        self._io.add_handler(self.node.resolve_topic_name(topic), callback)
 
     def create_publisher(self, msg_type: type, topic: str, qos: Any) -> Any:
         """Create a publisher for this plugin's own topics (states, odometry).

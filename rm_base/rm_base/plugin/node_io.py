@@ -23,7 +23,7 @@ from __future__ import annotations
 import abc
 import threading
 import weakref
-from collections.abc import Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping
 from typing import Any, Protocol
 
 from rclpy.qos import qos_profile_sensor_data
@@ -70,6 +70,7 @@ class NodeIO(abc.ABC):
         self.outbox: Outbox | None = None
         self._claims: dict[str, str] = {}
         self._lock = threading.Lock()
+        self._handlers: dict[str, list[Callable[[Any, int], Any]]] = {}
 
     @abc.abstractmethod
     def send(self, targets: Mapping[str, JointTarget], now: Any) -> None:
@@ -83,6 +84,28 @@ class NodeIO(abc.ABC):
         """A publisher for a plugin: through the outbox if there is one."""
         publisher = self.node.create_publisher(msg_type, topic, qos)
         return publisher if self.outbox is None else self.outbox.wrap(publisher)
+
+    def add_handler(self, topic: str, handler: Callable[[Any, int], Any]) -> None:
+        """Record a plugin's subscription callback for topic (a resolved name)."""
+        with self._lock:
+            self._handlers.setdefault(topic, []).append(handler)
+
+    def inject(self, topic: str, msg: Any) -> int:
+        """Hand msg to every plugin callback of topic, as if it had arrived now.
+
+        Args:
+            topic: topic name (relative names follow the node's namespace).
+            msg: the message, handed over as it is (callbacks only store it).
+
+        Returns:
+            Number of callbacks that got it.
+        """
+        with self._lock:
+            handlers = tuple(self._handlers.get(self.node.resolve_topic_name(topic), ()))
+        receive_ns = self.node.get_clock().now().nanoseconds
+        for handler in handlers:
+            handler(msg, receive_ns)
+        return len(handlers)
 
     def claim(self, plugin: str, joints: Iterable[str]) -> tuple[str, ...]:
         """Record that plugin drives joints; return them as a tuple.

@@ -13,6 +13,7 @@ from __future__ import annotations
 import collections
 import logging
 import threading
+from collections.abc import Callable
 from typing import Any
 
 _log = logging.getLogger(__name__)
@@ -56,6 +57,9 @@ class Outbox:
         self.published = 0
         self.dropped = 0
         self.errors = 0
+        # Lockstep: also hands each message at once to the in-process subscribers of its
+        # topic (``loopback(topic, msg)``), so nothing waits on an executor.
+        self.loopback: Callable[[str, Any], object] | None = None
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
 
     def wrap(self, publisher: Any) -> _EdgePublisher:
@@ -64,6 +68,8 @@ class Outbox:
 
     def put(self, publisher: Any, msg: Any) -> None:
         """Queue msg for publisher (any thread; never blocks)."""
+        if self.loopback is not None:
+            self.loopback(publisher.topic_name, msg)
         queue = self._queue
         if len(queue) == queue.maxlen:
             self.dropped += 1

@@ -369,6 +369,9 @@ class SimWorld:
         body: the robot body (an empty one until :meth:`set_body`).
         overruns: times the real-time loop fell too far behind and skipped ahead.
         error: the exception that stopped the physics thread, if any.
+        imu_sink: None (default): every IMU frame goes to its terminal; else
+            ``imu_sink(imu, frame)`` takes it instead, in the stepping thread (lockstep:
+            a terminal delivers to its reader asynchronously).
     """
 
     def __init__(
@@ -406,6 +409,7 @@ class SimWorld:
             raise SimConfigError(f'seed must be an int, got {seed!r}')
         self.period_ns = round(_NS_PER_S / tick_rate_hz)
         self.time_ns = 0
+        self.imu_sink: Callable[[SimImu, bytes], object] | None = None
         self.lock = threading.RLock()
         self.body = RobotBody()
         self.overruns = 0
@@ -721,10 +725,13 @@ class SimWorld:
         frames, self._imu_frames = self._imu_frames, []
         return frames
 
-    @staticmethod
-    def _write_imu_frames(frames: list[tuple[SimImu, bytes]]) -> None:
+    def _write_imu_frames(self, frames: list[tuple[SimImu, bytes]]) -> None:
+        sink = self.imu_sink
         for imu, frame in frames:
-            imu.write(frame)
+            if sink is None:
+                imu.write(frame)
+            else:
+                sink(imu, frame)
 
     # -- real time ---------------------------------------------------------------------------
 

@@ -166,13 +166,8 @@ class StandChassis(PluginBase):
         self._predictor = SpeedPredictor()
         self._imu = _LatestImu()
         if cfg.imu_mount is not ImuMount.NONE:
-            clock = self.node.get_clock()
             # Sensor QoS (best effort, keep last): an old IMU sample is worthless.
-            self.node.create_subscription(
-                Imu, cfg.imu_topic,
-                lambda msg: self._imu.put(msg, clock.now().nanoseconds),
-                qos_profile_sensor_data,
-            )
+            self.subscribe(cfg.imu_topic, Imu, self._imu.put, qos_profile_sensor_data)
         self._chassis_state_pub = self.create_publisher(ChassisState, 'chassis_state', 10)
         self._odom_pub = self.create_publisher(OdometryMsg, 'odom', 10)
         self._state_msg, self._odom_msg = _report_messages(cfg)

@@ -167,21 +167,10 @@ class StandGimbal(PluginBase):
         cfg = self.config
         self.claim_joints([cfg.yaw.joint, cfg.pitch.joint])
         self.command = self.subscribe_command(cfg.command_topic, GimbalCmd)
-        clock = self.node.get_clock()
         self._imu = _Latest()
         self._odom = _Latest()
-        self.node.create_subscription(
-            Imu,
-            cfg.imu_topic,
-            lambda m: self._imu.put(m, clock.now().nanoseconds),
-            qos_profile_sensor_data,
-        )
-        self.node.create_subscription(
-            Odometry,
-            cfg.odom_topic,
-            lambda m: self._odom.put(m, clock.now().nanoseconds),
-            qos_profile_sensor_data,
-        )
+        self.subscribe(cfg.imu_topic, Imu, self._imu.put, qos_profile_sensor_data)
+        self.subscribe(cfg.odom_topic, Odometry, self._odom.put, qos_profile_sensor_data)
         self._gimbal_state_pub = self.create_publisher(GimbalState, cfg.state_topic, 10)
         self._imu_topic = self.node.resolve_topic_name(cfg.imu_topic)
         self._odom_topic = self.node.resolve_topic_name(cfg.odom_topic)

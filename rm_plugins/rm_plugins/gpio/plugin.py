@@ -98,7 +98,7 @@ class UpboardGpio(PluginBase):
         self._next_log_ns = 0
         self._suppressed = 0
         self.state_pub = self.create_publisher(GpioState, STATE_TOPIC, STATE_QOS_DEPTH)
-        self.node.create_subscription(GpioCmd, COMMAND_TOPIC, self._on_command, COMMAND_QOS)
+        self.subscribe(COMMAND_TOPIC, GpioCmd, self._on_command, COMMAND_QOS)
         self.logger.info(
             f'{backend_kind.value} backend: '
             + ', '.join(f'{name} ({spec.kind.name.lower()})' for name, spec in self.pins.items())
@@ -119,7 +119,7 @@ class UpboardGpio(PluginBase):
 
     # -- commands -----------------------------------------------------------------------------
 
-    def _on_command(self, msg: GpioCmd) -> None:
+    def _on_command(self, msg: GpioCmd, receive_ns: int) -> None:
         # Executor thread: only hand the message over.
         with self._inbox_lock:
             if len(self._inbox) == self._inbox.maxlen:

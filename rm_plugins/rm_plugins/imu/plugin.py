@@ -38,6 +38,7 @@ from rm_base.plugin import PluginBase, PluginConfigError
 from sensor_msgs.msg import Imu
 
 from rm_plugins.imu.conversion import Mounting, reading_from_sample
+from rm_plugins.imu.message import imu_message
 from rm_plugins.imu.reader import ReaderStats, SerialReader
 
 _NS_PER_S = 1_000_000_000
@@ -47,8 +48,6 @@ _NS_PER_S = 1_000_000_000
 _ORIENTATION_COV = (7.6e-5, 0.0, 0.0, 0.0, 7.6e-5, 0.0, 0.0, 0.0, 3.0e-4)
 _RATE_COV = (3.0e-6, 0.0, 0.0, 0.0, 3.0e-6, 0.0, 0.0, 0.0, 3.0e-6)
 _ACCEL_COV = (1.0e-2, 0.0, 0.0, 0.0, 1.0e-2, 0.0, 0.0, 0.0, 1.0e-2)
-#: sensor_msgs/Imu: covariance[0] = -1 means "this field is not provided".
-_NOT_PROVIDED = (-1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
 
 
 class ImuState(IntEnum):
@@ -278,28 +277,11 @@ class Hi220(PluginBase):
         stamp_ns = now_ns
         if sample.system_time_ms is not None:
             stamp_ns = self._device_clock.stamp_ns(sample.system_time_ms, now_ns)
-        msg = Imu()
-        msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp_ns, _NS_PER_S)
-        msg.header.frame_id = self.frame_id
-        if reading.orientation is not None:
-            q = reading.orientation
-            msg.orientation.x, msg.orientation.y = q.x, q.y
-            msg.orientation.z, msg.orientation.w = q.z, q.w
-            msg.orientation_covariance = self.orientation_covariance
-        else:
-            msg.orientation_covariance = _NOT_PROVIDED
-        if reading.angular_velocity is not None:
-            v = msg.angular_velocity
-            v.x, v.y, v.z = reading.angular_velocity
-            msg.angular_velocity_covariance = self.angular_velocity_covariance
-        else:
-            msg.angular_velocity_covariance = _NOT_PROVIDED
-        if reading.linear_acceleration is not None:
-            a = msg.linear_acceleration
-            a.x, a.y, a.z = reading.linear_acceleration
-            msg.linear_acceleration_covariance = self.linear_acceleration_covariance
-        else:
-            msg.linear_acceleration_covariance = _NOT_PROVIDED
+        msg = imu_message(
+            reading, stamp_ns, self.frame_id,
+            (self.orientation_covariance, self.angular_velocity_covariance,
+             self.linear_acceleration_covariance),
+        )
         self._publisher.publish(msg)
         with self._lock:
             self._last_sample_ns = now_ns

@@ -140,13 +140,7 @@ class StandShooter(PluginBase):
         self._switch = _SwitchInput(
             cfg.limit_switch, round(cfg.switch_timeout * _NS_PER_S), self.logger
         )
-        clock = self.node.get_clock()
-        self.node.create_subscription(
-            GpioState,
-            GPIO_STATE_TOPIC,
-            lambda msg: self._switch.handle(msg, clock.now().nanoseconds),
-            qos_profile_sensor_data,
-        )
+        self.subscribe(GPIO_STATE_TOPIC, GpioState, self._switch.handle, qos_profile_sensor_data)
         self.state_pub = self.create_publisher(ShooterState, STATE_TOPIC, STATE_QOS_DEPTH)
         self._state_period_ns = round(_NS_PER_S / cfg.state_rate)
         self._detector = JamDetector(cfg.jam)

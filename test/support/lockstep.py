@@ -1,0 +1,199 @@
+"""LockstepRobot: the whole robot — loop, plugins and simulator — stepped tick by tick.
+
+    with LockstepRobot() as robot:
+        robot.publish('/chassis_cmd', ChassisCmd(mode=ChassisCmd.RAW), rate_hz=50)
+        robot.publish('/vel_cmd', Twist(linear=Vector3(x=1.0)), rate_hz=50)
+        robot.run(3.0)
+        assert robot.world.body.x > 2.5
+
+The robot comes from the robot config and its simulation overlay, as `bringup --sim`
+loads them (support.robot.robot_parameters), with the simulator stepped
+(``sim.timing: stepped``) and the plugins on simulated ROS time (``use_sim_time``, the
+clock set by the harness). Each tick the simulator moves one period, then one loop tick
+runs at the new time (feedback, due plugins, update, pack, send: ``CanBridgeNode.step``).
+Commands are handed to the plugins through the same callbacks their subscriptions run
+(``RobotHost.inject``), stamped on the simulated clock; what a plugin publishes reaches
+the plugins subscribed to it at once (``deliver_locally``); the simulated Hi220's frames
+are decoded as the Hi220 plugin decodes them and handed to /imu's subscribers. No
+executor spins, nothing waits on DDS or a terminal: the same inputs give the same numbers
+on every run, whatever the machine's load.
+"""
+
+from __future__ import annotations
+
+import copy
+import os
+import shutil
+import tempfile
+from collections.abc import Callable, Mapping
+from typing import Any
+
+import rclpy
+from rclpy.context import Context
+from rclpy.time import Time
+from rm_base.bridge import CanBridgeNode
+from rm_base.hardware.protocols.hipnuc import decode_frame, decode_payload
+from rm_base.host.node import RobotHost
+from rm_plugins.imu.conversion import Mounting, reading_from_sample
+from rm_plugins.imu.message import imu_message
+
+from support.robot import _parameter, robot_parameters
+
+#: Simulated ROS time at the world's time 0 [ns] (any fixed, positive value).
+BASE_NS = 1_700_000_000 * 1_000_000_000
+
+#: Covariances of the injected /imu (the plugins read no covariance).
+_IMU_COVARIANCE = (0.0,) * 9
+
+
+class LockstepRobot:
+    """The robot of one config, stepped on a simulated clock (see the module docstring).
+
+    Args:
+        config: robot config name in rm_bringup/config.
+        plugins: plugin instances to run; the Hi220 plugin is replaced by the harness's
+            decoding of the simulated frames.
+        overrides: ``{'can_bridge' | 'rm_robot': {flat parameter: value}}`` applied last.
+    """
+
+    def __init__(
+        self,
+        config: str = 'standard',
+        *,
+        plugins: tuple[str, ...] = ('gpio', 'chassis', 'gimbal', 'shooter'),
+        overrides: Mapping[str, Mapping[str, Any]] | None = None,
+    ) -> None:
+        self._tmp = tempfile.mkdtemp(prefix='rm_lockstep_')
+        bridge, host = robot_parameters(config, self._tmp, list(plugins), overrides)
+        bridge['sim.timing'] = 'stepped'
+        host['use_sim_time'] = True
+        self._imu_topic = host.get('imu.topic', 'imu')
+        self._imu_frame_id = host.get('imu.frame_id', 'gimbal_imu')
+        self._mounting = Mounting(tuple(host.get('imu.mount_rpy', (0.0, 0.0, 0.0))))
+        self._streams: dict[str, tuple[Any, int, int]] = {}  # topic: (msg, period, next)
+        self._latest: dict[str, Any] = {}
+        self.ticks = 0
+        self.context = Context()
+        rclpy.init(context=self.context, domain_id=int(os.environ['ROS_DOMAIN_ID']))
+        self.bridge: CanBridgeNode | None = None
+        self.host: RobotHost | None = None
+        try:
+            self.bridge = CanBridgeNode(
+                context=self.context,
+                parameter_overrides=[_parameter(k, v) for k, v in bridge.items()],
+            )
+            self.world = self.bridge.sim_world
+            self.world.imu_sink = self._on_imu_frame
+            self.host = RobotHost(
+                hardware=self.bridge.hardware,
+                deliver_locally=True,
+                context=self.context,
+                parameter_overrides=[_parameter(k, v) for k, v in host.items()],
+            )
+            self._clock = self.host.get_clock()
+            self._set_clock(self.world.time_ns)
+        except BaseException:
+            self.close()
+            raise
+
+    # -- life cycle -------------------------------------------------------------------------
+    def close(self) -> None:
+        """Disable the plugins (zero output), shut the bridge down, free everything."""
+        if self.host is not None:
+            self.host.destroy_node()
+            self.host = None
+        if self.bridge is not None:
+            self.bridge.destroy_node()
+            self.bridge = None
+        self.context.try_shutdown()
+        shutil.rmtree(self._tmp, ignore_errors=True)
+
+    def __enter__(self) -> LockstepRobot:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # -- time -------------------------------------------------------------------------------
+    @property
+    def now_ns(self) -> int:
+        """The simulated ROS time [ns]."""
+        return BASE_NS + self.world.time_ns
+
+    @property
+    def t(self) -> float:
+        """Simulated time since start [s]."""
+        return self.world.time_ns / 1e9
+
+    def _set_clock(self, world_ns: int) -> None:
+        self._clock.set_ros_time_override(Time(nanoseconds=BASE_NS + world_ns))
+
+    def step(self, ticks: int = 1) -> None:
+        """Advance the whole robot by ticks loop periods (commands streamed as set up)."""
+        period = self.world.period_ns
+        for _ in range(ticks):
+            self._set_clock(self.world.time_ns + period)
+            for topic, (msg, every, next_tick) in list(self._streams.items()):
+                if self.ticks >= next_tick:
+                    self._streams[topic] = (msg, every, next_tick + every)
+                    self._inject(topic, msg)
+            self.bridge.step(1)
+            self.ticks += 1
+
+    def run(self, seconds: float, every: Callable[[], object] | None = None) -> None:
+        """Step for seconds of simulated time, calling every() after each tick."""
+        for _ in range(round(seconds * 1e9 / self.world.period_ns)):
+            self.step()
+            if every is not None:
+                every()
+
+    # -- commands ---------------------------------------------------------------------------
+    def publish(self, topic: str, msg: Any, *, rate_hz: float | None = None) -> None:
+        """Hand msg to its subscribers at the next tick; with rate_hz, every 1/rate_hz.
+
+        A message with a header is stamped on the simulated clock each time, as a live
+        commander stamps its messages.
+        """
+        every = 0 if rate_hz is None else round(1e9 / rate_hz / self.world.period_ns)
+        if every:
+            self._streams[topic] = (msg, every, self.ticks)
+        else:
+            self._streams.pop(topic, None)
+            self._set_clock(self.world.time_ns)
+            self._inject(topic, msg)
+
+    def stop_publishing(self, topic: str) -> None:
+        """Stop a stream started by publish(..., rate_hz=...)."""
+        self._streams.pop(topic, None)
+
+    def _inject(self, topic: str, msg: Any) -> None:
+        msg = copy.deepcopy(msg)  # each delivery a message of its own, as from DDS
+        if hasattr(msg, 'header'):
+            msg.header.stamp = self._clock.now().to_msg()
+        if self.host.inject(topic, msg) == 0:
+            raise LookupError(f'no plugin subscribes {topic}')
+
+    def _on_imu_frame(self, imu: Any, frame: bytes) -> None:
+        reading = reading_from_sample(decode_payload(decode_frame(frame)), self._mounting)
+        covariances = (_IMU_COVARIANCE,) * 3
+        msg = imu_message(reading, self._clock.now().nanoseconds, self._imu_frame_id, covariances)
+        self.host.inject(self._imu_topic, msg)
+
+    # -- the robot --------------------------------------------------------------------------
+    def watch(self, topic: str) -> None:
+        """Keep the latest message the plugins publish on topic (``latest``)."""
+        self.host.add_local_handler(
+            topic, lambda msg, _receive_ns: self._latest.__setitem__(topic, msg)
+        )
+
+    def latest(self, topic: str) -> Any:
+        """The latest message published on a watched topic, or None."""
+        return self._latest.get(topic)
+
+    def plugin(self, name: str) -> Any:
+        """The plugin instance (read-only use in tests)."""
+        return self.host.plugin(name)
+
+    def joint(self, name: str) -> Any:
+        """The joint's state as the hardware has it (rm_base.hardware JointState)."""
+        return self.bridge.hardware.actuators[name].state()
