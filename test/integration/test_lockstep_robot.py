@@ -95,8 +95,8 @@ def scenario() -> dict[str, object]:
         robot.run(2.0, every=count)
         state = robot.latest('/shooter_state')
         out['shots'] = (state.state, state.shots_fired, tuple(shots_at))
-        out['trigger'] = robot.joint('trigger').position
-        out['wheels'] = tuple(robot.joint(w).velocity for w in ('wheel_fl', 'wheel_rr'))
+        out['trigger'] = robot.joint('trigger')['position']
+        out['wheels'] = tuple(robot.joint(w)['velocity'] for w in ('wheel_fl', 'wheel_rr'))
     return out
 
 

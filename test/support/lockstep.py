@@ -32,6 +32,7 @@ import rclpy
 from rclpy.context import Context
 from rclpy.time import Time
 from rm_base.bridge import CanBridgeNode
+from rm_base.bridge.messages import state_msgs
 from rm_base.hardware.protocols.hipnuc import decode_frame, decode_payload
 from rm_base.host.node import RobotHost
 from rm_plugins.imu.conversion import Mounting, reading_from_sample
@@ -46,13 +47,18 @@ BASE_NS = 1_700_000_000 * 1_000_000_000
 _IMU_COVARIANCE = (0.0,) * 9
 
 
+def _drop(imu: Any, frame: bytes) -> None:
+    """No IMU plugin: the frames go nowhere (as to a terminal nobody reads)."""
+
+
 class LockstepRobot:
     """The robot of one config, stepped on a simulated clock (see the module docstring).
 
     Args:
         config: robot config name in rm_bringup/config.
-        plugins: plugin instances to run; the Hi220 plugin is replaced by the harness's
-            decoding of the simulated frames.
+        plugins: plugin instances to run. ``imu`` (the Hi220) is played by the harness:
+            it decodes the simulated IMU's frames as the plugin does and hands them to
+            /imu's subscribers; without it nothing is published on /imu.
         overrides: ``{'can_bridge' | 'rm_robot': {flat parameter: value}}`` applied last.
     """
 
@@ -60,18 +66,26 @@ class LockstepRobot:
         self,
         config: str = 'standard',
         *,
-        plugins: tuple[str, ...] = ('gpio', 'chassis', 'gimbal', 'shooter'),
+        plugins: tuple[str, ...] = ('imu', 'gpio', 'chassis', 'gimbal', 'shooter'),
         overrides: Mapping[str, Mapping[str, Any]] | None = None,
     ) -> None:
         self._tmp = tempfile.mkdtemp(prefix='rm_lockstep_')
-        bridge, host = robot_parameters(config, self._tmp, list(plugins), overrides)
+        loaded = [p for p in plugins if p != 'imu']
+        bridge, host = robot_parameters(config, self._tmp, loaded, overrides)
         bridge['sim.timing'] = 'stepped'
         host['use_sim_time'] = True
+        self.bridge_parameters, self.host_parameters = bridge, host
         self._imu_topic = host.get('imu.topic', 'imu')
         self._imu_frame_id = host.get('imu.frame_id', 'gimbal_imu')
         self._mounting = Mounting(tuple(host.get('imu.mount_rpy', (0.0, 0.0, 0.0))))
-        self._streams: dict[str, tuple[Any, int, int]] = {}  # topic: (msg, period, next)
+        # topic: (message or factory, period [ticks], next tick)
+        self._streams: dict[str, tuple[Any, int, int]] = {}
         self._latest: dict[str, Any] = {}
+        self._history: dict[str, list[Any]] = {}
+        self._tick_hooks: list[Callable[[], object]] = []
+        self._bridge_topics: set[str] = set()
+        self._driven: dict[str, Mapping[str, float]] = {}
+        self._state_every = round(1e9 / float(bridge.get('publish_rate', 200.0)))
         self.ticks = 0
         self.context = Context()
         rclpy.init(context=self.context, domain_id=int(os.environ['ROS_DOMAIN_ID']))
@@ -83,7 +97,7 @@ class LockstepRobot:
                 parameter_overrides=[_parameter(k, v) for k, v in bridge.items()],
             )
             self.world = self.bridge.sim_world
-            self.world.imu_sink = self._on_imu_frame
+            self.world.imu_sink = self._on_imu_frame if 'imu' in plugins else _drop
             self.host = RobotHost(
                 hardware=self.bridge.hardware,
                 deliver_locally=True,
@@ -136,9 +150,25 @@ class LockstepRobot:
             for topic, (msg, every, next_tick) in list(self._streams.items()):
                 if self.ticks >= next_tick:
                     self._streams[topic] = (msg, every, next_tick + every)
-                    self._inject(topic, msg)
+                    self._inject(topic, msg() if callable(msg) else msg)
+            for joint, command in self._driven.items():
+                self.bridge.hardware.set_command(joint, **command)
             self.bridge.step(1)
             self.ticks += 1
+            for hook in self._tick_hooks:
+                hook()
+
+    def wait_until(self, predicate: Callable[[], Any], timeout: float) -> bool:
+        """Step until predicate() is true, for at most timeout [s] of simulated time."""
+        for _ in range(round(timeout * 1e9 / self.world.period_ns)):
+            if predicate():
+                return True
+            self.step()
+        return bool(predicate())
+
+    def on_tick(self, hook: Callable[[], object]) -> None:
+        """Call hook() after every tick from now on."""
+        self._tick_hooks.append(hook)
 
     def run(self, seconds: float, every: Callable[[], object] | None = None) -> None:
         """Step for seconds of simulated time, calling every() after each tick."""
@@ -149,10 +179,10 @@ class LockstepRobot:
 
     # -- commands ---------------------------------------------------------------------------
     def publish(self, topic: str, msg: Any, *, rate_hz: float | None = None) -> None:
-        """Hand msg to its subscribers at the next tick; with rate_hz, every 1/rate_hz.
+        """Hand msg to its subscribers now; with rate_hz, from the next tick every 1/rate_hz.
 
-        A message with a header is stamped on the simulated clock each time, as a live
-        commander stamps its messages.
+        msg may be a function that makes the message (called each time). A message with a
+        header is stamped on the simulated clock each time, as a live commander does.
         """
         every = 0 if rate_hz is None else round(1e9 / rate_hz / self.world.period_ns)
         if every:
@@ -160,16 +190,16 @@ class LockstepRobot:
         else:
             self._streams.pop(topic, None)
             self._set_clock(self.world.time_ns)
-            self._inject(topic, msg)
+            self._inject(topic, msg() if callable(msg) else msg)
 
     def stop_publishing(self, topic: str) -> None:
         """Stop a stream started by publish(..., rate_hz=...)."""
         self._streams.pop(topic, None)
 
     def _inject(self, topic: str, msg: Any) -> None:
-        msg = copy.deepcopy(msg)  # each delivery a message of its own, as from DDS
-        if hasattr(msg, 'header'):
+        if hasattr(msg, 'header'):  # the caller's message too, as a publisher stamps it
             msg.header.stamp = self._clock.now().to_msg()
+        msg = copy.deepcopy(msg)  # each delivery a message of its own, as from DDS
         if self.host.inject(topic, msg) == 0:
             raise LookupError(f'no plugin subscribes {topic}')
 
@@ -180,20 +210,58 @@ class LockstepRobot:
         self.host.inject(self._imu_topic, msg)
 
     # -- the robot --------------------------------------------------------------------------
-    def watch(self, topic: str) -> None:
-        """Keep the latest message the plugins publish on topic (``latest``)."""
-        self.host.add_local_handler(
-            topic, lambda msg, _receive_ns: self._latest.__setitem__(topic, msg)
+    def watch(self, topic: str, *, keep_history: bool = False) -> None:
+        """Keep the latest message published on topic (and, with keep_history, all).
+
+        Topics the plugins publish arrive as they are published; /actuator_states and
+        /joint_states are built from the hardware at the bridge's publish_rate, as the
+        bridge publishes them.
+        """
+        if keep_history:
+            self._history.setdefault(topic, [])
+        if topic in ('/actuator_states', '/joint_states'):
+            if not self._bridge_topics:
+                self.on_tick(self._bridge_states)
+            self._bridge_topics.add(topic)
+            return
+        self.host.add_local_handler(topic, lambda msg, _receive_ns: self._keep(topic, msg))
+
+    def _keep(self, topic: str, msg: Any) -> None:
+        self._latest[topic] = msg
+        history = self._history.get(topic)
+        if history is not None:
+            history.append(msg)
+
+    def _bridge_states(self) -> None:
+        if self.world.time_ns % self._state_every:
+            return
+        joint_states, actuator_states = state_msgs(
+            self.bridge.hardware.states(), self._clock.now().to_msg()
         )
+        for topic, msg in (('/joint_states', joint_states), ('/actuator_states', actuator_states)):
+            if topic in self._bridge_topics:
+                self._keep(topic, msg)
 
     def latest(self, topic: str) -> Any:
         """The latest message published on a watched topic, or None."""
         return self._latest.get(topic)
 
+    def history(self, topic: str) -> list[Any]:
+        """A copy of every message on a topic watched with keep_history."""
+        return list(self._history.get(topic, []))
+
     def plugin(self, name: str) -> Any:
         """The plugin instance (read-only use in tests)."""
         return self.host.plugin(name)
 
-    def joint(self, name: str) -> Any:
-        """The joint's state as the hardware has it (rm_base.hardware JointState)."""
-        return self.bridge.hardware.actuators[name].state()
+    def joint(self, name: str) -> dict[str, Any]:
+        """The joint's state as the hardware has it: ActuatorState fields by name."""
+        state = self.bridge.hardware.actuators[name].state()._asdict()
+        del state['name']
+        return state
+
+    def drive_joints(self, targets: Mapping[str, Mapping[str, float]]) -> None:
+        """Set joint targets on the hardware before every tick from now on, as a second
+        commander on /actuator_cmd would (``{joint: set_command keyword arguments}``);
+        an empty mapping stops it."""
+        self._driven = dict(targets)
