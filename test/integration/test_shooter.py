@@ -1,27 +1,25 @@
-"""rm_plugins/StandShooter end to end on the simulated robot (test/support/robot.py).
+"""rm_plugins/StandShooter end to end on the simulated robot, in lockstep.
 
-Each test runs SimRobot (can_bridge on rm_sim + rm_robot, from standard.yaml and its
-simulation overlay) with the ``gpio`` plugin (simulated backend: the ball switch closes
-while the trigger's phase is in its window) and the ``shooter`` plugin, publishes
-/shoot_cmd at 50 Hz, and records /shooter_state, /gpio_state and /actuator_states. The
-world runs in real time, so tests wait on conditions and check the physical outcome on
-the sim's motors (trigger angle, friction wheel speeds).
+Each test runs the standard robot (support.lockstep: the loop, the plugins and rm_sim
+stepped together on a simulated clock) with the ``gpio`` plugin (simulated backend: the
+ball switch closes while the trigger's phase is in its window) and the ``shooter``
+plugin, streams /shoot_cmd at 50 Hz, and records /shooter_state, /gpio_state and the
+joints every 5 ms. Tests step until a condition holds and check the physical outcome on
+the sim's motors (trigger angle, friction wheel speeds); the numbers are the same on
+every run.
 """
 
 from __future__ import annotations
 
 import math
-import threading
-import time
 from typing import Any
 
 import numpy
 import pytest
 from rm_base.sim import Fault, FaultKind
-from support.robot import SimRobot
-from support.ros import wait_until
+from support.lockstep import LockstepRobot
 
-from rm_msgs.msg import ActuatorState, GpioState, ShootCmd, ShooterState
+from rm_msgs.msg import ShootCmd, ShooterState
 
 pytestmark = pytest.mark.ros
 
@@ -35,24 +33,21 @@ FRICTION_LOAD_INERTIA = 4.5e-5
 # behind its gearbox); a direct-drive rotor runs to ~1000 rad/s at 24 V.
 FRICTION_MAX_VELOCITY = 1000.0  # [rad/s]
 TRIGGER_LOAD_INERTIA = 2e-4  # [kg*m^2] the trigger disc with balls, at the output shaft
+SAMPLE_NS = 5_000_000  # joints sampled every 5 ms, as the bridge publishes them
 
 
 class ShooterRig:
     """SimRobot with gpio + shooter, a /shoot_cmd stream and recorders."""
 
     def __init__(self, **shooter: Any) -> None:
-        # Five threads and the 1 kHz sim share two cores here: a stall of a few hundred ms
-        # would time the command out and (by design) abandon the burst, so the tests allow
-        # 0.5 s (the robot config: 0.2 s).
-        shooter.setdefault('command_timeout', 0.5)
         bridge = {}
         for wheel in ('friction_l', 'friction_r'):
             bridge[f'joints.{wheel}.sim.load_inertia'] = FRICTION_LOAD_INERTIA
             bridge[f'joints.{wheel}.max_velocity'] = FRICTION_MAX_VELOCITY
         bridge['joints.trigger.sim.load_inertia'] = TRIGGER_LOAD_INERTIA
-        self.robot = SimRobot(
+        self.robot = LockstepRobot(
             'standard',
-            plugins=['gpio', 'shooter'],
+            plugins=('gpio', 'shooter'),
             overrides={
                 'can_bridge': bridge,
                 'rm_robot': {f'shooter.{k}': v for k, v in shooter.items()},
@@ -61,20 +56,27 @@ class ShooterRig:
         self.robot_params = self.robot.host_parameters
         self.host = self.robot.host
         self.world = self.robot.world
-        self.robot.subscribe('/shooter_state', ShooterState, keep_history=True)
-        self.robot.subscribe('/gpio_state', GpioState)
-        self._lock = threading.Lock()
+        self.robot.watch('/shooter_state', keep_history=True)
+        self.robot.watch('/gpio_state')
         self.samples: list[tuple[float, dict[str, float], dict[str, float]]] = []
-        self.robot.driver.create_subscription(
-            ActuatorState, '/actuator_states', self._on_joints, 50
-        )
+        self.robot.on_tick(self._sample_joints)
         self.command: ShootCmd | None = None
 
-    def _on_joints(self, msg: ActuatorState) -> None:
-        position = dict(zip(msg.name, msg.position, strict=True))
-        velocity = dict(zip(msg.name, msg.velocity, strict=True))
-        with self._lock:
-            self.samples.append((time.monotonic(), position, velocity))
+    def _sample_joints(self) -> None:
+        if self.world.time_ns % SAMPLE_NS:
+            return
+        joints = {n: self.robot.joint(n) for n in ('friction_l', 'friction_r', 'trigger')}
+        position = {n: j['position'] for n, j in joints.items()}
+        velocity = {n: j['velocity'] for n, j in joints.items()}
+        self.samples.append((self.now(), position, velocity))
+
+    def now(self) -> float:
+        """Sim time [s]."""
+        return self.robot.t
+
+    def wait_until(self, predicate: Any, timeout: float = WAIT) -> bool:
+        """Step the robot until predicate() holds, for at most timeout [s] of sim time."""
+        return self.robot.wait_until(predicate, timeout)
 
     # -- commands and states ------------------------------------------------------------------
 
@@ -139,9 +141,8 @@ class ShooterRig:
         )
 
     def trigger_positions_since(self, t0: float) -> list[float]:
-        """Trigger joint positions on /actuator_states received since monotonic time t0."""
-        with self._lock:
-            return [p['trigger'] for t, p, _ in self.samples if t >= t0 and 'trigger' in p]
+        """Trigger joint positions sampled since sim time t0 [s]."""
+        return [p['trigger'] for t, p, _ in self.samples if t >= t0]
 
     def close(self) -> None:
         self.robot.close()
@@ -163,13 +164,13 @@ def rig():
 def ready(r: ShooterRig, speed: float = 15.0) -> None:
     """Command READY and wait for it (wheels at speed, a ball at the switch)."""
     r.send(ShootCmd.READY, speed=speed)
-    assert wait_until(lambda: r.in_state(ShooterState.READY), WAIT), r.state()
+    assert r.wait_until(lambda: r.in_state(ShooterState.READY), WAIT), r.state()
     settle(r)
 
 
 def settle(r: ShooterRig) -> None:
     """Wait until the trigger has come to rest (after a feed or a step)."""
-    assert wait_until(lambda: abs(r.trigger_speed()) < 0.01, WAIT), r.trigger_speed()
+    assert r.wait_until(lambda: abs(r.trigger_speed()) < 0.01, WAIT), r.trigger_speed()
 
 
 # -- tests ------------------------------------------------------------------------------------
@@ -179,7 +180,7 @@ def test_both_plugins_load_by_name_and_the_shooter_starts_passive(rig):
     r = rig()
     assert type(r.host.plugin('shooter')).__module__ == 'rm_plugins.shooter.plugin'
     assert type(r.host.plugin('gpio')).__module__ == 'rm_plugins.gpio.plugin'
-    assert wait_until(lambda: r.state() is not None and r.switch is not None, WAIT)
+    assert r.wait_until(lambda: r.state() is not None and r.switch is not None, WAIT)
     assert r.state().state == ShooterState.PASSIVE
     assert 'no command' in r.state().reason
 
@@ -190,10 +191,10 @@ def test_when_ready_expect_wheels_at_the_looked_up_speed_and_a_ball_fed(rig):
     # 15 m/s -> 470 rad/s from the table; the sim's wheels within the 25 rad/s tolerance.
     expected = r.lookup(15.0)
     assert expected == 470.0
-    assert wait_until(lambda: all(abs(w - expected) < 25.0 for w in r.wheel_speeds()), WAIT)
+    assert r.wait_until(lambda: all(abs(w - expected) < 25.0 for w in r.wheel_speeds()), WAIT)
     print('wheel speeds', r.wheel_speeds(), 'expected', expected)
     # The ball: the switch reports it, and physically the trigger's phase is in the window.
-    assert wait_until(lambda: r.switch == 1.0, WAIT)
+    assert r.wait_until(lambda: r.switch == 1.0, WAIT)
     phase = r.trigger_angle() % SLOT
     low, high = 0.15, 0.55  # gpio.pins.ball_switch.sim_window
     print('trigger phase in READY', phase)
@@ -211,10 +212,10 @@ def test_when_push_5_at_5_hz_expect_5_slot_steps_and_5_shots_in_about_a_second(r
     ready(r)
     angle0 = r.trigger_angle()
     r.send(ShootCmd.PUSH, speed=15.0, hz=5.0, num=5, burst_id=1)
-    t0 = time.monotonic()
-    assert wait_until(lambda: shots(r) >= 5, WAIT), r.state()
-    elapsed = time.monotonic() - t0
-    assert wait_until(lambda: r.in_state(ShooterState.READY), WAIT), r.state()
+    t0 = r.now()
+    assert r.wait_until(lambda: shots(r) >= 5, WAIT), r.state()
+    elapsed = r.now() - t0
+    assert r.wait_until(lambda: r.in_state(ShooterState.READY), WAIT), r.state()
     settle(r)
     advanced = r.trigger_angle() - angle0
     print(f'5 shots in {elapsed:.3f} s, trigger advanced {advanced:.4f} rad')
@@ -225,43 +226,41 @@ def test_when_push_5_at_5_hz_expect_5_slot_steps_and_5_shots_in_about_a_second(r
     assert shots(r) == 5 and r.state().burst_remaining == 0
     # Steps begin 1/hz = 0.2 s apart: at 0, 0.2, .., 0.8 s; each moves its slot at
     # step_speed 12 rad/s (0.785 / 12 = 65 ms) and settles within step_tolerance, so the
-    # fifth shot counts ~0.9 s after the command (measured 0.92-1.12 s). Accepted: 0.8 s
-    # (never faster than the rate) to 2.0 s (command latency and CPU steal on a shared
-    # 2-core VM, where ticks of all five threads stall for tens of ms).
-    assert 0.8 <= elapsed <= 2.0
+    # fifth shot counts ~0.9 s after the command, later where a step waits for its ball
+    # at the switch. Accepted: 0.8 s (never faster than the rate) to 1.2 s.
+    assert 0.8 <= elapsed <= 1.2
 
 
 def test_when_the_same_push_command_repeats_expect_no_second_burst(rig):
     r = rig()
     ready(r)
     r.send(ShootCmd.PUSH, speed=15.0, hz=10.0, num=2, burst_id=7)
-    assert wait_until(lambda: shots(r) >= 2 and r.in_state(ShooterState.READY), WAIT)
+    assert r.wait_until(lambda: shots(r) >= 2 and r.in_state(ShooterState.READY), WAIT)
     settle(r)
     angle = r.trigger_angle()
     mark = r.mark()
     # The same command keeps coming at 50 Hz; over the next 25 states (0.5 s at 50 Hz) not
     # one more shot, and the trigger holds (it may still creep back onto its hold against
     # friction: up to 0.19 rad seen after an overshoot; another step would be 0.785 rad).
-    assert wait_until(lambda: r.mark() >= mark + 25, WAIT)
+    assert r.wait_until(lambda: r.mark() >= mark + 25, WAIT)
     assert {s.shots_fired for s in r.states_since(mark)} == {2}
     assert abs(r.trigger_angle() - angle) < 0.3
     # A new burst_id fires again.
     r.send(ShootCmd.PUSH, speed=15.0, hz=10.0, num=1, burst_id=8)
-    assert wait_until(lambda: shots(r) >= 3, WAIT)
+    assert r.wait_until(lambda: shots(r) >= 3, WAIT)
 
 
 def test_when_push_from_passive_expect_no_trigger_motion_before_the_wheels_are_at_speed(rig):
     r = rig()
-    assert wait_until(lambda: r.state() is not None, WAIT)
-    t0 = time.monotonic()
+    assert r.wait_until(lambda: r.state() is not None, WAIT)
+    t0 = r.now()
     start = r.trigger_angle()
     r.send(ShootCmd.PUSH, speed=30.0, hz=5.0, num=2, burst_id=1)
-    assert wait_until(lambda: shots(r) >= 2, WAIT), r.state()
+    assert r.wait_until(lambda: shots(r) >= 2, WAIT), r.state()
     # The wheels' target at 30 m/s: 780 rad/s; find when both were first within 25 rad/s
-    # (from /actuator_states, as the plugin sees them) and check the trigger before that.
+    # (the joints as the plugin sees them) and check the trigger before that.
     target = r.lookup(30.0)
-    with r._lock:
-        samples = [(t, p, v) for t, p, v in r.samples if t >= t0]
+    samples = [(t, p, v) for t, p, v in r.samples if t >= t0]
     at_speed = next(
         t
         for t, _, v in samples
@@ -279,16 +278,16 @@ def test_when_the_trigger_jams_expect_block_reverse_feed_and_the_burst_completed
     r = rig()
     ready(r)
     r.send(ShootCmd.PUSH, speed=15.0, hz=5.0, num=5, burst_id=1)
-    assert wait_until(lambda: shots(r) >= 1, WAIT)
+    assert r.wait_until(lambda: shots(r) >= 1, WAIT)
     mark = r.mark()
     r.world.inject('trigger', Fault.jam())  # locked rotor: the next step stalls
-    assert wait_until(
+    assert r.wait_until(
         lambda: any(s.state == ShooterState.BLOCK for s in r.states_since(mark)), WAIT
     ), r.state()
     jammed_at = r.trigger_angle()
-    t_block = time.monotonic()
+    t_block = r.now()
     r.world.clear_faults('trigger', FaultKind.JAM)  # the ball comes free
-    assert wait_until(lambda: shots(r) >= 5 and r.in_state(ShooterState.READY), WAIT), r.state()
+    assert r.wait_until(lambda: shots(r) >= 5 and r.in_state(ShooterState.READY), WAIT), r.state()
     seen = [s.state for s in r.states_since(mark)]
     block = seen.index(ShooterState.BLOCK)
     assert ShooterState.FEED in seen[block:]  # BLOCK -> FEED -> READY/PUSH
@@ -305,7 +304,7 @@ def test_when_the_trigger_stays_jammed_expect_passive_with_a_fault_until_a_new_b
     r.world.inject('trigger', Fault.jam())
     r.send(ShootCmd.PUSH, speed=15.0, hz=5.0, num=3, burst_id=1)
     # jam_retries = 3 recoveries, the 4th jam in a row gives up.
-    assert wait_until(lambda: r.state().fault, WAIT), r.state()
+    assert r.wait_until(lambda: r.state().fault, WAIT), r.state()
     state = r.state()
     print('fault:', state.reason)
     assert state.state == ShooterState.PASSIVE
@@ -313,12 +312,12 @@ def test_when_the_trigger_stays_jammed_expect_passive_with_a_fault_until_a_new_b
     assert 'fault' in state.reason
     # Repeating the command keeps the fault (25 states, 0.5 s).
     mark = r.mark()
-    assert wait_until(lambda: r.mark() >= mark + 25, WAIT)
+    assert r.wait_until(lambda: r.mark() >= mark + 25, WAIT)
     assert all(s.fault and s.state == ShooterState.PASSIVE for s in r.states_since(mark))
     # A new burst clears it and, with the trigger free again, fires.
     r.world.clear_faults('trigger', FaultKind.JAM)
     r.send(ShootCmd.PUSH, speed=15.0, hz=5.0, num=3, burst_id=2)
-    assert wait_until(lambda: shots(r) >= 3, WAIT), r.state()
+    assert r.wait_until(lambda: shots(r) >= 3, WAIT), r.state()
     assert not r.state().fault
 
 
@@ -327,24 +326,24 @@ def test_when_the_command_stops_expect_passive_and_the_wheels_coasting(rig):
     ready(r)
     r.stop_commands()
     # command_timeout 0.2 s: PASSIVE, joints off; the wheels coast down on their own friction.
-    assert wait_until(lambda: r.in_state(ShooterState.PASSIVE), WAIT)
+    assert r.wait_until(lambda: r.in_state(ShooterState.PASSIVE), WAIT)
     assert 'no command' in r.state().reason
     speed = min(r.wheel_speeds())
-    assert wait_until(lambda: max(r.wheel_speeds()) < 0.8 * speed, WAIT)
+    assert r.wait_until(lambda: max(r.wheel_speeds()) < 0.8 * speed, WAIT)
 
 
 def test_when_the_command_returns_after_a_dropout_expect_the_burst_not_fired_again(rig):
     r = rig()
     ready(r)
     r.send(ShootCmd.PUSH, speed=15.0, hz=10.0, num=2, burst_id=3)
-    assert wait_until(lambda: shots(r) >= 2, WAIT)
+    assert r.wait_until(lambda: shots(r) >= 2, WAIT)
     command = r.command
     r.stop_commands()
-    assert wait_until(lambda: r.in_state(ShooterState.PASSIVE), WAIT)
+    assert r.wait_until(lambda: r.in_state(ShooterState.PASSIVE), WAIT)
     r.resend(command)  # the same PUSH, burst 3, comes back
-    assert wait_until(lambda: r.in_state(ShooterState.READY), WAIT), r.state()
+    assert r.wait_until(lambda: r.in_state(ShooterState.READY), WAIT), r.state()
     mark = r.mark()
-    assert wait_until(lambda: r.mark() >= mark + 25, WAIT)
+    assert r.wait_until(lambda: r.mark() >= mark + 25, WAIT)
     assert {s.shots_fired for s in r.states_since(mark)} == {2}
 
 
@@ -360,8 +359,10 @@ def test_when_the_command_returns_after_a_dropout_expect_the_burst_not_fired_aga
 def test_when_the_command_is_invalid_expect_it_rejected_and_nothing_moving(rig, fields, reason):
     r = rig()
     r.resend(ShootCmd(**fields))
-    assert wait_until(lambda: r.state() is not None and reason in r.state().reason, WAIT), r.state()
+    assert r.wait_until(
+        lambda: r.state() is not None and reason in r.state().reason, WAIT
+    ), r.state()
     assert r.state().state == ShooterState.PASSIVE
     mark = r.mark()
-    assert wait_until(lambda: r.mark() >= mark + 10, WAIT)
+    assert r.wait_until(lambda: r.mark() >= mark + 10, WAIT)
     assert max(r.wheel_speeds()) < 1.0 and abs(r.trigger_angle()) < 0.01
