@@ -6,45 +6,23 @@
 
 What happens:
 
-1. A SimRobot (support.robot) is built from the scenario's robot (config, plugins,
-   overrides); the harness subscribes to the outputs the scenario records (of OUTPUTS)
-   and waits until every loaded plugin reports its state (READY_TOPICS) with little
-   delay (READY_LATENCY_S: the robot's one executor has no backlog) and every command
-   topic is matched both ways.
-2. The bag (test/data/<scenario>/ unless given) is played with rmcli's own playback
-   (``rm_bringup.cli.bag_play.play``: the bag's order and relative timing, absolute
-   deadlines), into publishers with the QoS the bag recorded (rmcli's rule). Three things
-   differ from ``rmcli bag play``, all in what the harness hands play() as publishers:
-
-   - **Stamps are rewritten.** The bags carry header stamps relative to the bag start
-     (0 s at the first message); the plugins time their command watchdogs from the stamp
-     and reject stale commands, so every std_msgs/Header in a command is stamped with the
-     robot's ROS clock (now) at the moment it is published, as a live commander's would be.
-     Played with plain ``rmcli bag play`` into a live robot, these bags' commands are
-     rejected as stale.
-   - **Pacing follows the simulator.** A message goes out at its bag time on the wall
-     clock (play()) *and* not before the simulated world has advanced by as much since
-     playback started. Under CPU starvation the simulator lets its time slip behind the
-     wall clock (rm_base.sim.SimWorld); paced on the wall clock alone, a leg commanded for
-     1 s would move the robot for only part of that, by an amount that changes with the
-     load. With a quiet machine both clocks agree and the pacing is rmcli's.
-   - **The stream stays live.** While the sim holds a message back, a live commander
-     would still be sending its current command at its rate; the plugins' watchdogs run
-     on the wall clock and would otherwise see the slowed stream as a dropout. So while
-     a topic's stream continues in the bag (its next message follows within 1.5 of its
-     periods), its last message is sent again, freshly stamped, whenever REFRESH_PERIODS
-     of its periods of wall time pass without one (``Sent.refresh``): often enough for
-     any watchdog (60 ms at 50 Hz, a quarter of the shortest command timeout), rarely
-     enough not to add much work to a machine that is already too slow. Where the bag's
-     stream ends or pauses, nothing is sent: dropouts in the bag reach the robot as is.
-
-3. While playing and for the scenario's ``tail_s`` after it, a sampler thread reads the
-   sim's ground truth every SAMPLE_PERIOD_S (chassis pose and twist, gimbal joint angles)
-   and applies the scenario's faults at their bag times (Jam: lock the motor at its next
+1. A LockstepRobot (support.lockstep) is built from the scenario's robot (config,
+   plugins, overrides): the loop, the plugins and rm_sim stepped together on a simulated
+   clock, so a replay gives the same numbers on every run, whatever the machine's load.
+2. The bag (test/data/<scenario>/ unless given) is read with rmcli's reader
+   (``rm_bringup.cli.bag_io``) and each message is handed to the plugins subscribed to
+   its topic at its bag time on the simulated clock, through the callbacks their
+   subscriptions run. Every std_msgs/Header in a command is stamped with the robot's
+   ROS clock at that moment, as a live commander's would be (the bags carry stamps
+   relative to their start; played with plain ``rmcli bag play`` into a live robot, they
+   would be rejected as stale).
+3. While playing and for the scenario's ``tail_s`` after it, the sim's ground truth is
+   sampled every SAMPLE_PERIOD_S (chassis pose and twist, gimbal joint angles) and the
+   scenario's faults are applied at their bag times (Jam: lock the motor at its next
    drive forward, free it when it pushes back for a while).
 4. The result holds every output message and body sample against the *replay clock*
    (simulated time since playback start, in seconds: the bag's own time axis), plus the
-   commands as they were published. With ``output`` everything is also written to a
+   commands as they were handed over. With ``output`` everything is also written to a
    rosbag2 (MCAP) bag -- the commands, the outputs, the sim body as nav_msgs/Odometry on
    /sim/body and its gimbal joints as sensor_msgs/JointState on /sim/gimbal, stamped with
    the receive (sample) time -- so ``rmcli bag plot`` can draw it.
@@ -52,9 +30,7 @@ What happens:
 
 from __future__ import annotations
 
-import itertools
 import math
-import threading
 import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
@@ -63,14 +39,7 @@ from typing import Any
 
 from replay.scenarios import DATA_DIR, Jam, Scenario, headers
 
-SAMPLE_PERIOD_S = 0.01  # [s] ground-truth sampling and fault checks (wall clock)
-REFRESH_PERIODS = 3  # a held-back stream is refreshed after this many of its periods
-READY_TIMEOUT_S = 20.0  # [s] for the plugins' first states and the subscriptions to match
-# The robot is up once its state messages reach us within this of their stamps: all its
-# nodes share one executor, which can start with a backlog of the start-up's messages
-# (commands delivered 0.8 s late, and so rejected as stale, were measured without this).
-READY_LATENCY_S = 0.05  # [s]
-RECORD_DEPTH = 50  # messages a recording subscription holds while the executor is busy
+SAMPLE_PERIOD_S = 0.01  # [s] ground-truth sampling and fault checks (simulated time)
 SIM_BODY_TOPIC = '/sim/body'
 SIM_GIMBAL_TOPIC = '/sim/gimbal'
 
@@ -83,19 +52,10 @@ OUTPUTS: tuple[tuple[str, str], ...] = (
     ('/actuator_states', 'rm_msgs/msg/ActuatorState'),
     ('/imu', 'sensor_msgs/msg/Imu'),
 )
-# A plugin is up once it has published here (plugins without one are not waited for; the
-# imu plugin's /imu is not watched: 400 messages/s for the one executor, and the gimbal
-# reports on /gimbal_state whether it has IMU data).
-READY_TOPICS: dict[str, tuple[str, str]] = {
-    'chassis': ('/chassis_state', 'rm_msgs/msg/ChassisState'),
-    'gimbal': ('/gimbal_state', 'rm_msgs/msg/GimbalState'),
-    'shooter': ('/shooter_state', 'rm_msgs/msg/ShooterState'),
-    'gpio': ('/gpio_state', 'rm_msgs/msg/GpioState'),
-}
 
 
 class ReplayError(RuntimeError):
-    """The replay could not run as the scenario says (robot not ready, bag mismatch, stall)."""
+    """The replay could not run as the scenario says (a topic nobody subscribes)."""
 
 
 @dataclass(frozen=True)
@@ -103,7 +63,6 @@ class Received:
     """One message the robot published, with when it arrived."""
 
     t: float  # [s] replay clock (sim time since playback start)
-    wall: float  # [s] wall clock since playback start
     stamp_ns: int  # ROS time of arrival [ns]
     msg: Any
 
@@ -113,11 +72,9 @@ class Sent:
     """One command as published (with its rewritten stamps)."""
 
     t: float  # [s] replay clock
-    wall: float  # [s] wall clock since playback start
     bag_t: float  # [s] its time in the bag
     stamp_ns: int  # ROS time it was published with [ns]
     msg: Any
-    refresh: bool = False  # sent again to keep the stream live (module docstring)
 
 
 @dataclass(frozen=True)
@@ -125,7 +82,6 @@ class BodySample:
     """Sim ground truth: chassis pose in the world, its twist, the gimbal joints."""
 
     t: float  # [s] replay clock
-    wall: float  # [s] wall clock since playback start
     stamp_ns: int  # ROS time of the sample [ns]
     x: float  # [m]
     y: float  # [m]
@@ -161,10 +117,9 @@ class ReplayResult:
     sent: dict[str, list[Sent]]
     body: list[BodySample]
     faults: list[FaultRecord]
-    played: int  # messages of the bag published (refreshes not counted)
+    played: int  # messages of the bag handed over
     duration_s: float  # replay clock at the end of the recording [s]
     wall_s: float  # wall time from playback start to the end of the recording [s]
-    sim_overruns: int  # times the simulator let its time slip (CPU starved)
     output: Path | None = None
     parameters: dict[str, dict[str, Any]] = field(default_factory=dict)
 
@@ -192,33 +147,15 @@ class ReplayResult:
         return [s for s in self.body if t0 <= s.t <= t1]
 
     def last_sent(self, topic: str) -> Sent:
-        """The last command published on topic (a bag message or a refresh of one)."""
+        """The last command handed over on topic."""
         return self.sent[topic][-1]
 
-    @property
-    def refreshed(self) -> int:
-        """Commands sent again to keep a stream live while the sim lagged."""
-        return sum(1 for log in self.sent.values() for s in log if s.refresh)
-
-    @property
-    def stalls(self) -> list[float]:
-        """Wall-clock gaps between the harness's own samples longer than 0.1 s [s].
-
-        The sampler wakes every 10 ms; longer gaps mean this process got no CPU (or no
-        GIL) for that long, and so, most likely, did the plugins and the bridge.
-        """
-        return [b.wall - a.wall for a, b in itertools.pairwise(self.body) if b.wall - a.wall > 0.1]
-
     def summary(self) -> str:
-        """One line: played, durations, sim slip, stalls."""
+        """One line: played, durations, what was received."""
         counts = ', '.join(f'{t} {len(r)}' for t, r in self.received.items() if r)
-        stalls = self.stalls
-        worst = f', longest {max(stalls):.2f} s' if stalls else ''
         return (
-            f'{self.scenario.name}: played {self.played} messages (+{self.refreshed} '
-            f'refreshed); {self.duration_s:.2f} s sim in {self.wall_s:.2f} s wall '
-            f'({self.sim_overruns} sim overruns; {len(stalls)} stalls > 0.1 s{worst}); '
-            f'received {counts}'
+            f'{self.scenario.name}: played {self.played} messages; {self.duration_s:.2f} s '
+            f'sim in {self.wall_s:.2f} s wall; received {counts}'
         )
 
 
@@ -227,123 +164,8 @@ def bag_path(scenario: Scenario) -> Path:
     return DATA_DIR / scenario.name
 
 
-class _Clock:
-    """The replay clock (sim time since start) and the wall clock since start."""
-
-    def __init__(self, world: Any) -> None:
-        self._world = world
-        self._sim0_ns = world.time_ns
-        self._wall0 = time.monotonic()
-
-    def sim_elapsed_ns(self) -> int:
-        return self._world.time_ns - self._sim0_ns
-
-    def t(self) -> float:
-        return self.sim_elapsed_ns() * 1e-9
-
-    def wall(self) -> float:
-        return time.monotonic() - self._wall0
-
-
-class _Pacer:
-    """Holds each message back until the simulated world has reached its bag time.
-
-    play() publishes in the bag's order; the pacer knows that order (read from the same
-    bag beforehand) and checks that each publish is the one it expects.
-    """
-
-    def __init__(self, schedule: list[tuple[str, int]], clock: _Clock, stop: threading.Event):
-        self._schedule = schedule
-        self._index = 0
-        self._clock = clock
-        self._stop = stop
-
-    def wait_turn(self, topic: str) -> int | None:
-        """Wait for the next message's time on the replay clock; return its offset [ns].
-
-        Returns None if the replay was stopped meanwhile.
-        """
-        if self._index >= len(self._schedule):
-            raise ReplayError(f'play() published more messages than the bag has ({topic})')
-        expected, offset_ns = self._schedule[self._index]
-        if expected != topic:
-            raise ReplayError(f'message {self._index}: play() sent {topic}, the bag has {expected}')
-        self._index += 1
-        while not self._stop.is_set():
-            remaining_ns = offset_ns - self._clock.sim_elapsed_ns()
-            if remaining_ns <= 0:
-                return offset_ns
-            # The sim never runs ahead of the wall clock, so this never oversleeps.
-            self._stop.wait(max(remaining_ns * 1e-9, 0.0005))
-        return None
-
-
-class _CommandPublisher:
-    """What play() publishes through: paced by the sim, restamped, kept live, logged."""
-
-    def __init__(self, topic, publisher, msg_class, offsets_ns, pacer, clock, ros_clock, log):
-        self._topic = topic
-        self._publisher = publisher
-        self._msg_class = msg_class
-        self._offsets_ns = offsets_ns  # bag offsets of this topic's messages
-        steps = [b - a for a, b in itertools.pairwise(offsets_ns) if b > a]
-        self._period_ns = min(steps) if steps else None
-        self._pacer = pacer
-        self._clock = clock
-        self._ros_clock = ros_clock
-        self._log = log
-        self._lock = threading.Lock()
-        self._count = 0
-        self._last: tuple[bytes, int] | None = None  # raw CDR and bag offset [ns]
-        self._last_wall = 0.0
-        self._continues = False
-
-    def publish(self, raw: bytes) -> None:
-        offset_ns = self._pacer.wait_turn(self._topic)
-        if offset_ns is None:
-            return
-        with self._lock:
-            index, self._count = self._count, self._count + 1
-            following = self._offsets_ns[index + 1 : index + 2]
-            self._continues = (
-                bool(following)
-                and self._period_ns is not None
-                and (following[0] - offset_ns <= 1.5 * self._period_ns)
-            )
-            self._send(bytes(raw), offset_ns, refresh=False)
-
-    def refresh(self) -> None:
-        """Send the last message again if the stream continues and REFRESH_PERIODS passed."""
-        with self._lock:
-            if self._last is None or not self._continues:
-                return
-            if self._clock.wall() - self._last_wall < REFRESH_PERIODS * self._period_ns * 1e-9:
-                return
-            self._send(*self._last, refresh=True)
-
-    def _send(self, raw: bytes, offset_ns: int, *, refresh: bool) -> None:
-        from rclpy.serialization import deserialize_message
-
-        msg = deserialize_message(raw, self._msg_class)
-        now = self._ros_clock.now()
-        for header in headers(msg):
-            header.stamp = now.to_msg()
-        self._publisher.publish(msg)
-        self._last, self._last_wall = (raw, offset_ns), self._clock.wall()
-        self._log.append(
-            Sent(
-                self._clock.t(),
-                self._last_wall,
-                offset_ns * 1e-9,
-                now.nanoseconds,
-                msg,
-                refresh,
-            )
-        )
-
-
 class _Faults:
-    """Applies a scenario's faults at their bag times (called from the sampler)."""
+    """Applies a scenario's faults at their bag times (called every sample)."""
 
     def __init__(self, world: Any, faults: tuple[Jam, ...]) -> None:
         self._world = world
@@ -385,74 +207,14 @@ class _Faults:
 
     def _motor(self, motor: str) -> tuple[float, float]:
         """Torque [N*m] and speed [rad/s] of a simulated motor at its output shaft."""
-        with self._world.lock:
-            model = self._world.motor(motor).model
-            return model.torque, model.velocity
+        model = self._world.motor(motor).model
+        return model.torque, model.velocity
 
 
-def _sample_body(world: Any, clock: _Clock, ros_clock: Any) -> BodySample:
-    with world.lock:
-        b = world.body
-        vx, vy, wz = b.twist
-        values = (b.x, b.y, b.yaw, vx, vy, wz, b.gimbal_yaw, b.gimbal_pitch)
-    return BodySample(clock.t(), clock.wall(), ros_clock.now().nanoseconds, *values)
-
-
-class _Recorder:
-    """Subscriptions on the robot's driver node that keep every output message."""
-
-    def __init__(
-        self, robot: Any, outputs: tuple[tuple[str, str], ...], watched: list[tuple[str, str]]
-    ) -> None:
-        """Record outputs (after start()); of watched topics only note the first message."""
-        from rclpy.qos import QoSProfile, ReliabilityPolicy
-        from rm_bringup.cli.interfaces import get_message_class
-
-        self._lock = threading.Lock()
-        self._clock: _Clock | None = None
-        self._ros_clock = robot.driver.get_clock()
-        self.received: dict[str, list[Received]] = {topic: [] for topic, _ in outputs}
-        self.first_seen: set[str] = set()
-        self.latency_s: dict[str, float] = {}  # the latest message's receive time - stamp
-        # Best effort matches every publisher (reliable or not); a bounded depth, so that
-        # a busy executor drops old samples here rather than queueing work for later.
-        qos = QoSProfile(depth=RECORD_DEPTH, reliability=ReliabilityPolicy.BEST_EFFORT)
-        self._subscriptions = [
-            robot.driver.create_subscription(
-                get_message_class(msgtype), topic, self._callback(topic), qos
-            )
-            for topic, msgtype in (*outputs, *watched)
-        ]
-
-    def _callback(self, topic: str) -> Callable[[Any], None]:
-        def store(msg: Any) -> None:
-            stamp_ns = self._ros_clock.now().nanoseconds
-            header = getattr(msg, 'header', None)
-            with self._lock:
-                self.first_seen.add(topic)
-                if header is not None:
-                    sent_ns = header.stamp.sec * 1_000_000_000 + header.stamp.nanosec
-                    self.latency_s[topic] = (stamp_ns - sent_ns) * 1e-9
-                if self._clock is not None and topic in self.received:
-                    clock = self._clock
-                    self.received[topic].append(Received(clock.t(), clock.wall(), stamp_ns, msg))
-
-        return store
-
-    def keeping_up(self, topics: list[str]) -> bool:
-        """Whether every topic has arrived, its latest message within READY_LATENCY_S."""
-        with self._lock:
-            return all(self.latency_s.get(topic, math.inf) < READY_LATENCY_S for topic in topics)
-
-    def start(self, clock: _Clock) -> None:
-        """Record from now on."""
-        with self._lock:
-            self._clock = clock
-
-    def stop(self) -> dict[str, list[Received]]:
-        with self._lock:
-            self._clock = None
-            return {topic: list(samples) for topic, samples in self.received.items()}
+def _sample_body(world: Any, t: float, stamp_ns: int) -> BodySample:
+    b = world.body
+    vx, vy, wz = b.twist
+    return BodySample(t, stamp_ns, b.x, b.y, b.yaw, vx, vy, wz, b.gimbal_yaw, b.gimbal_pitch)
 
 
 def replay(
@@ -461,163 +223,107 @@ def replay(
     bag: Path | None = None,
     output: Path | None = None,
     record: tuple[str, ...] | None = None,
-    timeout_factor: float = 6.0,
 ) -> ReplayResult:
-    """Play a scenario's bag into a fresh SimRobot and record the outcome (module docstring).
+    """Play a scenario's bag into a fresh LockstepRobot and record the outcome (module doc).
 
     Args:
         scenario: what to build and do (robot, faults, tail).
         bag: the command bag (default: test/data/<scenario.name>).
         output: write commands, outputs and the sim body into a new bag here.
         record: the robot's output topics to record (OUTPUTS); default the scenario's.
-        timeout_factor: give up when the replay takes this many times the scenario's
-            length of wall time (a simulator that stopped).
 
     Raises:
-        ReplayError: the robot did not come up, the bag and the schedule disagree, or
-            the replay took too long.
+        ReplayError: an unknown output, or a bag topic no plugin subscribes.
     """
+    from rclpy.serialization import deserialize_message
     from rm_bringup.cli.bag_io import open_bag, read_messages
-    from rm_bringup.cli.bag_play import PlayOptions, play
     from rm_bringup.cli.interfaces import get_message_class
-    from rm_bringup.cli.qos import offer_for_recorded
-    from support.robot import SimRobot
+    from support.lockstep import LockstepRobot
 
     bag = bag_path(scenario) if bag is None else Path(bag)
     setup = scenario.robot
-    with (
-        SimRobot(setup.config, plugins=list(setup.plugins), overrides=setup.overrides) as robot,
-        open_bag(bag) as reader,
-    ):
-        ready_topics = [READY_TOPICS[p] for p in setup.plugins if p in READY_TOPICS]
-        ready = [topic for topic, _ in ready_topics]
-        types = dict(OUTPUTS)
-        topics = scenario.record if record is None else record
-        unknown = sorted(set(topics) - set(types))
-        if unknown:
-            raise ReplayError(f'cannot record {unknown}: the outputs are {sorted(types)}')
-        outputs = tuple((topic, types[topic]) for topic in topics)
-        watched = [(t, msgtype) for t, msgtype in ready_topics if t not in topics]
-        recorder = _Recorder(robot, outputs, watched)
-        connections = list(reader.connections)
-        publishers = {}
-        for connection in connections:
-            offered = list(connection.ext.offered_qos_profiles)
-            publishers[connection.topic] = robot.driver.create_publisher(
-                get_message_class(connection.msgtype),
-                connection.topic,
-                offer_for_recorded(offered),
-            )
-        # Matched both ways: our publisher sees the robot's subscription, and that
-        # subscription sees our publisher. A reliable reader drops what a writer sends
-        # before the reader has matched it, and under CPU starvation the two sides of
-        # discovery can be a second apart (the first commands were lost that way).
-        readers = [s for s in robot.host.subscriptions if s.topic_name in publishers]
-
-        def unmatched() -> list[str]:
-            return sorted(
-                topic
-                for topic, publisher in publishers.items()
-                if publisher.get_subscription_count() == 0
-                or not any(s.get_publisher_count() > 0 for s in readers if s.topic_name == topic)
-            )
-
-        if not robot.wait_until(
-            lambda: recorder.keeping_up(ready) and not unmatched(), READY_TIMEOUT_S
-        ):
-            missing = sorted(set(ready) - recorder.first_seen)
-            raise ReplayError(
-                f'{scenario.name}: robot not ready after {READY_TIMEOUT_S} s '
-                f'(no message on {missing}, latency {recorder.latency_s} s, '
-                f'not matched both ways: {unmatched()})'
-            )
-
+    topics = scenario.record if record is None else record
+    unknown = sorted(set(topics) - {topic for topic, _ in OUTPUTS})
+    if unknown:
+        raise ReplayError(f'cannot record {unknown}: the outputs are {sorted(dict(OUTPUTS))}')
+    with open_bag(bag) as reader:
+        classes = {c.topic: get_message_class(c.msgtype) for c in reader.connections}
         start_ns = reader.start_time
         schedule = [
-            (c.topic, stamp - start_ns)
-            for c, stamp, _ in read_messages(reader, bag, connections, start=start_ns)
+            (stamp - start_ns, c.topic, deserialize_message(raw, classes[c.topic]))
+            for c, stamp, raw in read_messages(reader, bag, list(reader.connections),
+                                               start=start_ns)
         ]
-        stop = threading.Event()
+    wall0 = time.monotonic()
+    with LockstepRobot(setup.config, plugins=tuple(setup.plugins),
+                       overrides=setup.overrides) as robot:
         world = robot.world
-        clock = _Clock(world)
-        overruns0 = world.overruns
-        ros_clock = robot.driver.get_clock()
-        pacer = _Pacer(schedule, clock, stop)
-        sent: dict[str, list[Sent]] = {topic: [] for topic in publishers}
-        adapters = {
-            topic: _CommandPublisher(
-                topic,
-                publisher,
-                get_message_class(next(c.msgtype for c in connections if c.topic == topic)),
-                [offset for t, offset in schedule if t == topic],
-                pacer,
-                clock,
-                ros_clock,
-                sent[topic],
+        received: dict[str, list[Received]] = {topic: [] for topic in topics}
+        t0_ns = world.time_ns
+
+        def replay_t() -> float:
+            return (world.time_ns - t0_ns) * 1e-9
+
+        for topic in topics:
+            log = received[topic]
+            robot.host.add_local_handler(
+                topic, lambda msg, now_ns, log=log: log.append(Received(replay_t(), now_ns, msg))
             )
-            for topic, publisher in publishers.items()
-        }
+            if topic in ('/actuator_states', '/joint_states'):
+                robot.watch(topic, keep_history=False)
+                robot.on_tick(_forward_bridge_states(robot, topic, log, replay_t))
+        sent: dict[str, list[Sent]] = {topic: [] for topic in classes}
         faults = _Faults(world, scenario.faults)
         body: list[BodySample] = []
-        done = threading.Event()
-        wall_limit = timeout_factor * (scenario.end_s + scenario.tail_s) + READY_TIMEOUT_S
-        timed_out = threading.Event()
-
-        sampler_errors: list[BaseException] = []
-
-        def sample() -> None:
-            try:
-                while not done.is_set():
-                    t = clock.t()
-                    body.append(_sample_body(world, clock, ros_clock))
-                    faults.update(t)
-                    for adapter in adapters.values():
-                        adapter.refresh()
-                    if clock.wall() > wall_limit:
-                        timed_out.set()
-                        break
-                    done.wait(SAMPLE_PERIOD_S)
-            except BaseException as err:  # ends the replay; raised again below
-                sampler_errors.append(err)
-            if not done.is_set():
-                stop.set()
-
-        recorder.start(clock)
-        sampler = threading.Thread(target=sample, name=f'replay-{scenario.name}', daemon=True)
-        sampler.start()
-        try:
-            played = play(reader, bag, connections, adapters, options=PlayOptions(), stop=stop)
-            end_ns = round((scenario.end_s + scenario.tail_s) * 1e9)
-            while not stop.is_set() and clock.sim_elapsed_ns() < end_ns:
-                stop.wait(SAMPLE_PERIOD_S)
-        finally:
-            done.set()
-            sampler.join(timeout=5.0)
-            received = recorder.stop()
-        if sampler_errors:
-            raise ReplayError(f'{scenario.name}: the sampler failed') from sampler_errors[0]
-        if timed_out.is_set():
-            raise ReplayError(
-                f'{scenario.name}: replay still running after {wall_limit:.0f} s wall '
-                f'(replay clock at {clock.t():.2f} s)'
-            )
+        end_ns = round((scenario.end_s + scenario.tail_s) * 1e9)
+        sample_ticks = round(SAMPLE_PERIOD_S * 1e9 / world.period_ns)
+        pending = iter(schedule)
+        upcoming = next(pending, None)
+        while world.time_ns - t0_ns <= end_ns:
+            elapsed_ns = world.time_ns - t0_ns
+            while upcoming is not None and upcoming[0] <= elapsed_ns:
+                offset_ns, topic, msg = upcoming
+                now = robot.host.get_clock().now()
+                for header in headers(msg):
+                    header.stamp = now.to_msg()
+                if robot.host.inject(topic, msg) == 0:
+                    raise ReplayError(f'{scenario.name}: no plugin subscribes {topic}')
+                sent[topic].append(Sent(replay_t(), offset_ns * 1e-9, now.nanoseconds, msg))
+                upcoming = next(pending, None)
+            if robot.ticks % sample_ticks == 0:
+                t = replay_t()
+                body.append(_sample_body(world, t, robot.now_ns))
+                faults.update(t)
+            robot.step()
         result = ReplayResult(
             scenario=scenario,
             received=received,
             sent=sent,
             body=body,
             faults=faults.records,
-            played=sum(1 for log in sent.values() for s in log if not s.refresh),
-            duration_s=clock.t(),
-            wall_s=clock.wall(),
-            sim_overruns=world.overruns - overruns0,
+            played=len(schedule),
+            duration_s=replay_t(),
+            wall_s=time.monotonic() - wall0,
             parameters={'can_bridge': robot.bridge_parameters, 'rm_robot': robot.host_parameters},
         )
-        if played != result.played:
-            raise ReplayError(f'play() reported {played} messages, {result.played} went out')
     if output is not None:
         result.output = write_output_bag(result, Path(output))
     return result
+
+
+def _forward_bridge_states(
+    robot: Any, topic: str, log: list[Received], replay_t: Callable[[], float]
+) -> Callable[[], None]:
+    """A tick hook that records each new message of a bridge state topic."""
+    last: list[Any] = [None]
+
+    def forward() -> None:
+        msg = robot.latest(topic)
+        if msg is not last[0]:
+            last[0] = msg
+            log.append(Received(replay_t(), robot.now_ns, msg))
+
+    return forward
 
 
 def _records(result: ReplayResult, store: Any) -> Iterator[tuple[str, str, int, bytes]]:

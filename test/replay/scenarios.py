@@ -9,14 +9,12 @@ A scenario is what an operator (or a planner) did, written down as data:
   1/rate_hz, header stamps equal to the time since the bag start (the first message is
   at 0 s), each topic offset by a millisecond from the previous one like independent
   publishers. The bags hold commands only.
-- ``robot``: the SimRobot to replay into: robot config, plugins, parameter overrides.
+- ``robot``: the robot to replay into (in lockstep): robot config, plugins, parameter overrides.
 - ``faults``: what the harness does to the simulated world during the replay, at bag time
   (the fault schedule lives here, not in the bag, since no ROS message carries it).
 - ``tail_s``: how long the harness keeps recording after the last command.
 - ``record``: the robot's output topics the harness records (the sim's ground truth is
-  always sampled). Only what the tests need: every subscription is one more callback in
-  the robot's single executor, which under load delivers late to the plugins too (the
-  GYRO replay measured /odom 0.1-1 s late with every output recorded).
+  always sampled); only what the tests need.
 
 Simulated loads: standard_sim.yaml gives the turret, barrel, friction wheels and trigger
 their loads but leaves the wheels with nothing but their rotors, which makes the wheel
@@ -57,42 +55,9 @@ SIM_LOADS: dict[str, dict[str, float]] = {
 }
 
 
-# Room for stalls of the test process. The simulated world runs in the same process as
-# the robot's nodes: when this shared 2-core VM stops the process for 0.1-0.5 s (measured
-# every few seconds under load), the world stops with it (its time slips) while the
-# watchdogs, on the wall clock, see the wheel feedback, joint states and commands go stale
-# and put the mechanism PASSIVE (limp) for a tick -- for a stall the physics never had.
-# On the robot that reaction is right; here it makes the outcome depend on the VM (a
-# square's leg 0.15 m short, a lost aim). So, as test_shooter.py and test_gimbal.py do,
-# the replays give the watchdogs room, except the one a scenario is about (dropout keeps
-# the chassis' command timeout). The watchdogs have tests of their own.
-STALL_ROOM_S = 0.5  # [s]
-STALL_ROOM: dict[str, dict[str, dict[str, float]]] = {
-    'bridge': {'safety.feedback_timeout_s': STALL_ROOM_S, 'safety.command_timeout_s': STALL_ROOM_S},
-    'chassis': {
-        'chassis.command_timeout': STALL_ROOM_S,
-        'chassis.wheel_feedback_timeout': STALL_ROOM_S,
-    },
-    'gimbal': {
-        'gimbal.command_timeout': STALL_ROOM_S,
-        'gimbal.joint_timeout': STALL_ROOM_S,
-        'gimbal.imu_timeout': STALL_ROOM_S,
-    },
-    'shooter': {'shooter.command_timeout': STALL_ROOM_S, 'shooter.joint_timeout': STALL_ROOM_S},
-}
-
-
-def robot_overrides(
-    plugins: tuple[str, ...], *, bridge: Mapping[str, Any] = (), keep: tuple[str, ...] = ()
-) -> dict[str, dict[str, Any]]:
-    """SimRobot overrides: stall room for the bridge and plugins (less ``keep``), + bridge."""
-    robot = {
-        key: value
-        for plugin in plugins
-        for key, value in STALL_ROOM.get(plugin, {}).items()
-        if key not in keep
-    }
-    return {'can_bridge': {**STALL_ROOM['bridge'], **dict(bridge)}, 'rm_robot': robot}
+def robot_overrides(bridge: Mapping[str, Any] = ()) -> dict[str, dict[str, Any]]:
+    """LockstepRobot overrides: the bridge's (simulated loads); the plugins as configured."""
+    return {'can_bridge': dict(bridge), 'rm_robot': {}}
 
 
 @dataclass(frozen=True)
@@ -130,7 +95,7 @@ class Jam:
 
 @dataclass(frozen=True)
 class Robot:
-    """The simulated robot a scenario drives (support.robot.SimRobot arguments)."""
+    """The simulated robot a scenario drives (support.lockstep.LockstepRobot arguments)."""
 
     plugins: tuple[str, ...]
     overrides: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
@@ -267,7 +232,7 @@ SQUARE = Scenario(
     name='square',
     description='RAW: 1 m forward, left, back and right at 1 m/s, back at the start',
     robot=Robot(
-        plugins=('chassis',), overrides=robot_overrides(('chassis',), bridge=SIM_LOADS['chassis'])
+        plugins=('chassis',), overrides=robot_overrides(SIM_LOADS['chassis'])
     ),
     commands=(
         *_streams(CHASSIS_CMD, (0.0, SQUARE_END_S, {'mode': 'raw'})),
@@ -301,10 +266,7 @@ GYRO_TRACK = Scenario(
     description='GYRO spin in place for 4.5 s, gimbal TRACK on a point in odom',
     robot=Robot(
         plugins=('imu', 'chassis', 'gimbal'),
-        overrides=robot_overrides(
-            ('chassis', 'gimbal'),
-            bridge={**SIM_LOADS['chassis'], 'sim.imu.rate_hz': GYRO_IMU_RATE},
-        ),
+        overrides=robot_overrides({**SIM_LOADS['chassis'], 'sim.imu.rate_hz': GYRO_IMU_RATE}),
     ),
     commands=(
         *_streams(
@@ -348,7 +310,7 @@ BURST_JAM = Scenario(
     description='READY, PUSH 5 shots at 5 Hz with a trigger jam 0.5 s in, then PASSIVE',
     robot=Robot(
         plugins=('gpio', 'shooter'),
-        overrides=robot_overrides(('gpio', 'shooter')),
+        overrides=robot_overrides(),
     ),
     commands=_streams(
         SHOOT_CMD,
@@ -376,9 +338,7 @@ DROPOUT = Scenario(
     description='RAW 1 m/s forward; all commands stop at 2 s',
     robot=Robot(
         plugins=('chassis',),
-        overrides=robot_overrides(
-            ('chassis',), bridge=SIM_LOADS['chassis'], keep=('chassis.command_timeout',)
-        ),
+        overrides=robot_overrides(SIM_LOADS['chassis']),
     ),
     commands=(
         *_streams(CHASSIS_CMD, (0.0, DROPOUT_AT_S, {'mode': 'raw'})),

@@ -3,8 +3,8 @@
 The robot runs the gpio (simulated ball switch) and shooter plugins of standard.yaml on
 rm_sim. The scenario's fault schedule makes the trigger's first push from 0.5 s into the
 burst on jam: the trigger locks, and frees when it pushes back (the shooter's BLOCK
-reverse), as a wedged ball does (replay.scenarios.Jam). Measured (10 runs, load 2-5):
-5 shots, BLOCK once, the fifth shot 1.2-1.5 s after PUSH, the trigger 4.95-5.11 slots on.
+reverse), as a wedged ball does (replay.scenarios.Jam). Measured (lockstep, the same on
+every run): 5 shots, BLOCK once, the fifth shot 1.27 s after PUSH.
 """
 
 from __future__ import annotations

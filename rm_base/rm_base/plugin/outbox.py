@@ -1,11 +1,12 @@
 """Outbox: messages built in the control loop, published by a thread of the ROS edge.
 
-rclpy's publish serialises the message and hands it to DDS; on the 1 kHz loop thread
-that would put DDS inside the robot (docs/ARCHITECTURE.md, "ROS at the edge"). A plugin's
-publisher is wrapped instead (:meth:`Outbox.wrap`): ``publish(msg)`` appends to a queue and
-wakes the outbox thread, which publishes in order. Appending never blocks. The queue is
-bounded: if the edge falls behind, the oldest messages are dropped and counted (a state
-message is superseded by the next one anyway).
+rclpy's publish hands the message to DDS; on the 1 kHz loop thread that would put DDS
+inside the robot (docs/ARCHITECTURE.md, "ROS at the edge"). A plugin's publisher is
+wrapped instead (:meth:`Outbox.wrap`): ``publish(msg)`` serialises the message (a C call,
+~10 µs: the snapshot, so the plugin may reuse its message object at once), appends the
+bytes to a queue and wakes the outbox thread, which publishes them in order. Appending
+never blocks. The queue is bounded: if the edge falls behind, the oldest messages are
+dropped and counted (a state message is superseded by the next one anyway).
 """
 
 from __future__ import annotations
@@ -15,6 +16,8 @@ import logging
 import threading
 from collections.abc import Callable
 from typing import Any
+
+from rclpy.serialization import deserialize_message, serialize_message
 
 _log = logging.getLogger(__name__)
 
@@ -42,7 +45,7 @@ class _EdgePublisher:
 
 
 class Outbox:
-    """A queue of (publisher, message) and the thread that publishes them.
+    """A queue of (publisher, serialised message) and the thread that publishes them.
 
     Args:
         name: thread name.
@@ -57,8 +60,9 @@ class Outbox:
         self.published = 0
         self.dropped = 0
         self.errors = 0
-        # Lockstep: also hands each message at once to the in-process subscribers of its
-        # topic (``loopback(topic, msg)``), so nothing waits on an executor.
+        # Lockstep: also hands a copy of each message at once to the in-process
+        # subscribers of its topic (``loopback(topic, msg)``), so nothing waits on an
+        # executor.
         self.loopback: Callable[[str, Any], object] | None = None
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
 
@@ -67,13 +71,14 @@ class Outbox:
         return _EdgePublisher(self, publisher)
 
     def put(self, publisher: Any, msg: Any) -> None:
-        """Queue msg for publisher (any thread; never blocks)."""
+        """Queue msg, serialised now, for publisher (any thread; never blocks)."""
+        raw = serialize_message(msg)
         if self.loopback is not None:
-            self.loopback(publisher.topic_name, msg)
+            self.loopback(publisher.topic_name, deserialize_message(raw, type(msg)))
         queue = self._queue
         if len(queue) == queue.maxlen:
             self.dropped += 1
-        queue.append((publisher, msg))
+        queue.append((publisher, raw))
         self._wake.set()
 
     def start(self) -> None:

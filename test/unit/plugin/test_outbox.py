@@ -2,7 +2,9 @@
 
 import threading
 
+from rclpy.serialization import deserialize_message
 from rm_base.plugin.outbox import Outbox
+from std_msgs.msg import UInt32
 from support.ros import wait_until
 
 
@@ -13,8 +15,8 @@ class FakePublisher:
         self.published = []
         self.threads = set()
 
-    def publish(self, msg):
-        self.published.append(msg)
+    def publish(self, raw):
+        self.published.append(deserialize_message(raw, UInt32).data)
         self.threads.add(threading.current_thread().name)
 
 
@@ -25,7 +27,7 @@ def test_messages_are_published_in_order_by_the_outbox_thread():
     box.start()
     try:
         for i in range(100):
-            wrapped.publish(i)
+            wrapped.publish(UInt32(data=i))
         assert wait_until(lambda: len(pub.published) == 100, 5.0)
     finally:
         box.stop()
@@ -33,12 +35,23 @@ def test_messages_are_published_in_order_by_the_outbox_thread():
     assert pub.threads == {'test-publish'}
 
 
+def test_a_message_changed_after_publish_goes_out_as_it_was_published():
+    # Plugins reuse one message object per topic: the outbox keeps a snapshot.
+    box = Outbox()
+    pub = FakePublisher()
+    msg = UInt32(data=1)
+    box.wrap(pub).publish(msg)
+    msg.data = 2
+    box.stop()
+    assert pub.published == [1]
+
+
 def test_stop_publishes_what_is_still_queued():
     box = Outbox()
     pub = FakePublisher()
-    box.wrap(pub).publish('last words')  # never started: stop() flushes
+    box.wrap(pub).publish(UInt32(data=7))  # never started: stop() flushes
     box.stop()
-    assert pub.published == ['last words']
+    assert pub.published == [7]
 
 
 def test_when_the_edge_falls_behind_expect_the_oldest_dropped_and_counted():
@@ -46,7 +59,18 @@ def test_when_the_edge_falls_behind_expect_the_oldest_dropped_and_counted():
     pub = FakePublisher()
     wrapped = box.wrap(pub)
     for i in range(5):
-        wrapped.publish(i)
+        wrapped.publish(UInt32(data=i))
     box.stop()
     assert pub.published == [2, 3, 4]
     assert box.dropped == 2
+
+
+def test_loopback_gets_a_copy_at_once_with_the_topic():
+    box = Outbox()
+    got = []
+    box.loopback = lambda topic, msg: got.append((topic, msg))
+    msg = UInt32(data=5)
+    box.wrap(FakePublisher()).publish(msg)
+    msg.data = 6
+    assert [(topic, m.data) for topic, m in got] == [('/fake', 5)]
+    box.stop()
