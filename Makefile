@@ -13,12 +13,9 @@ all: test
 setup:
 	@scripts/setup.sh
 
-## test: the whole suite (unit, integration, replay, linters); the tests that failed run
-## once more on their own (timing on a loaded 2-core machine); a failure twice fails
+## test: the whole suite (unit, integration, replay, linters), one pass
 test: setup
-	@scripts/with_env.sh python -m pytest $(PYTEST_ARGS) || { \
-	  echo '[test] some tests failed: running only those once more'; \
-	  scripts/with_env.sh python -m pytest --last-failed --last-failed-no-failures none $(PYTEST_ARGS); }
+	@scripts/with_env.sh python -m pytest $(PYTEST_ARGS)
 
 ## run: the standard robot on the simulated CAN bus (ROBOT=hero for the hero)
 run: setup

@@ -20,20 +20,9 @@ from pathlib import Path
 from typing import Any
 
 import can
-import yaml
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG_DIR = ROOT / 'rm_bringup' / 'config'
-_TYPED = {
-    'publish_rate',
-    'diagnostics_rate',
-    'publish_frames',
-    'log_file',
-    'sim',
-    'sim.timing',
-    'sim.seed',
-    'scheduler.rate_hz',
-}
 _channel_ids = itertools.count()
 
 
@@ -42,26 +31,13 @@ def quiet_logs() -> None:
     logging.getLogger('rm_base').setLevel(logging.ERROR)
 
 
-def _flatten(tree: dict[str, Any], prefix: str = '') -> dict[str, Any]:
-    out: dict[str, Any] = {}
-    for key, value in tree.items():
-        name = f'{prefix}{key}'
-        if isinstance(value, dict):
-            out.update(_flatten(value, f'{name}.'))
-        else:
-            out[name] = value
-    return out
-
-
 def standard_hardware() -> dict[str, Any]:
     """The standard robot's CanHardware config dict (standard.yaml + standard_sim.yaml)."""
     from rm_base.bridge.params import settings_from_parameters
+    from rm_base.bridge.sim_process import TYPED, bridge_parameters
 
-    flat: dict[str, Any] = {}
-    for name in ('standard.yaml', 'standard_sim.yaml'):
-        doc = yaml.safe_load((CONFIG_DIR / name).read_text())
-        flat.update(_flatten(doc['can_bridge']['ros__parameters']))
-    typed = {k: v for k, v in flat.items() if k in _TYPED or k.startswith('safety.')}
+    flat = bridge_parameters(CONFIG_DIR / name for name in ('standard.yaml', 'standard_sim.yaml'))
+    typed = {k: v for k, v in flat.items() if k in TYPED}
     settings = settings_from_parameters(typed, {k: v for k, v in flat.items() if k not in typed})
     return dict(settings.hardware)
 

@@ -59,6 +59,28 @@ def make_tap_class():
     return TapBus
 
 
+class _SendTap:
+    """Keeps (t_ns, id, data) of some frames a ManagedBus sends (rm_sim in its process)."""
+
+    def __init__(self, bus: Any, channel: str, ids: set[int]) -> None:
+        self.records: list[tuple[int, int, str]] = []
+        self.channel_id = channel
+        self._bus = bus
+        self._ids = frozenset(ids)
+        send = type(bus).send.__get__(bus)
+
+        def tapped(msg: Any) -> bool:
+            ok = send(msg)
+            if msg.arbitration_id in self._ids:
+                self.records.append((time.monotonic_ns(), msg.arbitration_id, msg.data.hex()))
+            return ok
+
+        bus.send = tapped
+
+    def shutdown(self) -> None:
+        self._bus.__dict__.pop('send', None)
+
+
 class Robot:
     """The robot and its measuring hooks (see the module docstring)."""
 
@@ -70,6 +92,7 @@ class Robot:
         from rm_base.host.node import RobotHost
         from rm_base.ros_env import prepare_ros_process
         from rm_bringup.bringup import parameter_files
+        from rm_bringup.sim_process import SimProcess
 
         from bench.scheduler_timing import TickRecorder
 
@@ -91,8 +114,16 @@ class Robot:
                 }
             )
         )
+        files = [*files, overlay]
+        # As make run lays it out: rm_sim (the motors) in a process of its own, reached
+        # through the rm_sim_socket interface; the two-process layout keeps it in the
+        # bridge's process, as the robot split over DDS did before.
+        self.sim = None
+        if role == 'all':
+            self.sim = SimProcess(files, pathlib.Path(self._tmp) / 'sim')
+            files = [*files, self.sim.bridge_overlay]
         args = ['bench_robot', '--ros-args']
-        for path in [*files, overlay]:
+        for path in files:
             args += ['--params-file', str(path)]
         rclpy.init(args=args, signal_handler_options=SignalHandlerOptions.NO)
         self.rclpy = rclpy
@@ -107,6 +138,7 @@ class Robot:
                 self.executor.add_node(node)
         self.hw = self.bridge.hardware if self.bridge is not None else None
         self.recorder = TickRecorder(self.hw.scheduler) if self.hw is not None else None
+        self._sent_taps: list[Any] = []
         self.stop = threading.Event()
         self._taps: list[Any] = []
         self._applied: list[tuple[int, str, float, float]] = []
@@ -130,6 +162,8 @@ class Robot:
         for node in nodes:
             node.destroy_node()
         self.rclpy.try_shutdown()
+        if self.sim is not None:
+            self.sim.stop()
         shutil.rmtree(self._tmp, ignore_errors=True)
 
     # -- commands (control thread) ------------------------------------------------------
@@ -198,11 +232,13 @@ class Robot:
         threads0 = thread_cpu_snapshot()
         if world is not None:
             world._tick = _timed(type(world)._tick.__get__(world), physics_ns.append)
+        if self.recorder is not None:
             self.recorder.start()
         time.sleep(seconds)
         sched = None
-        if world is not None:
+        if self.recorder is not None:
             sched = self.recorder.stop()
+        if world is not None:
             world.__dict__.pop('_tick', None)
         threads1 = thread_cpu_snapshot()
         facts = window.close()
@@ -214,6 +250,7 @@ class Robot:
         feedback_hz: dict[str, float] = {}
         if hw is not None:
             loops['can-scheduler'] = (hw.config.rate_hz, sched['ticks'])
+        if world is not None:
             loops['rm_sim-physics'] = (
                 1e9 / world.period_ns,
                 (world.time_ns - sim_time0) // world.period_ns,
@@ -266,7 +303,15 @@ class Robot:
             ids.setdefault(channel, set()).add(frame_id)
             slots[name] = {'channel': channel, 'id': frame_id, 'slot': actuator.slot}
         world = self.bridge.sim_world
-        self._taps = [tap_class(channel, world, frame_ids) for channel, frame_ids in ids.items()]
+        if world is not None:
+            self._taps = [
+                tap_class(channel, world, frame_ids) for channel, frame_ids in ids.items()
+            ]
+        else:  # rm_sim in its own process: stamp the frames as the bridge hands them over
+            self._taps = [
+                _SendTap(bus, str(bus.config.channel), ids.get(str(bus.config.channel), set()))
+                for bus in self.hw.buses.values()
+            ]
         self._applied = []
         applied = self._applied
         original = type(self.hw).set_command.__get__(self.hw)

@@ -21,10 +21,12 @@ setup(
         'console_scripts': [
             'can_bridge = rm_base.bridge.main:main',
             'rm_robot = rm_base.host.main:main',
+            'rm_sim = rm_base.bridge.sim_process:main',
         ],
         # The simulated CAN interface: can.Bus(interface='rm_sim', channel=...).
         'can.interface': [
             'rm_sim = rm_base.sim.bus:SimBus',
+            'rm_sim_socket = rm_base.sim.socket_bus:SimSocketBus',
         ],
     },
 )

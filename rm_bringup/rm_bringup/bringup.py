@@ -5,8 +5,10 @@
     bringup --config my_robot.yaml --sim  # any robot config file
 
 The robot config is a ROS parameter file with a ``can_bridge`` and an ``rm_robot``
-section (rm_bringup/config/<robot>.yaml); ``--sim`` loads its simulation overlay
-(<robot>_sim.yaml) after it, as a second --params-file, so every bus runs on rm_sim.
+section (rm_bringup/config/<robot>.yaml). ``--sim`` starts rm_sim, the simulated motors
+and IMU, in a process of their own from the config and its simulation overlay
+(<robot>_sim.yaml), and runs every bus on it through the ``rm_sim_socket`` interface
+(rm_bringup.sim_process); the robot itself runs as it would on socketcan.
 The plugins run inside the bridge's 1 kHz CAN loop (one thread: feedback, due plugins,
 actuator updates, pack, send), setting joint targets on the actuators directly; both
 nodes' ROS callbacks share one EventsExecutor at the edge. On Ctrl-C (or SIGTERM) every
@@ -21,6 +23,7 @@ import logging
 import os
 import pathlib
 import sys
+import tempfile
 import time
 
 import rclpy
@@ -32,6 +35,7 @@ from rm_base.host.node import RobotHost
 from rm_base.node_main import init_ros, spin_until_shutdown
 from rm_base.ros_logging import forward_package_logging
 
+from rm_bringup.sim_process import SimProcess
 from rm_bringup.status import StatusView
 
 # How long one spin_once may block [s]; bounds the reaction to Ctrl-C.
@@ -121,17 +125,31 @@ def main(argv: list[str] | None = None) -> int:
     except ConfigError as err:
         print(f'[bringup] {err}', file=sys.stderr)
         return 1
-    ros_args = ['--ros-args']
-    for path in files:
-        ros_args += ['--params-file', str(path)]
-    if not init_ros('bringup', ['bringup', *ros_args]):
-        return 1
-    # the hardware layer's log lines (offline joints, bus errors) under the bridge's name
-    handler = forward_package_logging(BRIDGE_NODE_NAME)
-    try:
-        return _run(args, files)
-    finally:
-        logging.getLogger('rm_base').removeHandler(handler)
+    with tempfile.TemporaryDirectory(prefix='rm_bringup_') as workdir:
+        sim = None
+        if args.sim:
+            try:
+                sim = SimProcess(files, pathlib.Path(workdir))
+            except ConfigError as err:
+                print(f'[bringup] {err}', file=sys.stderr)
+                return 1
+        try:
+            node_files = files if sim is None else [*files, sim.bridge_overlay]
+            ros_args = ['--ros-args']
+            for path in node_files:
+                ros_args += ['--params-file', str(path)]
+            if not init_ros('bringup', ['bringup', *ros_args]):
+                return 1
+            # the hardware layer's log lines (offline joints, bus errors) under the
+            # bridge's name
+            handler = forward_package_logging(BRIDGE_NODE_NAME)
+            try:
+                return _run(args, files)
+            finally:
+                logging.getLogger('rm_base').removeHandler(handler)
+        finally:
+            if sim is not None:
+                sim.stop()  # after the bridge's zero frames
 
 
 def _run(args: argparse.Namespace, files: list[pathlib.Path]) -> int:

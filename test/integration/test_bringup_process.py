@@ -61,3 +61,46 @@ def test_when_the_robot_is_unknown_expect_one_line_naming_the_installed_ones(tmp
     assert proc.wait(timeout=30) == 1
     err = log.read_text().strip().splitlines()
     assert len(err) == 1 and 'installed robots: hero, standard' in err[0], err
+
+
+def test_when_a_motor_is_taken_offline_in_rm_sim_expect_the_robot_to_see_it(
+    tmp_path, ros_context
+):
+    # bringup --sim runs the motors in rm_sim, a process of its own; its fault services
+    # are rm_sim's, and what they do reaches the robot only through the CAN socket.
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+    from std_srvs.srv import SetBool
+
+    log = tmp_path / 'stderr.log'
+    proc = start_bringup(['--robot', 'standard', '--sim'], log)
+    node = rclpy.create_node('fault_probe', context=ros_context)
+    lines = []
+
+    def status(predicate):
+        line = proc.stdout.readline()
+        if line:
+            lines.append(line)
+        return (lines and predicate(lines[-1])) or proc.poll() is not None
+
+    try:
+        assert wait_until(lambda: status(lambda s: s.startswith('chassis ')), 60.0, period=0.0)
+        assert 'offline -' in lines[-1], lines[-1]
+        client = node.create_client(SetBool, '/rm_sim/wheel_fl/offline')
+        assert client.wait_for_service(timeout_sec=20.0)
+        future = client.call_async(SetBool.Request(data=True))
+        executor = SingleThreadedExecutor(context=ros_context)
+        executor.add_node(node)
+        executor.spin_until_future_complete(future, timeout_sec=20.0)
+        executor.shutdown()
+        assert future.result().success, future.result().message
+        assert wait_until(lambda: status(lambda s: 'offline wheel_fl' in s), 30.0, period=0.0)
+        assert proc.poll() is None, ''.join(lines) + log.read_text()
+        proc.send_signal(signal.SIGINT)
+        proc.wait(timeout=30)
+    finally:
+        node.destroy_node()
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+    assert proc.returncode == 0, log.read_text()

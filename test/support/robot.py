@@ -24,17 +24,17 @@ import tempfile
 import threading
 import time
 import uuid
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import rclpy
-import yaml
 from rclpy.context import Context
 from rclpy.experimental import EventsExecutor
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, qos_profile_sensor_data
 from rm_base.bridge import CanBridgeNode
 from rm_base.host.node import RobotHost
+from rm_base.param_files import load_parameters
 
 from support.ros import wait_until
 
@@ -51,29 +51,6 @@ SHOOTER_SIM_LOADS = {
     'joints.friction_r.max_velocity': 1000.0,
     'joints.trigger.sim.load_inertia': 2e-4,
 }
-
-
-def flatten(tree: Mapping[str, Any], prefix: str = '') -> dict[str, Any]:
-    """Nested parameter mapping -> {'a.b.c': value}, as rcl reads a parameter file."""
-    flat: dict[str, Any] = {}
-    for key, value in tree.items():
-        name = f'{prefix}{key}'
-        if isinstance(value, Mapping):
-            flat.update(flatten(value, f'{name}.'))
-        else:
-            flat[name] = value
-    return flat
-
-
-def load_parameters(files: Iterable[pathlib.Path]) -> dict[str, dict[str, Any]]:
-    """{node name: flat parameters} from ROS parameter files, later files overriding."""
-    nodes: dict[str, dict[str, Any]] = {}
-    for path in files:
-        document = yaml.safe_load(path.read_text()) or {}
-        for node, section in document.items():
-            params = (section or {}).get('ros__parameters', {})
-            nodes.setdefault(node, {}).update(flatten(params))
-    return nodes
 
 
 def robot_parameters(

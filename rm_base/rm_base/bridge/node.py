@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import functools
-import re
 import threading
 import time
 from collections.abc import Callable
@@ -16,7 +14,6 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
-from std_srvs.srv import SetBool
 
 from rm_base.bridge.commands import check_stamp, parse_actuator_cmd
 from rm_base.bridge.diagnostics import CommandStats, DiagnosticsReporter
@@ -31,25 +28,14 @@ from rm_base.bridge.params import (
     with_sim_world,
 )
 from rm_base.bridge.sim_config import world_config
+from rm_base.bridge.sim_services import SimFaultServices
 from rm_base.hardware import CanHardware, CommandRejectedError
 from rm_base.plugin.params import PluginParams
 from rm_base.ros_logging import FastLogger
-from rm_base.sim import Fault, FaultKind, SimConfigError, SimError, SimWorld, Timing
+from rm_base.sim import SimConfigError, SimWorld, Timing
 from rm_msgs.msg import ActuatorCmd, ActuatorState, CanFrame
 
 NODE_NAME = 'can_bridge'
-
-#: Faults the sim services inject, by service name (``~/sim/<joint>/<name>``), with the
-#: parameters they use: a locked rotor, 130 °C, 100 random frames/s on the feedback id.
-SIM_FAULTS: dict[str, Callable[[], Fault]] = {
-    FaultKind.OFFLINE.value: Fault.offline,
-    FaultKind.JAM.value: Fault.jam,
-    FaultKind.OVER_TEMPERATURE.value: Fault.over_temperature,
-    FaultKind.GARBAGE.value: Fault.garbage,
-}
-
-# A joint or bus name becomes one token of a service name.
-_NAME_TOKEN = re.compile(r'[A-Za-z][A-Za-z0-9_]*')
 
 # State publishing runs on a plain thread sleeping to absolute deadlines, not on an
 # executor timer. Measured on this 2-vCPU VM (rclpy 7.1.6, 8 joints, /joint_states +
@@ -184,7 +170,10 @@ class CanBridgeNode(Node):
             ActuatorCmd, 'actuator_cmd', self._on_actuator_cmd, _COMMAND_QOS
         )
         if self.sim_world is not None:
-            self._create_sim_services()
+            self._sim_services = SimFaultServices(
+                self, self.sim_world, self.hardware.joint_names,
+                {b.name: str(b.channel) for b in settings.hardware_config.buses}, prefix='~/sim/',
+            )
         self.add_on_set_parameters_callback(self._on_set_parameters)
 
         if self.stepped:
@@ -317,34 +306,6 @@ class CanBridgeNode(Node):
                     'sim.body: {...}, sim.imu: {...}'
                 )
 
-    def _create_sim_services(self) -> None:
-        assert self.hardware is not None
-        self._sim_services = []
-        for joint in self.hardware.joint_names:
-            if not _NAME_TOKEN.fullmatch(joint):
-                self.get_logger().warning(
-                    f'joint {joint!r} is not a valid ROS name token: no fault services'
-                )
-                continue
-            for kind in SIM_FAULTS:
-                self._sim_services.append(
-                    self.create_service(
-                        SetBool,
-                        f'~/sim/{joint}/{kind}',
-                        functools.partial(self._on_sim_fault, joint, kind),
-                    )
-                )
-        for bus in self.settings.hardware_config.buses:
-            if not _NAME_TOKEN.fullmatch(bus.name):
-                continue
-            self._sim_services.append(
-                self.create_service(
-                    SetBool,
-                    f'~/sim/{bus.name}/bus_off',
-                    functools.partial(self._on_sim_bus_off, bus.name, str(bus.channel)),
-                )
-            )
-
     # --- callbacks -----------------------------------------------------------------------
     def _on_actuator_cmd(self, msg: ActuatorCmd) -> None:
         assert self.hardware is not None
@@ -379,38 +340,6 @@ class CanBridgeNode(Node):
             return
         with self._stats_lock:
             self._accepted += 1
-
-    def _on_sim_fault(
-        self, joint: str, kind: str, request: SetBool.Request, response: SetBool.Response
-    ) -> SetBool.Response:
-        assert self.sim_world is not None
-        try:
-            if request.data:
-                self.sim_world.inject(joint, SIM_FAULTS[kind]())
-            else:
-                self.sim_world.clear_faults(joint, kind)
-        except SimError as err:
-            response.success, response.message = False, str(err)
-            return response
-        response.success = True
-        response.message = f'{joint}: {kind} {"injected" if request.data else "cleared"}'
-        self.get_logger().info(f'sim: {response.message}')
-        return response
-
-    def _on_sim_bus_off(
-        self, bus: str, channel: str, request: SetBool.Request, response: SetBool.Response
-    ) -> SetBool.Response:
-        assert self.sim_world is not None
-        state = can.BusState.ERROR if request.data else can.BusState.ACTIVE
-        try:
-            self.sim_world.channel(channel).set_state(state)
-        except SimError as err:
-            response.success, response.message = False, str(err)
-            return response
-        response.success = True
-        response.message = f'{bus}: {"bus-off injected" if request.data else "bus-off cleared"}'
-        self.get_logger().info(f'sim: {response.message}')
-        return response
 
     def _on_set_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
         names = ', '.join(p.name for p in parameters)

@@ -1,0 +1,125 @@
+"""rm_sim: the simulated motors, IMU and faults of a robot, in a process of their own.
+
+    rm_sim --params-file standard.yaml --params-file standard_sim.yaml [--socket PATH]
+
+Reads the ``can_bridge`` section of the robot's parameter files (the same ``buses``,
+``joints``, ``sim.*`` keys can_bridge reads), builds the simulated world and serves its
+channels on an AF_UNIX socket (:mod:`rm_base.sim.server`), where can_bridge's buses with
+``interface: rm_sim_socket`` connect as they would to socketcan. The world runs in real
+time on its own physics thread; the simulated Hi220 writes to its pty as on a robot; a
+node ``rm_sim`` serves the fault services (``/rm_sim/<joint>/offline``, ``.../jam``,
+``.../over_temperature``, ``.../garbage``, ``/rm_sim/<bus>/bus_off``;
+:mod:`rm_base.bridge.sim_services`). Runs until SIGINT/SIGTERM (or ``--duration``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from collections.abc import Iterable, Mapping
+from pathlib import Path
+from typing import Any
+
+import rclpy
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+
+from rm_base.bridge.params import settings_from_parameters
+from rm_base.bridge.sim_config import world_config
+from rm_base.bridge.sim_services import SimFaultServices
+from rm_base.errors import ConfigError
+from rm_base.node_main import init_ros, spin_until_shutdown
+from rm_base.param_files import load_parameters
+from rm_base.sim import SimWorld
+from rm_base.sim.server import SimServer
+from rm_base.sim.socket_bus import default_socket_path
+
+NODE_NAME = 'rm_sim'
+BRIDGE_SECTION = 'can_bridge'
+#: The bridge's parameters that it declares itself (the rest are its config tree).
+TYPED = frozenset({
+    'publish_rate', 'diagnostics_rate', 'publish_frames', 'log_file', 'scheduler.rate_hz',
+    'safety.feedback_timeout_s', 'safety.command_timeout_s', 'safety.temperature_hysteresis_c',
+    'sim', 'sim.timing', 'sim.seed',
+})
+
+
+def bridge_parameters(files: Iterable[Path]) -> dict[str, Any]:
+    """The can_bridge section's parameters of the files, later files overriding.
+
+    Raises:
+        ConfigError: a file is missing or not a ROS parameter file.
+    """
+    return load_parameters(files).get(BRIDGE_SECTION, {})
+
+
+def build_world(params: Mapping[str, Any]) -> tuple[SimWorld, Any]:
+    """The simulated world of a robot's bridge parameters, and the bridge's settings.
+
+    Raises:
+        ConfigError: the parameters are invalid (the message names the key).
+    """
+    typed = {k: v for k, v in params.items() if k in TYPED}
+    typed['sim'] = True
+    open_params = {k: v for k, v in params.items() if k not in TYPED}
+    settings = settings_from_parameters(typed, open_params)
+    world = SimWorld.from_config(world_config(settings.hardware_config, settings.sim))
+    return world, settings
+
+
+def parse_args(argv: list[str]) -> argparse.Namespace:
+    """The command line (see the module docstring)."""
+    parser = argparse.ArgumentParser(prog=NODE_NAME, description=__doc__.split('\n\n')[0])
+    parser.add_argument('--params-file', action='append', required=True, type=Path,
+                        help='robot parameter file (repeat: the sim overlay after the robot)')
+    parser.add_argument(
+        '--socket', default=None,
+        help='socket path (default $RM_SIM_SOCKET, else /tmp/rm_sim_<domain>/can.sock)',
+    )
+    parser.add_argument('--duration', type=float, default=None, help='stop after seconds [s]')
+    return parser.parse_args(argv)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the simulator until SIGINT/SIGTERM; return the exit status (1 on a config error)."""
+    args = parse_args(sys.argv[1:] if argv is None else argv)
+    try:
+        world, settings = build_world(bridge_parameters(args.params_file))
+    except ConfigError as err:
+        print(f'[{NODE_NAME}] configuration error: {err}', file=sys.stderr)
+        return 1
+    path = args.socket or default_socket_path()
+    server = SimServer(world, path)
+    if not init_ros(NODE_NAME, [NODE_NAME]):
+        server.stop()
+        world.close()
+        return 1
+    node = Node(NODE_NAME)
+    SimFaultServices(
+        node, world, [j.name for j in settings.hardware_config.joints],
+        {b.name: str(b.channel) for b in settings.hardware_config.buses}, prefix='~/',
+    )
+    # Only the fault services run on this executor; the physics and the sockets have
+    # threads of their own.
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    deadline = None if args.duration is None else time.monotonic() + args.duration
+    try:
+        world.start()
+        server.start()
+        print(f'[{NODE_NAME}] {", ".join(sorted(world.channels))} at {path}', flush=True)
+        spin_until_shutdown(
+            executor, on_tick=lambda: deadline is None or time.monotonic() < deadline
+        )
+    finally:
+        server.stop()
+        world.close()
+        executor.shutdown()
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,105 @@
+"""Start rm_sim (the simulated motors, in a process of their own) and point a robot at it.
+
+    with SimProcess(files, workdir) as sim:      # rm_sim serving the robot's channels
+        files += [sim.bridge_overlay]            # can_bridge: every bus on rm_sim_socket
+
+``bridge_overlay`` is a parameter file for can_bridge, loaded after the robot config and
+its simulation overlay: ``sim: false`` (no in-process simulator) and every bus with
+``interface: rm_sim_socket`` on rm_sim's socket. The robot then runs exactly as on
+socketcan; only the interface name differs.
+"""
+
+from __future__ import annotations
+
+import os
+import pathlib
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Sequence
+
+import yaml
+from rm_base.bridge.sim_process import BRIDGE_SECTION, bridge_parameters
+from rm_base.errors import ConfigError
+
+#: How long rm_sim may take to build its world and listen [s].
+START_TIMEOUT_S = 20.0
+#: How long it may take to stop on SIGINT before it is killed [s].
+STOP_TIMEOUT_S = 10.0
+
+
+class SimProcess:
+    """rm_sim for the robot of files (see the module docstring).
+
+    Args:
+        files: the robot's parameter files (config, then its simulation overlay).
+        workdir: a private folder for the socket, the overlay and rm_sim's log.
+
+    Raises:
+        ConfigError: rm_sim did not come up (its log's last lines are in the message).
+    """
+
+    def __init__(self, files: Sequence[pathlib.Path], workdir: pathlib.Path) -> None:
+        workdir.mkdir(parents=True, exist_ok=True)
+        self.socket = str(workdir / 'can.sock')
+        self.log_path = workdir / 'rm_sim.log'
+        buses = sorted(
+            {k.split('.')[1] for k in bridge_parameters(files) if k.startswith('buses.')}
+        )
+        self.bridge_overlay = workdir / 'rm_sim_socket.yaml'
+        self.bridge_overlay.write_text(
+            yaml.safe_dump(
+                {
+                    BRIDGE_SECTION: {
+                        'ros__parameters': {
+                            'sim': False,
+                            'buses': {
+                                bus: {
+                                    'interface': 'rm_sim_socket',
+                                    'options': {'socket': self.socket},
+                                }
+                                for bus in buses
+                            },
+                        }
+                    }
+                }
+            )
+        )
+        args = [sys.executable, '-m', 'rm_base.bridge.sim_process', '--socket', self.socket]
+        for path in files:
+            args += ['--params-file', str(path)]
+        self._log = open(self.log_path, 'wb')
+        self.process = subprocess.Popen(
+            args, stdout=self._log, stderr=subprocess.STDOUT, env=dict(os.environ)
+        )
+        try:
+            self._wait_listening()
+        except BaseException:
+            self.stop()
+            raise
+
+    def _wait_listening(self) -> None:
+        deadline = time.monotonic() + START_TIMEOUT_S
+        while not os.path.exists(self.socket):
+            if self.process.poll() is not None or time.monotonic() > deadline:
+                tail = self.log_path.read_text(errors='replace').strip().splitlines()[-5:]
+                raise ConfigError('rm_sim did not start: ' + (' | '.join(tail) or 'no output'))
+            time.sleep(0.05)
+
+    def stop(self) -> None:
+        """SIGINT, then wait (kill after STOP_TIMEOUT_S). Idempotent."""
+        if self.process.poll() is None:
+            self.process.send_signal(signal.SIGINT)
+            try:
+                self.process.wait(STOP_TIMEOUT_S)
+            except subprocess.TimeoutExpired:
+                self.process.kill()
+                self.process.wait()
+        self._log.close()
+
+    def __enter__(self) -> SimProcess:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()

@@ -1,0 +1,33 @@
+"""param_files: ROS parameter files read as rcl reads them, without rcl."""
+
+import pytest
+from rm_base.errors import ConfigError
+from rm_base.param_files import load_parameters
+
+
+def test_later_files_override_key_by_key_and_nesting_becomes_dots(tmp_path):
+    base, overlay = tmp_path / 'robot.yaml', tmp_path / 'robot_sim.yaml'
+    base.write_text('can_bridge: {ros__parameters: {buses: {can0: {interface: socketcan}}, '
+                    'publish_rate: 200.0}}\n')
+    overlay.write_text("can_bridge: {ros__parameters: {sim: true, 'sim.body': {x: 1}, "
+                       'buses: {can0: {interface: rm_sim}}}}\n')
+    params = load_parameters([base, overlay])['can_bridge']
+    assert params == {
+        'buses.can0.interface': 'rm_sim', 'publish_rate': 200.0, 'sim': True, 'sim.body.x': 1,
+    }
+
+
+@pytest.mark.parametrize(
+    ('text', 'message'),
+    [('[1, 2]\n', 'not a ROS parameter file'), ('a: [\n', r'robot\.yaml: ')],
+)
+def test_a_file_that_is_not_a_parameter_file_is_one_clear_error(tmp_path, text, message):
+    path = tmp_path / 'robot.yaml'
+    path.write_text(text)
+    with pytest.raises(ConfigError, match=message):
+        load_parameters([path])
+
+
+def test_a_missing_file_names_itself(tmp_path):
+    with pytest.raises(ConfigError, match=r'nope\.yaml'):
+        load_parameters([tmp_path / 'nope.yaml'])
