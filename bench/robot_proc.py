@@ -60,25 +60,31 @@ def make_tap_class():
 
 
 class _SendTap:
-    """Keeps (t_ns, id, data) of some frames a ManagedBus sends (rm_sim in its process)."""
+    """Keeps (t_ns, id, data) of some frames a ManagedBus sends (rm_sim in its process).
+
+    Stamped when the loop hands the tick's frames to the bus (``send_many``): the moment
+    they go on the socket, as the in-process tap stamps them on the simulated wire.
+    """
 
     def __init__(self, bus: Any, channel: str, ids: set[int]) -> None:
         self.records: list[tuple[int, int, str]] = []
         self.channel_id = channel
         self._bus = bus
         self._ids = frozenset(ids)
-        send = type(bus).send.__get__(bus)
+        send_many = type(bus).send_many.__get__(bus)
 
-        def tapped(msg: Any) -> bool:
-            ok = send(msg)
-            if msg.arbitration_id in self._ids:
-                self.records.append((time.monotonic_ns(), msg.arbitration_id, msg.data.hex()))
-            return ok
+        def tapped(msgs: Any) -> int:
+            sent = send_many(msgs)
+            now = time.monotonic_ns()
+            for msg in msgs:
+                if msg.arbitration_id in self._ids:
+                    self.records.append((now, msg.arbitration_id, msg.data.hex()))
+            return sent
 
-        bus.send = tapped
+        bus.send_many = tapped
 
     def shutdown(self) -> None:
-        self._bus.__dict__.pop('send', None)
+        self._bus.__dict__.pop('send_many', None)
 
 
 class Robot:

@@ -41,7 +41,7 @@ class Lockstep:
             },
             'joints': joints,
         }
-        self.hw = CanHardware(config, clock_ns=lambda: self.now_ns)
+        self.hw = CanHardware(config, clock_ns=lambda: self.now_ns, receive_in_loop=False)
 
     def __enter__(self):
         self.hw.open()

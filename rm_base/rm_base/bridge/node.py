@@ -242,6 +242,13 @@ class CanBridgeNode(Node):
             description='control loop rate: update every joint, pack, send',
         )
         declare(
+            'scheduler.receive_in_loop',
+            params.boolean,
+            True,
+            description='the control loop takes the received feedback each tick (no receive '
+            'thread per bus)',
+        )
+        declare(
             'safety.feedback_timeout_s',
             params.double,
             0.1,

@@ -17,6 +17,8 @@ Parameters (units in brackets; typed ones are declared by the node with a descri
                                                key of ``rm_base.sim.device_from_config``
                                                (``load_inertia``, ``overtemp_c``, ``type``)
 ``scheduler.rate_hz``               [Hz]       control loop rate, 1000
+``scheduler.receive_in_loop``       bool       the loop takes the feedback (no receive
+                                               thread per bus), true
 ``safety.feedback_timeout_s``       [s]        offline after no feedback this long, 0.1
 ``safety.command_timeout_s``        [s]        zero output after no command this long, 0.1
 ``safety.temperature_hysteresis_c`` [°C]       resume below limit - this, 5
@@ -172,7 +174,8 @@ def settings_from_parameters(
         typed: the declared, already type-checked parameters: ``publish_rate``,
             ``diagnostics_rate``, ``publish_frames``, ``log_file``, ``sim``,
             ``sim.timing`` (:class:`Timing` or its value), ``sim.seed``,
-            ``scheduler.rate_hz`` and ``safety.*``; missing ones take their defaults.
+            ``scheduler.rate_hz``, ``scheduler.receive_in_loop`` and ``safety.*``;
+            missing ones take their defaults.
         open_params: every other parameter by its flat name (rclpy's own excluded).
 
     Returns:
@@ -205,8 +208,9 @@ def settings_from_parameters(
         else:
             raise BridgeConfigError(
                 f'unknown parameter {name!r}; the bridge takes buses.*, joints.*, '
-                'scheduler.rate_hz, safety.*, publish_rate, diagnostics_rate, '
-                'publish_frames, log_file, sim, sim.timing, sim.seed, sim.body.*, sim.imu.*'
+                'scheduler.rate_hz, scheduler.receive_in_loop, safety.*, publish_rate, '
+                'diagnostics_rate, publish_frames, log_file, sim, sim.timing, sim.seed, '
+                'sim.body.*, sim.imu.*'
             )
     hardware = nest(hardware_flat)
     sim_on = bool(typed.get('sim', False))
@@ -221,7 +225,10 @@ def settings_from_parameters(
                 bus['interface'] = 'rm_sim'
             if log_file and 'log_file' not in bus:
                 bus['log_file'] = bus_log_path(log_file, bus_name, len(buses) > 1)
-    scheduler = {'rate_hz': typed.get('scheduler.rate_hz', 1000.0)}
+    scheduler = {
+        'rate_hz': typed.get('scheduler.rate_hz', 1000.0),
+        'receive_in_loop': typed.get('scheduler.receive_in_loop', True),
+    }
     safety = {
         key: typed[f'safety.{key}']
         for key in ('feedback_timeout_s', 'command_timeout_s', 'temperature_hysteresis_c')

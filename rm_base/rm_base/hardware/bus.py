@@ -377,6 +377,37 @@ class ManagedBus:
             self._log_sink.sent(msg, self.name)
         return True
 
+    def send_many(self, msgs: list[can.Message]) -> int:
+        """Send a tick's frames in order; never raises.
+
+        One driver call where the interface has ``send_many`` (rm_sim_socket: one
+        datagram), else one frame at a time.
+
+        Returns:
+            How many the driver accepted.
+        """
+        bus = self._bus
+        many = getattr(bus, 'send_many', None)
+        if many is None:
+            return sum(self.send(msg) for msg in msgs)
+        try:
+            many(msgs, timeout=self.config.send_timeout_s)
+        except (can.CanError, OSError, ValueError) as err:
+            self._send_errors += len(msgs)
+            self._consecutive_send_failures += 1
+            if self._consecutive_send_failures == 1:
+                self._note_error(f'send failed: {err!r}')
+            if self._consecutive_send_failures >= self.config.send_failures_to_reopen:
+                self._reopen_requested = True
+            return 0
+        self._consecutive_send_failures = 0
+        self._sent += len(msgs)
+        self._bits += sum(map(frame_bits, msgs))
+        if self._log_sink is not None:
+            for msg in msgs:
+                self._log_sink.sent(msg, self.name)
+        return len(msgs)
+
     # --- receiving ---------------------------------------------------------------------------
     def poll(self) -> int:
         """Dispatch every frame received so far, without waiting (the loop's feedback stage).

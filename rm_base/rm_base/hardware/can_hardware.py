@@ -53,7 +53,7 @@ class CanHardware:
         clock_ns: Callable[[], int] = time.perf_counter_ns,
         bus_factory: BusFactory = can.Bus,
         on_error: Callable[[Exception], bool] | None = None,
-        receive_in_loop: bool = False,
+        receive_in_loop: bool | None = None,
     ) -> None:
         """Build everything; nothing is opened until :meth:`open` or :meth:`start`.
 
@@ -65,7 +65,8 @@ class CanHardware:
             on_error: scheduler error hook (return True to go on); the default logs, counts
                 and goes on.
             receive_in_loop: take received frames in the loop (first stage of every tick)
-                instead of a receive thread per bus.
+                instead of a receive thread per bus; default the config's
+                ``scheduler.receive_in_loop``.
 
         Raises:
             HardwareConfigError: anything wrong in the config, naming where.
@@ -100,17 +101,23 @@ class CanHardware:
             members = [a for a in actuators if a.bus_name == name]
             bus.add_failure_listener(lambda now_ns, m=members: self._bus_down(m, now_ns))
             bus.add_reopen_listener(lambda now_ns, m=members: self._bus_recovered(m, now_ns))
-        packers = [(g, self.buses[g.bus_name].send) for g in self.groups]
-        packers += [(a, self.buses[a.bus_name].send) for a in own_frames]
+        # A tick's frames are collected per bus and sent together (one driver call per bus
+        # where the interface takes several frames at once).
+        self._outgoing: dict[str, list[can.Message]] = {name: [] for name in self.buses}
+        packers = [(g, self._outgoing[g.bus_name].append) for g in self.groups]
+        packers += [(a, self._outgoing[a.bus_name].append) for a in own_frames]
         self.scheduler = Scheduler(
             actuators,
             packers,
             rate_hz=config.rate_hz,
             on_error=on_error if on_error is not None else self._log_and_go_on,
             clock_ns=clock_ns,
+            flush=self._send_outgoing,
         )
-        self.receive_in_loop = receive_in_loop
-        if receive_in_loop:
+        self.receive_in_loop = (
+            config.receive_in_loop if receive_in_loop is None else receive_in_loop
+        )
+        if self.receive_in_loop:
             self.scheduler.add_stage(_FeedbackStage(tuple(self.buses.values())))
 
     def _check_ids(self, own_frames: list[Actuator]) -> None:
@@ -133,6 +140,12 @@ class CanHardware:
                         f'with the same id nibble on {a.bus_name}'
                     )
                 damiao_replies[reply] = a.name
+
+    def _send_outgoing(self) -> None:
+        for name, frames in self._outgoing.items():
+            if frames:
+                self.buses[name].send_many(frames)
+                frames.clear()
 
     @staticmethod
     def _bus_down(members: list[Actuator], now_ns: int) -> None:

@@ -37,7 +37,8 @@ The schema, with units (every key optional unless marked *required*)::
           ...                          # family options (model, limits, master_id...)
         },
       },
-      'scheduler': {'rate_hz': 1000.0},
+      'scheduler': {'rate_hz': 1000.0,
+                    'receive_in_loop': True},  # feedback taken by the loop, no rx threads
       'safety': {
         'feedback_timeout_s': 0.1,     # no feedback this long -> offline, zero output
         'command_timeout_s': 0.1,      # no command this long -> zero output
@@ -327,6 +328,7 @@ class HardwareConfig:
     joints: tuple[JointConfig, ...]
     rate_hz: float = 1000.0
     safety: SafetyConfig = SafetyConfig()
+    receive_in_loop: bool = True
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> HardwareConfig:
@@ -364,8 +366,13 @@ class HardwareConfig:
                     f'joints.{j.name}.bus {j.bus!r} is not a configured bus {sorted(bus_names)}'
                 )
         scheduler = _mapping('scheduler', data.get('scheduler') or {})
-        _check_keys('scheduler', scheduler, {'rate_hz'})
+        _check_keys('scheduler', scheduler, {'rate_hz', 'receive_in_loop'})
         rate = _number('scheduler.rate_hz', scheduler.get('rate_hz', 1000.0), positive=True)
         if rate > 10_000:
             raise HardwareConfigError(f'scheduler.rate_hz {rate} above 10000 Hz')
-        return cls(buses, joints, rate, SafetyConfig.from_dict(data.get('safety')))
+        in_loop = scheduler.get('receive_in_loop', True)
+        if not isinstance(in_loop, bool):
+            raise HardwareConfigError(
+                f'scheduler.receive_in_loop must be true or false, got {in_loop!r}'
+            )
+        return cls(buses, joints, rate, SafetyConfig.from_dict(data.get('safety')), in_loop)

@@ -118,6 +118,7 @@ class Scheduler:
         sleep: Callable[[float], None] = time.sleep,
         report_period_s: float = 5.0,
         thread_name: str = 'can-scheduler',
+        flush: Callable[[], object] | None = None,
     ) -> None:
         """Create a stopped scheduler.
 
@@ -133,6 +134,8 @@ class Scheduler:
             sleep: sleep function [s] (tests may replace it).
             report_period_s: the thread logs its timing window this often [s].
             thread_name: name of the loop thread.
+            flush: called after the frames of a tick were handed to their ``send``
+                functions (which may only collect them), within the ``send`` component.
 
         Raises:
             HardwareConfigError: rate_hz not positive.
@@ -145,6 +148,7 @@ class Scheduler:
         self._outputs: tuple[Stage, ...] = ()
         self._report_period_ns = round(report_period_s * 1e9)
         self._thread_name = thread_name
+        self._flush = flush
         self._lateness = DurationHistogram()
         self._durations: dict[str, DurationHistogram] = {}
         for name in (ACTUATORS, PACK, SEND):
@@ -235,6 +239,8 @@ class Scheduler:
         durations[PACK].record(t1 - t)
         for send, msg in frames:
             send(msg)
+        if self._flush is not None:
+            self._flush()
         durations[SEND].record(timer() - t1)
         self._ticks += 1
         return len(frames)

@@ -84,6 +84,7 @@ class SimServer:
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name='rm_sim-server', daemon=True)
         self.connected = 0  # buses that said hello, in all
+        self.datagrams = 0  # frame datagrams received, in all
 
     def start(self) -> None:
         """Accept connections and read them in a thread."""
@@ -134,6 +135,7 @@ class SimServer:
         if connection is None:
             self._hello(sock, datagram)
             return
+        self.datagrams += 1
         try:
             frames = wire.decode(datagram, connection.channel.name)
         except wire.WireError as err:

@@ -108,10 +108,18 @@ class SimSocketBus(can.BusABC):
         Raises:
             can.CanOperationError: rm_sim reports bus-off, or the socket failed.
         """
+        self.send_many([msg], timeout)
+
+    def send_many(self, msgs: list[can.Message], timeout: float | None = None) -> None:
+        """Send a tick's frames to rm_sim in one datagram.
+
+        Raises:
+            can.CanOperationError: rm_sim reports bus-off, or the socket failed.
+        """
         if self.bus_off:
             raise can.CanOperationError(f'{self._channel}: bus-off')
         try:
-            self._sock.send(wire.encode((msg,), time.time()))
+            self._sock.send(wire.encode(msgs, time.time()))
         except OSError as err:
             raise can.CanOperationError(f'{self._channel}: send failed: {err}') from err
 

@@ -68,7 +68,7 @@ def slots(data):
 
 @pytest.fixture
 def rig(channel, clock):
-    hw = CanHardware(config(channel), clock_ns=clock)
+    hw = CanHardware(config(channel), clock_ns=clock, receive_in_loop=False)
     peer = can.Bus(interface='virtual', channel=channel)
     hw.open()
     yield hw, peer, clock
@@ -200,7 +200,7 @@ def test_unknown_joint_is_rejected_and_counted(rig):
 
 
 def test_shutdown_sends_zero_then_disable_and_is_idempotent(channel, clock):
-    hw = CanHardware(config(channel), clock_ns=clock)
+    hw = CanHardware(config(channel), clock_ns=clock, receive_in_loop=False)
     with can.Bus(interface='virtual', channel=channel) as peer:
         hw.open()
         fed(hw, peer)
@@ -257,7 +257,7 @@ def test_after_a_bus_error_the_bus_reopens_and_sends_zero_until_commanded(channe
     factory = FlakyFactory()
     cfg = config(channel)
     cfg['buses']['can0'].update(reconnect_initial_s=0.01, reconnect_max_s=0.02)
-    hw = CanHardware(cfg, clock_ns=clock, bus_factory=factory)
+    hw = CanHardware(cfg, clock_ns=clock, bus_factory=factory, receive_in_loop=False)
     with hw, can.Bus(interface='virtual', channel=channel) as peer:
         hw.open()
         fed(hw, peer)
@@ -354,3 +354,21 @@ def test_joints_may_be_a_list_and_top_level_keys_are_checked(channel):
         CanHardware(dict(cfg, scheduler_rate=1))
     with pytest.raises(HardwareConfigError, match=r'safety\.command_timeout_s must be > 0'):
         CanHardware(dict(cfg, safety={'command_timeout_s': 0}))
+
+
+def test_by_default_the_loop_takes_the_feedback_at_the_start_of_its_tick(channel, clock):
+    hw = CanHardware(config(channel), clock_ns=clock)
+    peer = can.Bus(interface='virtual', channel=channel)
+    try:
+        hw.open()
+        assert hw.receive_in_loop
+        assert not [t for t in threading.enumerate() if t.name.startswith('canrx-')]
+        all_feedback(peer)
+        assert all(a.feedback is None for a in hw.actuators.values())  # nobody took it yet
+        hw.tick()
+        assert all(a.feedback is not None for a in hw.actuators.values())
+        counts = {name: s.count for name, s in hw.scheduler.component_stats()}
+        assert counts['feedback'] == 1
+    finally:
+        hw.shutdown()
+        peer.shutdown()

@@ -60,7 +60,7 @@ def test_effort_and_native_mit_against_simulated_motors(channel, world):
             'arm': {'type': 'dm4310', 'bus': 'can0', 'id': 2},  # master id 0x12 in both
         },
     }
-    hw = CanHardware(cfg, clock_ns=clock, bus_factory=sim_factory)
+    hw = CanHardware(cfg, clock_ns=clock, bus_factory=sim_factory, receive_in_loop=False)
     with hw:
         hw.open()
         world.step(1)

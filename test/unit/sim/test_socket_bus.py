@@ -76,14 +76,14 @@ def served():
     world.add_channel('can0', [{'type': 'm3508', 'id': 1, 'name': 'wheel'}])
     server = SimServer(world, path)
     server.start()
-    yield world, path
+    yield world, path, server
     server.stop()
     world.close()
     os.rmdir(folder)
 
 
 def test_feedback_of_a_tick_arrives_on_the_bus(served):
-    world, path = served
+    world, path, _ = served
     bus = SimSocketBus('can0', socket=path)
     try:
         assert wait_until(lambda: world.channel('can0').bus_count == 1, WAIT)
@@ -96,7 +96,7 @@ def test_feedback_of_a_tick_arrives_on_the_bus(served):
 
 
 def test_a_current_command_turns_the_motor(served):
-    world, path = served
+    world, path, _ = served
     bus = SimSocketBus('can0', socket=path)
     try:
         group, _ = dji.command_slot('c620', 1)  # 0x200, first slot
@@ -110,7 +110,7 @@ def test_a_current_command_turns_the_motor(served):
 
 
 def test_an_unknown_channel_is_refused_at_open(served):
-    _, path = served
+    _, path, _ = served
     with pytest.raises(can.CanInitializationError, match='can9'):
         SimSocketBus('can9', socket=path)
 
@@ -121,7 +121,7 @@ def test_nobody_listening_is_refused_at_open(tmp_path):
 
 
 def test_when_bus_off_is_injected_expect_send_to_fail_until_it_is_cleared(served):
-    world, path = served
+    world, path, _ = served
     bus = SimSocketBus('can0', socket=path)
     try:
         world.channel('can0').set_state(can.BusState.ERROR)
@@ -135,3 +135,26 @@ def test_when_bus_off_is_injected_expect_send_to_fail_until_it_is_cleared(served
         assert bus.state is can.BusState.ACTIVE
     finally:
         bus.shutdown()
+
+
+def test_a_ticks_frames_go_to_rm_sim_in_one_datagram_per_bus(served):
+    from rm_base.hardware import CanHardware
+
+    world, path, server = served
+    world.add_motor('can0', {'type': 'gm6020', 'id': 1, 'name': 'yaw'})
+    hw = CanHardware({
+        'buses': {'can0': {'interface': 'rm_sim_socket', 'channel': 'can0',
+                           'options': {'socket': path}}},
+        'joints': {'wheel': {'type': 'm3508', 'bus': 'can0', 'id': 1},
+                   'yaw': {'type': 'gm6020', 'bus': 'can0', 'id': 1}},
+    })
+    try:
+        hw.open()
+        assert wait_until(lambda: world.channel('can0').bus_count == 1, WAIT)
+        sent, datagrams = world.channel('can0').stats.sent, server.datagrams
+        hw.tick()  # two frames: the C620 group (0x200) and the GM6020 group (0x1FF)
+        assert wait_until(lambda: world.channel('can0').stats.sent == sent + 2, WAIT)
+        assert server.datagrams == datagrams + 1
+        assert hw.buses['can0'].stats().frames_sent == 2
+    finally:
+        hw.shutdown()
