@@ -83,6 +83,7 @@ def main(argv: list[str] | None = None) -> int:
     os.environ['ROS_DOMAIN_ID'] = str(args.domain_id)
 
     from bench import baseline, robot, throughput
+    from bench.loop_targets import evaluate_targets, format_targets
     from bench.machine import Window, machine_facts
     from bench.report import ROWS, evaluate, format_table
 
@@ -155,6 +156,9 @@ def main(argv: list[str] | None = None) -> int:
     )
     print('values: min / median / max over runs; PASS/MISS compares the median with the target')
     print()
+    targets = evaluate_targets(evaluated)
+    print(format_targets(targets))
+    print()
     print(format_table(evaluated))
     if notes:
         print()
@@ -173,6 +177,7 @@ def main(argv: list[str] | None = None) -> int:
                 'domain_id': args.domain_id,
                 'overall': {**overall.as_dict(), 'load_start': load_start},
                 'rows': evaluated,
+                'loop_targets': targets,
                 'notes': notes,
                 'raw': raw,
             },
