@@ -1,17 +1,23 @@
-"""Launch the robot: can_bridge and rm_robot, both from one robot config.
+"""Launch the robot from one robot config: one process by default, or split in nodes.
 
     ros2 launch rm_bringup robot.launch.py                          # standard, real buses
     ros2 launch rm_bringup robot.launch.py robot:=standard sim:=true   # on rm_sim
     ros2 launch rm_bringup robot.launch.py config:=/path/my_robot.yaml
+    ros2 launch rm_bringup robot.launch.py split:=true              # can_bridge + rm_robot
 
 Arguments:
     robot: installed robot config, share/rm_bringup/config/<robot>.yaml (default standard).
     config: path of a robot config file instead (its overlay: <name>_sim.yaml beside it).
-    sim: true loads the simulation overlay after the config (every bus on rm_sim).
+    sim: true runs every bus on rm_sim, the simulated motors (a process of their own).
+    split: true runs can_bridge and rm_robot as two processes, /actuator_cmd between them
+        over DDS (only to split a robot across machines); default false: ``bringup``, the
+        one-process robot whose plugins run in the CAN loop.
 
-The same files `bringup --robot <robot> [--sim]` loads, in the same order, given to both
-nodes as --params-file (each node reads its own section). For a real ROS 2 Jazzy install;
-the virtualenv has no launch (use `bringup` or `make run` there).
+One process: ``bringup --config <file> [--sim] --no-status``. Split: the files (the config,
+then with sim its overlay) given to both nodes as --params-file (each node reads its own
+section) and, with sim, rm_sim beside them and the bridge's buses on ``rm_sim_socket``.
+For a real ROS 2 Jazzy install; the virtualenv has no launch (use `bringup` or `make run`
+there).
 
 DDS discovery stays on this machine (ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST) unless the
 variable is already set: set SUBNET on a robot that talks to other machines.
@@ -19,6 +25,7 @@ variable is already set: set SUBNET on a robot that talks to other machines.
 
 import os
 
+import yaml
 from ament_index_python.packages import get_package_share_directory
 from launch import LaunchDescription
 from launch.actions import DeclareLaunchArgument, OpaqueFunction, SetEnvironmentVariable
@@ -47,17 +54,53 @@ def parameter_files(robot: str, config: str, sim: bool) -> list[str]:
     return files
 
 
+def bus_names(files: list[str]) -> list[str]:
+    """The buses of the can_bridge section of the files."""
+    buses: set[str] = set()
+    for path in files:
+        with open(path) as stream:
+            document = yaml.safe_load(stream) or {}
+        section = (document.get('can_bridge') or {}).get('ros__parameters', {})
+        buses.update(section.get('buses', {}))
+    return sorted(buses)
+
+
 def _nodes(context, *args, **kwargs):
     robot = LaunchConfiguration('robot').perform(context)
     config = LaunchConfiguration('config').perform(context)
     sim = LaunchConfiguration('sim').perform(context) == 'true'
+    split = LaunchConfiguration('split').perform(context) == 'true'
     files = parameter_files(robot, config, sim)
-    return [
+    if not split:
+        return [
+            Node(
+                package='rm_bringup',
+                executable='bringup',
+                arguments=['--config', files[0], '--no-status', *(['--sim'] if sim else [])],
+                output='screen',
+                emulate_tty=True,
+            )
+        ]
+    nodes = []
+    bridge_parameters = list(files)
+    if sim:
+        # rm_sim listens on its default socket (per ROS_DOMAIN_ID), where rm_sim_socket
+        # looks by default; the bridge retries its buses until rm_sim is up.
+        arguments = []
+        for path in files:
+            arguments += ['--params-file', path]
+        nodes.append(
+            Node(package='rm_base', executable='rm_sim', arguments=arguments, output='screen')
+        )
+        bridge_parameters.append(
+            {'sim': False, **{f'buses.{b}.interface': 'rm_sim_socket' for b in bus_names(files)}}
+        )
+    nodes += [
         Node(
             package='rm_base',
             executable='can_bridge',
             name='can_bridge',
-            parameters=files,
+            parameters=bridge_parameters,
             output='screen',
             emulate_tty=True,
         ),
@@ -70,6 +113,7 @@ def _nodes(context, *args, **kwargs):
             emulate_tty=True,
         ),
     ]
+    return nodes
 
 
 def generate_launch_description():
@@ -84,7 +128,13 @@ def generate_launch_description():
             'sim',
             default_value='false',
             choices=['true', 'false'],
-            description='run every bus on the simulated CAN interface rm_sim',
+            description='run every bus on rm_sim, the simulated motors',
+        ),
+        DeclareLaunchArgument(
+            'split',
+            default_value='false',
+            choices=['true', 'false'],
+            description='can_bridge and rm_robot as two processes (DDS between them)',
         ),
     ]
     if DISCOVERY_RANGE_VAR not in os.environ:

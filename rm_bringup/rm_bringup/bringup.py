@@ -28,6 +28,7 @@ import time
 
 import rclpy
 from rclpy.experimental import EventsExecutor
+from rclpy.utilities import remove_ros_args
 from rm_base.bridge import CanBridgeNode
 from rm_base.bridge.node import NODE_NAME as BRIDGE_NODE_NAME
 from rm_base.errors import ConfigError
@@ -74,8 +75,11 @@ def parameter_files(robot: str | None, config: str | None, sim: bool) -> list[pa
     return files
 
 
-def parse_args(argv: list[str] | None) -> argparse.Namespace:
-    """Parse the command line (see the module docstring)."""
+def parse_args(argv: list[str]) -> argparse.Namespace:
+    """Parse the command line (see the module docstring), less any ROS arguments.
+
+    launch_ros may append ``--ros-args ...`` to the command line: those are rclpy's.
+    """
     parser = argparse.ArgumentParser(prog='bringup', description=__doc__.split('\n\n')[0])
     which = parser.add_mutually_exclusive_group()
     which.add_argument('--robot', default='standard', help='installed robot config name')
@@ -85,7 +89,7 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     parser.add_argument(
         '--duration', type=float, default=None, help='stop after this many seconds [s]'
     )
-    return parser.parse_args(argv)
+    return parser.parse_args(remove_ros_args(['bringup', *argv])[1:])
 
 
 class _StatusPrinter:

@@ -135,9 +135,25 @@ def nodes_by_executable(produced):
     return {n.kwargs['executable']: n.kwargs for n in nodes}
 
 
-def test_when_launched_with_defaults_expect_bridge_and_host_on_the_standard_config(launch_file):
+def test_when_launched_with_defaults_expect_the_one_process_robot_on_the_standard_config(
+    launch_file,
+):
     _, produced = launch(launch_file)
-    assert len(produced) == 2
+    nodes = nodes_by_executable(produced)
+    assert set(nodes) == {'bringup'}
+    assert nodes['bringup']['package'] == 'rm_bringup'
+    config = str(CONFIG / 'standard.yaml')
+    assert nodes['bringup']['arguments'] == ['--config', config, '--no-status']
+
+
+def test_when_sim_is_true_expect_bringup_to_start_rm_sim(launch_file):
+    _, produced = launch(launch_file, robot='standard', sim='true')
+    arguments = nodes_by_executable(produced)['bringup']['arguments']
+    assert arguments == ['--config', str(CONFIG / 'standard.yaml'), '--no-status', '--sim']
+
+
+def test_when_split_expect_bridge_and_host_on_the_standard_config(launch_file):
+    _, produced = launch(launch_file, split='true')
     nodes = nodes_by_executable(produced)
     assert set(nodes) == {'can_bridge', 'rm_robot'}
     for executable, node in nodes.items():
@@ -146,11 +162,19 @@ def test_when_launched_with_defaults_expect_bridge_and_host_on_the_standard_conf
         assert node['parameters'] == [str(CONFIG / 'standard.yaml')]
 
 
-def test_when_sim_is_true_expect_the_overlay_after_the_config_for_both_nodes(launch_file):
-    _, produced = launch(launch_file, robot='standard', sim='true')
+def test_when_split_on_the_sim_expect_rm_sim_and_the_bridge_on_its_socket(launch_file):
+    _, produced = launch(launch_file, robot='standard', sim='true', split='true')
     expected = [str(CONFIG / 'standard.yaml'), str(CONFIG / 'standard_sim.yaml')]
     nodes = nodes_by_executable(produced)
-    assert nodes['can_bridge']['parameters'] == expected
+    assert set(nodes) == {'rm_sim', 'can_bridge', 'rm_robot'}
+    assert nodes['rm_sim']['arguments'] == [
+        '--params-file', expected[0], '--params-file', expected[1],
+    ]
+    assert nodes['can_bridge']['parameters'] == [
+        *expected,
+        {'sim': False, 'buses.can0.interface': 'rm_sim_socket',
+         'buses.can1.interface': 'rm_sim_socket'},
+    ]
     assert nodes['rm_robot']['parameters'] == expected
     assert all(pathlib.Path(p).is_file() for p in expected)
 
@@ -162,6 +186,7 @@ def test_the_arguments_are_declared_with_their_defaults(launch_file):
     assert declared['sim']['default_value'] == 'false'
     assert declared['sim']['choices'] == ['true', 'false']
     assert declared['config']['default_value'] == ''
+    assert declared['split']['default_value'] == 'false'
     # The arguments come before the function that reads them.
     opaque = next(i for i, a in enumerate(entities) if isinstance(a, OpaqueFunction))
     assert all(i < opaque for i, a in enumerate(entities) if isinstance(a, DeclareLaunchArgument))
@@ -188,7 +213,7 @@ def test_when_a_config_file_is_given_expect_it_and_its_overlay_beside_it(launch_
     robot = tmp_path / 'my_robot.yaml'
     robot.write_text('can_bridge: {ros__parameters: {}}\n')
     (tmp_path / 'my_robot_sim.yaml').write_text('can_bridge: {ros__parameters: {sim: true}}\n')
-    _, produced = launch(launch_file, config=str(robot), sim='true')
+    _, produced = launch(launch_file, config=str(robot), sim='true', split='true')
     node = nodes_by_executable(produced)['rm_robot']
     assert node['parameters'] == [str(robot), str(tmp_path / 'my_robot_sim.yaml')]
 

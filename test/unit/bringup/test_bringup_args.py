@@ -1,0 +1,16 @@
+"""bringup's command line: its own options, and ROS arguments a launcher appends left to rclpy."""
+
+from rm_bringup.bringup import parse_args
+
+
+def test_options_are_read():
+    args = parse_args(['--config', '/tmp/my_robot.yaml', '--sim', '--no-status'])
+    assert (args.config, args.sim, args.no_status, args.robot) == (
+        '/tmp/my_robot.yaml', True, True, 'standard',
+    )
+
+
+def test_ros_arguments_appended_by_a_launcher_are_ignored():
+    args = parse_args(['--robot', 'hero', '--ros-args', '-r', '__node:=bringup', '-p', 'a:=1'])
+    assert args.robot == 'hero'
+    assert not args.sim
