@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import argparse
 import array
+import dataclasses
 import json
 import os
 import pathlib
@@ -291,6 +292,11 @@ class Robot:
                 for bus in frames1
             },
             'plugin_overruns': {n: host.task(n).skipped - overruns0[n] for n in plugins},
+            # the loop's own timing of each component (since start), p50 / p99 / max
+            'components': {
+                name: dataclasses.asdict(summary)
+                for name, summary in hw.scheduler.component_stats()
+            } if hw is not None else {},
             'holds': {a.name: a.hold_reason.value for a in hw.actuators.values()} if hw else {},
             'publishers': {
                 topic: self._publishers(topic)
