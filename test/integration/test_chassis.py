@@ -547,11 +547,11 @@ def test_when_accelerating_hard_expect_the_estimated_power_under_the_limit(rig):
     assert max(s.power for s in states) <= limit * 1.01
     assert all(s.power_limit == limit for s in states if s.state == ChassisCmd.RAW)
     # Independently, from what reached the wire: the efforts the bridge applied and the
-    # wheel speeds it measured (200 Hz), through the same model. Averaged over any 100 ms
-    # within +10 % (what counts: the referee samples at 10 Hz, and its energy buffer
-    # absorbs the rest). A single sample may run over by up to 40 %: an effort is held
-    # until the next tick while the wheels speed up, and in the first milliseconds from
-    # rest the prediction does not know their acceleration yet (+19..29 % measured).
+    # wheel speeds it measured (sampled at 200 Hz), through the same model. The power
+    # stage scales the efforts every 1 ms tick at speeds at most a tick old, so a sample
+    # runs over only by what the wheels gain within a tick and the ESC's current
+    # rounding: +5 % allowed (+0.05 % measured), +2 % averaged over any 100 ms (what
+    # counts: the referee samples at 10 Hz and its energy buffer absorbs the rest).
     config = chassis_section()
     model = ChassisPowerModel(config['power.k1'], config['power.k2'],
                               config['power.static_power'])
@@ -559,7 +559,7 @@ def test_when_accelerating_hard_expect_the_estimated_power_under_the_limit(rig):
     wire = []
     for msg in list(kept):
         index = [msg.name.index(w) for w in wheels]
-        if all(msg.mode[i] == ActuatorCmd.MODE_EFFORT for i in index):
+        if all(msg.mode[i] != ActuatorCmd.MODE_OFF for i in index):
             stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
             wire.append((stamp, estimate_power(model, [msg.command[i] for i in index],
                                                [msg.velocity[i] for i in index])))
@@ -567,11 +567,11 @@ def test_when_accelerating_hard_expect_the_estimated_power_under_the_limit(rig):
     powers = [p for _, p in wire]
     print(f'measured power: plugin max {max(s.power for s in states):.2f} W, wire max '
           f'{max(powers):.2f} W, wire mean {sum(powers) / len(powers):.2f} W')
-    assert max(powers) <= limit * 1.40
+    assert max(powers) <= limit * 1.05
     stamps = [t for t, _ in wire]
     for k, t in enumerate(stamps):
         window = powers[k:bisect.bisect_left(stamps, t + 0.1)]
-        assert sum(window) / len(window) <= limit * 1.10
+        assert sum(window) / len(window) <= limit * 1.02
     # The limit binds: the budget is used (> 80 %) and the robot is slower than the ramp
     # (20 m/s^2 would reach 3 m/s in 0.15 s; at ~40 W it is still below 2 m/s at 0.3 s).
     assert max(powers) >= 0.8 * limit

@@ -20,11 +20,12 @@ from __future__ import annotations
 
 import logging
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import can
 
+from rm_base.control import ChassisPowerModel
 from rm_base.hardware.actuators import (
     ACTUATOR_TYPES,
     Actuator,
@@ -37,6 +38,7 @@ from rm_base.hardware.bus import BusFactory, ManagedBus
 from rm_base.hardware.config import HardwareConfig
 from rm_base.hardware.errors import CommandRejectedError, HardwareConfigError
 from rm_base.hardware.groups import build_dji_groups
+from rm_base.hardware.power_stage import PowerLimitStage
 from rm_base.hardware.protocols.mit import SystemCommand
 from rm_base.hardware.scheduler import Scheduler
 
@@ -114,6 +116,7 @@ class CanHardware:
             clock_ns=clock_ns,
             flush=self._send_outgoing,
         )
+        self.power_limits: dict[str, PowerLimitStage] = {}
         self.receive_in_loop = (
             config.receive_in_loop if receive_in_loop is None else receive_in_loop
         )
@@ -262,6 +265,33 @@ class CanHardware:
             kp=kp,
             kd=kd,
         )
+
+    def add_power_limit(
+        self, group: str, joints: Sequence[str], model: ChassisPowerModel
+    ) -> PowerLimitStage:
+        """Run one power limit over joints in the loop, after their update.
+
+        See :mod:`rm_base.hardware.power_stage`; set the stage's ``limit_w`` to use it.
+
+        Raises:
+            HardwareConfigError: an unknown joint, or the group exists already.
+        """
+        unknown = [j for j in joints if j not in self.actuators]
+        if unknown or not joints:
+            raise HardwareConfigError(
+                f'power limit {group!r}: unknown joint(s) {unknown}' if unknown
+                else f'power limit {group!r}: no joints'
+            )
+        stage = PowerLimitStage(group, [self.actuators[j] for j in joints], model)
+        self.scheduler.add_stage(stage, after_update=True)
+        self.power_limits[group] = stage
+        return stage
+
+    def remove_power_limit(self, group: str) -> None:
+        """Take a power limit out of the loop (no-op if there is none)."""
+        stage = self.power_limits.pop(group, None)
+        if stage is not None:
+            self.scheduler.remove_stage(stage.name)
 
     def request_system_command(self, name: str, command: SystemCommand | int) -> None:
         """Send enable / disable / set-zero / clear-error to an MIT-mode motor next tick.

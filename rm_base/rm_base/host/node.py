@@ -166,6 +166,7 @@ class RobotHost(Node):
                 task.disable(reason)  # waits for a run in progress, through the lock
             except Exception as err:  # keep turning the others off
                 self.get_logger().error(f"disabling plugin '{task.plugin.name}' failed: {err}")
+        self._io.release()
         self._outbox.stop()
         if self._tasks and isinstance(self._io, DdsJointIO):
             # Give reliable readers (the bridge) the chance to receive the zero output

@@ -416,6 +416,26 @@ class PluginBase:
         self._require_init()
         return self._io.create_publisher(msg_type, topic, qos)
 
+    def power_limit(self, joints: Iterable[str], model: Any) -> Any:
+        """A power limit over some of our joints, run in the control loop, or None.
+
+        In the one-process robot the joints' velocity loops run at the loop rate and this
+        stage scales their efforts by one factor after them (set its ``limit_w``; its
+        ``last`` tells what it did); with rm_robot as a process of its own there is none,
+        and the plugin limits the efforts it sends itself.
+
+        Raises:
+            TargetRejectedError: a joint is not ours.
+        """
+        self._require_init()
+        joints = tuple(joints)
+        foreign = [j for j in joints if j not in self._joints]
+        if foreign:
+            raise TargetRejectedError(
+                f"plugin '{self.name}' does not drive joint(s) {', '.join(foreign)}"
+            )
+        return self._io.power_limit(self.name, joints, model)
+
     def claim_joints(self, joints: Iterable[str]) -> tuple[str, ...]:
         """Declare the joints this plugin drives (zero output turns them off).
 

@@ -23,7 +23,7 @@ from __future__ import annotations
 import abc
 import threading
 import weakref
-from collections.abc import Callable, Iterable, Mapping
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any, Protocol
 
 from rclpy.qos import qos_profile_sensor_data
@@ -60,6 +60,12 @@ class JointBackend(Protocol):
     def states(self) -> list[Any]:
         """Every joint's state: named tuples with ``name`` and ActuatorState fields."""
 
+    def add_power_limit(self, group: str, joints: Sequence[str], model: Any) -> Any:
+        """Run one power limit over joints at the loop rate; return its stage."""
+
+    def remove_power_limit(self, group: str) -> None:
+        """Take the power limit of group out of the loop."""
+
 
 class NodeIO(abc.ABC):
     """Shared plugin I/O of one node; see the subclasses. Use ``node_io(node)``."""
@@ -79,6 +85,17 @@ class NodeIO(abc.ABC):
         Raises:
             TargetRejectedError: a target is invalid (``check_targets``); nothing is sent.
         """
+
+    def power_limit(self, group: str, joints: Sequence[str], model: Any) -> Any:
+        """A power limit over joints run in the control loop, or None where there is none.
+
+        Only local joint I/O has one (the joints' own loops run in this process); over
+        DDS the plugin limits the efforts it sends itself.
+        """
+        return None
+
+    def release(self) -> None:  # noqa: B027 - nothing to undo over DDS
+        """Undo what the plugins set up in the loop (power limits). Idempotent."""
 
     def create_publisher(self, msg_type: type, topic: str, qos: Any) -> Any:
         """A publisher for a plugin: through the outbox if there is one."""
@@ -169,6 +186,7 @@ class LocalJointIO(NodeIO):
         super().__init__(node, JointStateView(node.get_logger()))
         self._hardware = hardware
         self._modes = {int(m): m for m in ActuatorMode}
+        self._power_limits: list[str] = []
 
     def send(self, targets: Mapping[str, JointTarget], now: Any) -> None:
         """Set targets on the actuators (the hardware clock stamps them)."""
@@ -180,6 +198,17 @@ class LocalJointIO(NodeIO):
                 )
             except Exception as err:  # an unknown joint: checked targets are otherwise valid
                 raise TargetRejectedError(f'joint {joint!r}: {err}') from err
+
+    def power_limit(self, group: str, joints: Sequence[str], model: Any) -> Any:
+        """The hardware's power limit stage over joints, run after their 1 kHz loops."""
+        stage = self._hardware.add_power_limit(group, joints, model)
+        self._power_limits.append(group)
+        return stage
+
+    def release(self) -> None:
+        """Take the plugins' power limits out of the hardware's loop."""
+        while self._power_limits:
+            self._hardware.remove_power_limit(self._power_limits.pop())
 
     def refresh(self, stamp_ns: int) -> None:
         """Fill the view from the actuators (the loop, before plugins run).

@@ -33,12 +33,15 @@ holds the robot's own heading at the moment the mode was entered, in odom (so FO
 drives straight in the robot frame it had, TWIST swings about it, and GYRO translates in
 that fixed world direction while spinning); it is taken anew after any PASSIVE.
 
-The wheels are driven in effort mode: the speed PIDs and the power limit run here (see
-``wheels``), because only where the torques are computed can they be scaled to the power
-limit, as RoboMaster firmware does on the MCU. The speed loops close over the bridge's
-/actuator_states, so run the plugin at that rate (faster only reuses old samples; raise
-both together). If the plugin stalls, the bridge's own command timeout (100 ms) zeroes
-the wheels.
+The wheel speed loops: in the one-process robot the chassis sends wheel *velocity*
+targets, each wheel's velocity PID (its joint's ``velocity_pid`` in can_bridge) runs in the
+1 kHz loop, and a power-limit stage of the same tick scales the four efforts by one common
+factor before they are packed (``PluginBase.power_limit``; the firmware order: speed loops,
+then one factor on the four currents), so the power model sees speeds at most one tick
+old. With rm_robot as a process of its own the speed PIDs and the power limit run here
+instead (``wheels``, gains ``wheel_pid``) in effort mode, closing over /actuator_states:
+run the plugin at the bridge's publish rate then. If the plugin stalls, the bridge's own
+command timeout (100 ms) zeroes the wheels.
 
 Odometry (``odometry``) counts the wheels' angle changes, so late ticks lose no distance;
 its yaw comes from the IMU when one is configured and fresh (minus the yaw joint angle
@@ -162,6 +165,8 @@ class StandChassis(PluginBase):
             cfg.wheels, cfg.modes, cfg.linear_limits, cfg.angular_limits, cfg.max_wheel_speed
         )
         self._drive = WheelSpeedController(len(cfg.wheel_joints), cfg.wheel_gains, cfg.power_model)
+        # In the one-process robot: the wheels' own 1 kHz loops and a power stage after them.
+        self._power_stage = self.power_limit(cfg.wheel_joints, cfg.power_model)
         self._odometry = Odometry(cfg.wheels)
         self._predictor = SpeedPredictor()
         self._imu = _LatestImu()
@@ -447,15 +452,27 @@ class StandChassis(PluginBase):
             yaw_joint=phi, yaw_joint_rate=phi_rate, gimbal_yaw_rate=gimbal_rate,
         )
         limit = self.config.power_limit if request.power_limit is None else request.power_limit
-        # Power at the speeds the wheels will have at the end of the coming period.
-        ahead = self._predictor.predict(now_ns + round(_NS_PER_S / self.rate))
-        wheels = self._drive.update(motion.wheel_targets, speeds, dt, limit, ahead or None)
-        self.send_joint_targets({
-            joint: JointTarget.with_effort(effort)
-            for joint, effort in zip(self.config.wheel_joints, wheels.efforts, strict=True)
-        })
-        self._report.set_output(motion.twist, motion.wheel_targets, wheels.efforts,
-                                wheels.power_w, limit)
+        joints = self.config.wheel_joints
+        stage = self._power_stage
+        if stage is not None:
+            stage.limit_w = limit
+            self.send_joint_targets({
+                joint: JointTarget.with_velocity(target)
+                for joint, target in zip(joints, motion.wheel_targets, strict=True)
+            })
+            last = stage.last  # the loop's latest tick
+            efforts = last.torques if last is not None else (0.0,) * len(joints)
+            power_w = last.power_w if last is not None else self._drive.idle_power(speeds)
+        else:
+            # Power at the speeds the wheels will have at the end of the coming period.
+            ahead = self._predictor.predict(now_ns + round(_NS_PER_S / self.rate))
+            wheels = self._drive.update(motion.wheel_targets, speeds, dt, limit, ahead or None)
+            self.send_joint_targets({
+                joint: JointTarget.with_effort(effort)
+                for joint, effort in zip(joints, wheels.efforts, strict=True)
+            })
+            efforts, power_w = wheels.efforts, wheels.power_w
+        self._report.set_output(motion.twist, motion.wheel_targets, efforts, power_w, limit)
         self._report.speeds = speeds
 
     # -- reports ------------------------------------------------------------------------

@@ -12,6 +12,14 @@ from rm_base.plugin.node_io import LocalJointIO
 class FakeHardware:
     def __init__(self):
         self.commands = []
+        self.power_limits = {}
+
+    def add_power_limit(self, group, joints, model):
+        self.power_limits[group] = (tuple(joints), model)
+        return ('stage', group)
+
+    def remove_power_limit(self, group):
+        del self.power_limits[group]
 
     def set_command(self, name, mode, **values):
         if name not in ('wheel_l', 'wheel_r'):
@@ -58,3 +66,13 @@ def test_the_view_holds_every_joint_stamped_with_the_tick():
     state = io.joint_states.get('wheel_l')
     assert (state.position, state.velocity, state.command, state.stamp_ns) == (1.0, 2.0, 0.4, 123)
     assert state.mode is ActuatorMode.VELOCITY and state.online
+
+
+def test_a_power_limit_runs_in_the_hardware_until_released():
+    hw = FakeHardware()
+    io = LocalJointIO(FakeNode(), hw)
+    assert io.power_limit('chassis', ['wheel_l', 'wheel_r'], 'model') == ('stage', 'chassis')
+    assert hw.power_limits == {'chassis': (('wheel_l', 'wheel_r'), 'model')}
+    io.release()
+    io.release()  # idempotent
+    assert hw.power_limits == {}

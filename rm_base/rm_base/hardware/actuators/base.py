@@ -466,6 +466,28 @@ class Actuator:
                 )
             self._hold_zero(HoldReason.ERROR)
 
+    @property
+    def effort_out(self) -> float:
+        """The effort this tick's update commands [N·m] (0 while held at zero)."""
+        return self._effort_out
+
+    def scale_output(self, factor: float) -> None:
+        """Scale this tick's output by factor in [0, 1] (a group stage after the update).
+
+        Nothing changes while the output is held at zero; the control loops keep their
+        own state (their integrals see the effort they asked for).
+
+        Raises:
+            ValueError: factor outside [0, 1] or NaN.
+        """
+        if not 0.0 <= factor <= 1.0:
+            raise ValueError(f'{self.name}: output scale must be in [0, 1], got {factor!r}')
+        if self._applied_mode is Mode.OFF or factor == 1.0:
+            return
+        self._effort_out = self._set_output(
+            self._effort_out * factor, self._command, self._feedback
+        )
+
     def _hold_reason(
         self, now_ns: int, fb: Feedback | None, cmd: JointCommand | None
     ) -> HoldReason:
