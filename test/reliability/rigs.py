@@ -22,7 +22,7 @@ import os
 import threading
 import time
 import typing
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import can
@@ -249,6 +249,9 @@ class WireWatch:
         stall_s: the checker's stall gap [s] (see WireChecker).
         feedback_window_s: the checker's feedback window [s] (see WireChecker): the
             feedback timeout plus the grace.
+        clock: the time frames and commands are stamped with [s]; a stepped world's
+            ``timestamp`` in lockstep (then there is no thread: ``sync`` checks everything
+            up to the world's now).
     """
 
     def __init__(
@@ -263,6 +266,7 @@ class WireWatch:
         period_s: float = 0.01,
         stall_s: float | None = 0.02,
         feedback_window_s: float = 0.15,
+        clock: Callable[[], float] | None = None,
     ) -> None:
         self.checker = WireChecker(
             config,
@@ -285,8 +289,11 @@ class WireWatch:
         self._done_until = 0.0  # everything before this wall time has been checked
         self._stop = threading.Event()
         self._period_s = period_s
-        self._thread = threading.Thread(target=self._run, name='wire-watch', daemon=True)
-        self._thread.start()
+        self._clock = time.time if clock is None else clock
+        self._thread: threading.Thread | None = None
+        if clock is None:
+            self._thread = threading.Thread(target=self._run, name='wire-watch', daemon=True)
+            self._thread.start()
 
     def _run(self) -> None:
         while not self._stop.wait(self._period_s):
@@ -331,14 +338,19 @@ class WireWatch:
         original = hardware.set_command
         commands = self._commands
 
+        clock = self._clock
+
         def set_command(name: str, mode: int, **kwargs: Any) -> None:
             original(name, mode, **kwargs)  # raises for a rejected one: not noted
-            commands.append((time.time(), _JointCommand(name, mode)))
+            commands.append((clock(), _JointCommand(name, mode)))
 
         hardware.set_command = set_command  # type: ignore[method-assign]
 
     def sync(self, timeout: float = 10.0) -> None:
-        """Wait until every frame up to now has been checked."""
+        """Wait until every frame up to now has been checked (lockstep: check them)."""
+        if self._thread is None:
+            self._work(self._clock())
+            return
         target = time.time()
         deadline = time.monotonic() + timeout
         while self._done_until < target and time.monotonic() < deadline:
@@ -347,7 +359,8 @@ class WireWatch:
     def close(self) -> None:
         """Stop the thread, check everything left, close the taps."""
         self._stop.set()
-        self._thread.join(timeout=5.0)
+        if self._thread is not None:
+            self._thread.join(timeout=5.0)
         self._work(math.inf)
         for tap in self._taps.values():
             tap.shutdown()

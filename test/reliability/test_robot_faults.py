@@ -1,9 +1,10 @@
-"""Faults on the whole standard robot (SimRobot: can_bridge on rm_sim + rm_robot with every
-plugin, in this process), every frame on both buses checked by the unsafe-frame checker.
+"""Faults on the whole standard robot in lockstep (support.lockstep: the loop with every
+plugin and rm_sim stepped on a simulated clock), every frame on both buses checked by the
+unsafe-frame checker.
 
-* A motor goes silent: its command is zero on the wire within 100 ms (+ the checker's
-  real-time grace, see GRACE), the plugin that owns it goes to its safe state and names the
-  joint, and it comes back without a restart when the motor does.
+* A motor goes silent: its command is zero on the wire within 100 ms (+ one tick of grace),
+  the plugin that owns it goes to its safe state and names the joint, and it comes back
+  without a restart when the motor does.
 * A friction wheel stalls: the shooter does not feed (no ball against stopped wheels) and
   the stalled wheel's current stays within its max_effort.
 * A wheel overheats: the bridge holds it at zero (OVER_TEMPERATURE on /diagnostics, MODE_OFF
@@ -11,9 +12,8 @@ plugin, in this process), every frame on both buses checked by the unsafe-frame 
 * Bad plugin commands (NaN, ±inf, huge, unknown modes, stale stamps) on /chassis_cmd,
   /vel_cmd, /gimbal_cmd and /shoot_cmd: rejected or clamped, nothing unsafe on the wire.
 
-One robot serves the module (start-up costs seconds); each test leaves it as it found it
-(faults cleared, commands stopped). The world runs in real time: waits on conditions,
-WAIT seconds at most.
+One robot serves the module; each test leaves it as it found it (faults cleared, commands
+stopped). Waits step the robot until a condition holds, WAIT simulated seconds at most.
 
 Covered elsewhere and not repeated: trigger jam -> BLOCK -> FEED and the jam fault
 (test/integration/test_shooter.py), chassis and gimbal command timeouts
@@ -23,63 +23,49 @@ Covered elsewhere and not repeated: trigger jam -> BLOCK -> FEED and the jam fau
 from __future__ import annotations
 
 import math
-import time
 
 import pytest
-from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Twist
 from rm_base.sim import Fault
-from support.robot import SHOOTER_SIM_LOADS, SimRobot
+from support.lockstep import LockstepRobot
+from support.robot import SHOOTER_SIM_LOADS
 
 from reliability.rigs import WireWatch, hardware_config
 from reliability.wire import check_actuator_states, max_efforts
-from rm_msgs.msg import (
-    ActuatorState,
-    ChassisCmd,
-    ChassisState,
-    GimbalCmd,
-    GimbalState,
-    ShootCmd,
-    ShooterState,
-)
+from rm_msgs.msg import ChassisCmd, GimbalCmd, ShootCmd, ShooterState
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
-WAIT = 10.0  # [s] longest wait for a condition
-# [s] checker timing grace in real time. Generous: on this shared 2-vCPU VM a thread of
-# this process can lose the CPU for 100-300 ms (measured under parallel test load), and a
-# frame the scheduler decided on in time then reaches the wire that late. Exact timing is
-# asserted in lockstep (test_hardware_faults.py); the effort limits here have no grace.
-GRACE = 0.25
-
-HOST = {'shooter.command_timeout': 0.5}
+WAIT = 10.0  # [s] longest wait for a condition, simulated time
+GRACE = 0.0011  # [s] the checker's timing grace: one loop tick (+ the float rounding of
+# the frames' epoch timestamps, ~0.2 µs)
 
 
 @pytest.fixture(scope='module')
 def robot():
-    r = SimRobot('standard', overrides={'can_bridge': SHOOTER_SIM_LOADS, 'rm_robot': HOST})
-    for topic, cls in (
-        ('/chassis_state', ChassisState),
-        ('/gimbal_state', GimbalState),
-        ('/shooter_state', ShooterState),
-    ):
-        r.subscribe(topic, cls, keep_history=True)
-    r.subscribe('/actuator_states', ActuatorState)
-    r.watch = WireWatch(
-        r.world, hardware_config(r.bridge_parameters), grace_s=GRACE, track_commands=True
+    r = LockstepRobot('standard', overrides={'can_bridge': SHOOTER_SIM_LOADS})
+    for topic in ('/chassis_state', '/gimbal_state', '/shooter_state'):
+        r.watch(topic, keep_history=True)
+    r.watch('/actuator_states')
+    r.wire = WireWatch(
+        r.world, hardware_config(r.bridge_parameters), grace_s=GRACE, track_commands=True,
+        clock=r.world.timestamp,
     )
-    r.watch.watch_commands(r.bridge.hardware)
+    r.wire.watch_commands(r.bridge.hardware)
     # every /actuator_states too: no NaN, nothing beyond a limit, MODE_OFF means 0
     limits = max_efforts(hardware_config(r.bridge_parameters))
     r.state_problems = []
-    r.driver.create_subscription(
-        ActuatorState,
-        '/actuator_states',
-        lambda m: r.state_problems.extend(check_actuator_states(m, limits)),
-        50,
-    )
+    last = [None]
+
+    def check_states() -> None:
+        msg = r.latest('/actuator_states')
+        if msg is not last[0]:
+            last[0] = msg
+            r.state_problems.extend(check_actuator_states(msg, limits))
+
+    r.on_tick(check_states)
     yield r
-    r.watch.close()
+    r.wire.close()
     r.close()
 
 
@@ -89,9 +75,9 @@ def clean(robot):
     for topic in ('/chassis_cmd', '/vel_cmd', '/gimbal_cmd', '/shoot_cmd'):
         robot.stop_publishing(topic)
     robot.world.clear_faults()
-    robot.watch.sync()
-    assert robot.watch.checker.violation_count == 0, '\n'.join(
-        map(str, robot.watch.checker.violations)
+    robot.wire.sync()
+    assert robot.wire.checker.violation_count == 0, '\n'.join(
+        map(str, robot.wire.checker.violations)
     )
     assert robot.state_problems == []
 
@@ -130,15 +116,15 @@ def test_when_a_wheel_goes_silent_expect_zero_and_the_chassis_passive_naming_it(
         lambda: state_of(robot, '/chassis_state') == ChassisCmd.RAW and wheels_driven(robot), WAIT
     )
     mark = len(robot.history('/chassis_state'))
-    episodes = len(robot.watch.checker.stats('wheel_fl').zero_latencies)
+    episodes = len(robot.wire.checker.stats('wheel_fl').zero_latencies)
     robot.world.inject('wheel_fl', Fault.offline())
     assert robot.wait_until(lambda: not joint(robot, 'wheel_fl')['online'], WAIT)
     assert robot.wait_until(lambda: state_of(robot, '/chassis_state') == ChassisCmd.PASSIVE, WAIT)
     reasons = {m.reason for m in since(robot, '/chassis_state', mark)}
     assert any('wheel_fl' in r for r in reasons), reasons
     # on the wire: zero within the feedback timeout plus the grace (else a violation)
-    robot.watch.sync()
-    latencies = robot.watch.checker.stats('wheel_fl').zero_latencies[episodes:]
+    robot.wire.sync()
+    latencies = robot.wire.checker.stats('wheel_fl').zero_latencies[episodes:]
     assert latencies and max(latencies) <= GRACE, latencies
     # it comes back: RAW again, driving, no restart
     robot.world.clear_faults('wheel_fl')
@@ -194,14 +180,13 @@ def test_when_a_friction_wheel_stalls_expect_no_shot_and_its_current_limited(rob
     trigger = robot.world.motor('trigger').model
     assert robot.wait_until(lambda: abs(trigger.velocity) < 0.01, WAIT)  # settled
     angle = trigger.angle
-    deadline = time.monotonic() + 1.0
-    while time.monotonic() < deadline:  # a second of waiting: the trigger stays put
-        assert abs(trigger.angle - angle) < 0.05
-        time.sleep(0.02)
+    moved = []
+    robot.run(1.0, every=lambda: moved.append(abs(trigger.angle - angle)))  # a second
+    assert max(moved) < 0.05  # the trigger stays put
     assert robot.latest('/shooter_state').shots_fired == fired
     # the stalled wheel gets its velocity loop's full output, never more than max_effort
-    robot.watch.sync()
-    seen = robot.watch.checker.stats('friction_l').max_effort_seen
+    robot.wire.sync()
+    seen = robot.wire.checker.stats('friction_l').max_effort_seen
     assert 0.25 <= seen <= 0.3 * 1.01, seen  # standard.yaml friction max_effort 0.3 N·m
 
 
@@ -220,11 +205,6 @@ def test_when_a_wheel_overheats_expect_it_held_at_zero_while_the_others_drive(ro
     # the chassis does not look at temperatures: it stays in RAW on three wheels
     robot.world.inject('wheel_rr', Fault.over_temperature(60.0))
     assert robot.wait_until(lambda: wheels_driven(robot), WAIT)
-
-
-def _stamp(robot, offset_s):
-    t = robot.driver.get_clock().now().nanoseconds + round(offset_s * 1e9)
-    return Time(sec=t // 1_000_000_000, nanosec=t % 1_000_000_000)
 
 
 BAD_CHASSIS = [
@@ -252,20 +232,15 @@ def test_when_plugin_commands_are_invalid_or_stale_expect_every_plugin_passive(r
     ):
         for msg in messages:
             robot.publish(topic, msg, rate_hz=100.0)
-            time.sleep(0.15)
+            robot.run(0.15)
     # valid commands, but stamped 5 s ago: stale on arrival
     for topic, msg in (
         ('/chassis_cmd', ChassisCmd(mode=ChassisCmd.RAW)),
         ('/gimbal_cmd', GimbalCmd(mode=GimbalCmd.RATE, rate_yaw=1.0)),
         ('/shoot_cmd', ShootCmd(mode=ShootCmd.READY, speed=15.0)),
     ):
-        robot.stop_publishing(topic)
-        pub = robot.driver.create_publisher(type(msg), topic, 10)
-        end = time.monotonic() + 0.5
-        while time.monotonic() < end:
-            msg.header.stamp = _stamp(robot, -5.0)
-            pub.publish(msg)
-            time.sleep(0.01)
+        robot.publish(topic, msg, rate_hz=100.0, age_s=5.0)
+        robot.run(0.5)
     for topic, passive in (
         ('/chassis_state', ChassisCmd.PASSIVE),
         ('/gimbal_state', GimbalCmd.PASSIVE),
@@ -294,9 +269,9 @@ def test_when_plugin_commands_are_huge_expect_outputs_within_every_limit(robot):
         rate_hz=50.0,
     )
     assert robot.wait_until(lambda: wheels_driven(robot), WAIT)
-    time.sleep(1.0)  # let every loop run into its limits (the checker watches all along)
-    robot.watch.sync()
+    robot.run(1.0)  # let every loop run into its limits (the checker watches all along)
+    robot.wire.sync()
     limits = {j.name: j.max_effort for j in robot.bridge.hardware.actuators.values()}
     for name, limit in limits.items():
-        assert robot.watch.checker.stats(name).max_effort_seen <= limit * 1.01 + 1e-3, name
+        assert robot.wire.checker.stats(name).max_effort_seen <= limit * 1.01 + 1e-3, name
     assert robot.latest('/shooter_state').shots_fired <= shots_before + 2  # num=2

@@ -78,8 +78,8 @@ class LockstepRobot:
         self._imu_topic = host.get('imu.topic', 'imu')
         self._imu_frame_id = host.get('imu.frame_id', 'gimbal_imu')
         self._mounting = Mounting(tuple(host.get('imu.mount_rpy', (0.0, 0.0, 0.0))))
-        # topic: (message or factory, period [ticks], next tick)
-        self._streams: dict[str, tuple[Any, int, int]] = {}
+        # topic: (message or factory, period [ticks], next tick, age of its stamps [s])
+        self._streams: dict[str, tuple[Any, int, int, float]] = {}
         self._latest: dict[str, Any] = {}
         self._history: dict[str, list[Any]] = {}
         self._tick_hooks: list[Callable[[], object]] = []
@@ -147,10 +147,10 @@ class LockstepRobot:
         period = self.world.period_ns
         for _ in range(ticks):
             self._set_clock(self.world.time_ns + period)
-            for topic, (msg, every, next_tick) in list(self._streams.items()):
+            for topic, (msg, every, next_tick, age_s) in list(self._streams.items()):
                 if self.ticks >= next_tick:
-                    self._streams[topic] = (msg, every, next_tick + every)
-                    self._inject(topic, msg() if callable(msg) else msg)
+                    self._streams[topic] = (msg, every, next_tick + every, age_s)
+                    self._inject(topic, msg() if callable(msg) else msg, age_s)
             for joint, command in self._driven.items():
                 self.bridge.hardware.set_command(joint, **command)
             self.bridge.step(1)
@@ -178,27 +178,31 @@ class LockstepRobot:
                 every()
 
     # -- commands ---------------------------------------------------------------------------
-    def publish(self, topic: str, msg: Any, *, rate_hz: float | None = None) -> None:
+    def publish(
+        self, topic: str, msg: Any, *, rate_hz: float | None = None, age_s: float = 0.0
+    ) -> None:
         """Hand msg to its subscribers now; with rate_hz, from the next tick every 1/rate_hz.
 
         msg may be a function that makes the message (called each time). A message with a
-        header is stamped on the simulated clock each time, as a live commander does.
+        header is stamped on the simulated clock each time, as a live commander does,
+        age_s [s] in the past (a stale command: > its timeout).
         """
         every = 0 if rate_hz is None else round(1e9 / rate_hz / self.world.period_ns)
         if every:
-            self._streams[topic] = (msg, every, self.ticks)
+            self._streams[topic] = (msg, every, self.ticks, age_s)
         else:
             self._streams.pop(topic, None)
             self._set_clock(self.world.time_ns)
-            self._inject(topic, msg() if callable(msg) else msg)
+            self._inject(topic, msg() if callable(msg) else msg, age_s)
 
     def stop_publishing(self, topic: str) -> None:
         """Stop a stream started by publish(..., rate_hz=...)."""
         self._streams.pop(topic, None)
 
-    def _inject(self, topic: str, msg: Any) -> None:
+    def _inject(self, topic: str, msg: Any, age_s: float = 0.0) -> None:
         if hasattr(msg, 'header'):  # the caller's message too, as a publisher stamps it
-            msg.header.stamp = self._clock.now().to_msg()
+            stamp_ns = self._clock.now().nanoseconds - round(age_s * 1e9)
+            msg.header.stamp = Time(nanoseconds=stamp_ns).to_msg()
         msg = copy.deepcopy(msg)  # each delivery a message of its own, as from DDS
         if self.host.inject(topic, msg) == 0:
             raise LookupError(f'no plugin subscribes {topic}')
