@@ -48,6 +48,11 @@ TARGETS: tuple[Target, ...] = (
            'cpu.load.process', '57', '<', 35.0),
     Target('CPU of the robot without the simulator, streaming [% of a core], two processes',
            'split.cpu.host_bridge', '71', '<', 35.0),
+    Target('from the wire: wheel group frames per second (make run)', 'wire.rate', '901', '>=',
+           995.0),
+    Target('from the wire: gaps over 1.5 ms [%] (make run)', 'wire.gaps', '13', '<', 0.5),
+    Target('from the wire: command -> new mode, worst of the steps [ms] (make run)',
+           'wire.delay.max', '17', '<', 3.0),
 )
 
 

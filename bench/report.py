@@ -26,6 +26,7 @@ SECTIONS = {
     'throughput': '4. Feedback decode + dispatch (bridge code, rigs without physics)',
     'baseline': '5. Same 1 kHz loop on an rclpy timer (standard robot actuators, same run)',
     'split': '6. Sections 1-3 again with can_bridge (+ rm_sim) and rm_robot in two processes',
+    'wire': '7. From the wire: can0 log of bringup --sim, /chassis_cmd PASSIVE <-> RAW every 0.6 s',
 }
 
 
@@ -703,6 +704,18 @@ ROWS: tuple[Row, ...] = (
         None,
         _LOAD,
     ),
+)
+
+ROWS += (
+    Row('wire.rate', 'wire', 'wheel group frames (0x200) per second', 'wire',
+        _get('frames_per_s'), ('>=', 995.0)),
+    Row('wire.gaps', 'wire', 'gaps between them over 1.5 ms [%]', 'wire',
+        _get('late_gap_pct'), ('<', 0.5)),
+    Row('wire.gap.max', 'wire', '  longest gap [ms]', 'wire', _get('max_gap_ms')),
+    Row('wire.delay.median', 'wire', 'command -> first frame of the new mode, median [ms]',
+        'wire', _get('delay_ms', 'median')),
+    Row('wire.delay.max', 'wire', 'command -> first frame of the new mode, worst [ms]', 'wire',
+        _get('delay_ms', 'max'), ('<', 3.0)),
 )
 
 _OPS = {'<': operator.lt, '<=': operator.le, '>': operator.gt, '>=': operator.ge}

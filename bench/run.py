@@ -34,7 +34,7 @@ ROOT = Path(__file__).resolve().parents[1]
 if str(ROOT) not in sys.path:
     sys.path.insert(0, str(ROOT))
 
-MEASUREMENTS = ('robot', 'throughput', 'baseline', 'split')
+MEASUREMENTS = ('robot', 'throughput', 'baseline', 'split', 'wire')
 DEFAULT_DOMAIN_ID = 90
 
 
@@ -82,7 +82,7 @@ def main(argv: list[str] | None = None) -> int:
     os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
     os.environ['ROS_DOMAIN_ID'] = str(args.domain_id)
 
-    from bench import baseline, robot, throughput
+    from bench import baseline, robot, throughput, wire_check
     from bench.loop_targets import evaluate_targets, format_targets
     from bench.machine import Window, machine_facts
     from bench.report import ROWS, evaluate, format_table
@@ -96,6 +96,7 @@ def main(argv: list[str] | None = None) -> int:
         )
     tp_plan = throughput.QUICK_PLAN if args.quick else throughput.ThroughputPlan()
     bl_plan = baseline.QUICK_PLAN if args.quick else baseline.BaselinePlan()
+    wire_plan = wire_check.QUICK_PLAN if args.quick else wire_check.WirePlan()
 
     stamp = dt.datetime.now().strftime('%Y%m%d-%H%M%S')
     args.out.mkdir(parents=True, exist_ok=True)
@@ -119,6 +120,7 @@ def main(argv: list[str] | None = None) -> int:
         'throughput': lambda i: throughput.run_once(tp_plan),
         'baseline': lambda i: baseline.run_once(bl_plan),
         'split': lambda i: robot.run_split(robot_plan, log_dir, str(i)),
+        'wire': lambda i: wire_check.run_once(wire_plan, log_dir, str(i)),
     }
     # Runs interleave the measurements, so a burst of steal or load hits all of them alike.
     for i in range(1, runs + 1):

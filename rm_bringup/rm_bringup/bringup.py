@@ -3,6 +3,7 @@
     bringup --robot standard --sim        # the standard robot on the simulated CAN bus
     bringup --robot hero                  # the hero on its real buses (socketcan)
     bringup --config my_robot.yaml --sim  # any robot config file
+    bringup --sim --params-file extra.yaml  # and overrides, loaded last
 
 The robot config is a ROS parameter file with a ``can_bridge`` and an ``rm_robot``
 section (rm_bringup/config/<robot>.yaml). ``--sim`` starts rm_sim, the simulated motors
@@ -85,6 +86,10 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     which.add_argument('--robot', default='standard', help='installed robot config name')
     which.add_argument('--config', help='path of a robot config file (instead of --robot)')
     parser.add_argument('--sim', action='store_true', help='run every bus on rm_sim')
+    parser.add_argument(
+        '--params-file', action='append', default=[], type=pathlib.Path,
+        help='another parameter file, loaded last (repeatable), e.g. can_bridge: log_file',
+    )
     parser.add_argument('--no-status', action='store_true', help='no live status line')
     parser.add_argument(
         '--duration', type=float, default=None, help='stop after this many seconds [s]'
@@ -139,6 +144,7 @@ def main(argv: list[str] | None = None) -> int:
                 return 1
         try:
             node_files = files if sim is None else [*files, sim.bridge_overlay]
+            node_files = [*node_files, *args.params_file]
             ros_args = ['--ros-args']
             for path in node_files:
                 ros_args += ['--params-file', str(path)]

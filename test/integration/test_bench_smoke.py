@@ -57,14 +57,17 @@ def test_when_run_quick_expect_every_row_in_the_table_and_the_json(tmp_path):
     data = json.loads(results[0].read_text())
     assert [r['key'] for r in data['rows']] == [row.key for row in rows]
     # every measurement produced its raw result (not only a printed 'n/a')
-    assert all(len(data['raw'][name]) == 1 for name in ('robot', 'throughput', 'baseline', 'split'))
+    assert all(
+        len(data['raw'][name]) == 1
+        for name in ('robot', 'throughput', 'baseline', 'split', 'wire')
+    )
     # the control loop's targets, each printed with a verdict; the one-process robot's
     # (make run's) all measured (a quick two-process run may see no settled wheel step)
     targets = data['loop_targets']
     assert [t['label'] for t in targets] == [t.label for t in _targets()]
     assert all(t['verdict'] in ('PASS', 'MISS', 'n/a') for t in targets), targets
     one_process = [t for t in targets if t['label'].endswith(('one process', '(make run)'))]
-    assert len(one_process) == 6
+    assert len(one_process) == 9
     assert all(t['verdict'] in ('PASS', 'MISS') for t in one_process), one_process
     for target in targets:
         assert any(line.startswith(f'| {target["label"]} |') for line in table_lines)

@@ -14,3 +14,8 @@ def test_ros_arguments_appended_by_a_launcher_are_ignored():
     args = parse_args(['--robot', 'hero', '--ros-args', '-r', '__node:=bringup', '-p', 'a:=1'])
     assert args.robot == 'hero'
     assert not args.sim
+
+
+def test_extra_parameter_files_are_kept_in_order():
+    args = parse_args(['--sim', '--params-file', 'a.yaml', '--params-file', 'b.yaml'])
+    assert [str(p) for p in args.params_file] == ['a.yaml', 'b.yaml']
