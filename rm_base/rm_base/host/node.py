@@ -244,7 +244,9 @@ class RobotHost(Node):
             )
             plugin = loader.create(type_name, plugin=name)
             plugin.init(self, name, PluginParams(self, name, type_name))
-            self._tasks[name] = PluginTask(plugin, inputs)
+            # one loop period apart: plugins of like rates do not all fall on one tick
+            phase_ns = len(self._tasks) * self.loop.period_ns
+            self._tasks[name] = PluginTask(plugin, inputs, phase_ns)
 
         for name, task in self._tasks.items():
             self.create_service(

@@ -61,6 +61,9 @@ class PluginTask:
     Args:
         plugin: an initialised plugin.
         inputs: the loop's shared per-tick inputs.
+        phase_ns: how long after enable the first scheduled run comes [ns]; the host
+            gives each plugin another tick, so that plugins of similar rates do not all
+            run in one tick and overrun it (firmware schedulers offset their tasks alike).
 
     Attributes:
         name: stage name, ``plugin <instance name>``.
@@ -72,7 +75,7 @@ class PluginTask:
             disables the plugin (zero output), with the error as its reason.
     """
 
-    def __init__(self, plugin: PluginBase, inputs: TickInputs) -> None:
+    def __init__(self, plugin: PluginBase, inputs: TickInputs, phase_ns: int = 0) -> None:
         self.plugin = plugin
         self.name = f'plugin {plugin.name}'
         self.period_ns = round(_NS_PER_S / plugin.rate)
@@ -83,6 +86,7 @@ class PluginTask:
         self.errors = 0
         self._inputs = inputs
         self._min_gap_ns = min(self.period_ns // 4, _MAX_GAP_NS)
+        self.phase_ns = phase_ns % self.period_ns
         self._next_ns: int | None = None
         self._last_ns: int | None = None
         self._new_command = False
@@ -100,7 +104,7 @@ class PluginTask:
             return False
         next_ns = self._next_ns
         if next_ns is None:
-            next_ns = now_ns
+            next_ns = self._next_ns = now_ns + self.phase_ns
         due = now_ns >= next_ns
         for_command = (
             not due

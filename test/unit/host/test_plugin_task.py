@@ -137,3 +137,11 @@ def test_enable_and_disable_wait_for_a_run_in_progress():
     disabler.join(5.0)
     loop.join(5.0)
     assert not plugin.enabled
+
+
+def test_a_phase_moves_the_schedule_not_the_rate():
+    clock = {'ns': 0}
+    plugin = FakePlugin(100.0)
+    task = PluginTask(plugin, TickInputs(lambda: Time(clock['ns'])), phase_ns=3 * MS)
+    run_ticks(task, clock, 30)
+    assert plugin.runs == [3 * MS, 13 * MS, 23 * MS]
