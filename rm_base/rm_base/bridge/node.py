@@ -91,7 +91,7 @@ class CanBridgeNode(Node):
     """
 
     def get_logger(self) -> FastLogger:
-        """The node's logger, cheap enough for its 1 kHz and plugin threads (ros_logging)."""
+        """The node's logger, cheap enough for the 1 kHz loop thread (ros_logging)."""
         return self._fast_logger
 
     def __init__(self, **kwargs: Any) -> None:

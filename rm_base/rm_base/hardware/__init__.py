@@ -31,7 +31,9 @@ from rm_base.hardware.errors import (
     ValueRangeError,
 )
 from rm_base.hardware.groups import DjiCommandGroup
-from rm_base.hardware.scheduler import PeriodStats, Scheduler
+from rm_base.hardware.power_stage import PowerLimitStage
+from rm_base.hardware.scheduler import PeriodStats, Scheduler, Stage
+from rm_base.hardware.timing import DurationHistogram, DurationSummary
 
 __all__ = [
     'ACTUATOR_TYPES',
@@ -49,6 +51,8 @@ __all__ = [
     'ChecksumError',
     'CommandRejectedError',
     'DjiCommandGroup',
+    'DurationHistogram',
+    'DurationSummary',
     'FrameLengthError',
     'HardwareConfig',
     'HardwareConfigError',
@@ -60,8 +64,10 @@ __all__ = [
     'ManagedBus',
     'Mode',
     'PeriodStats',
+    'PowerLimitStage',
     'ProtocolError',
     'SafetyConfig',
     'Scheduler',
+    'Stage',
     'ValueRangeError',
 ]

@@ -325,7 +325,8 @@ class Scheduler:
 
     def _log_window(self) -> None:
         lateness = self._lateness.take_window()
-        windows = [(name, h.take_window()) for name, h in self._durations.items()]
+        # a copy: the host may add a stage meanwhile (list() of a dict is one GIL step)
+        windows = [(name, h.take_window()) for name, h in list(self._durations.items())]
         top = sorted(windows, key=lambda item: item[1].p99_us, reverse=True)[:3]
         _log.info(
             'loop: %d ticks, %d skipped in all; lateness p50 %.0f / p99 %.0f / max %.0f us; '

@@ -16,12 +16,10 @@ from rm_base.node_main import init_ros, spin_until_shutdown
 def make_executor(node: RobotHost) -> Executor:
     """Return the executor for node's ROS callbacks, as its ``executor`` parameter says.
 
-    The executor only runs ROS callbacks (subscriptions, services, the state timer); the
-    plugins tick in their own threads. EventsExecutor is the default: with
-    /actuator_states at 1 kHz it used 14 % of a core against 38 % for the
-    SingleThreadedExecutor (rm_robot with a 200 Hz plugin: 20-24 % against 56-73 %),
-    measured here on rclpy 7.1.6. Its spin() ignores SIGINT, and spin() from a thread
-    received nothing at all, so callers loop on spin_once(timeout_sec=...).
+    The executor only runs the ROS edge (subscriptions, services, the state timer); the
+    plugins run in the control loop's thread. EventsExecutor is the default: several
+    times cheaper per callback than the SingleThreadedExecutor (docs/PERFORMANCE.md). Its
+    spin() ignores SIGINT on rclpy 7.1.6, so callers loop on spin_once(timeout_sec=...).
     """
     if node.executor_kind is ExecutorKind.EVENTS:
         return EventsExecutor(context=node.context)

@@ -83,7 +83,7 @@ class RobotHost(Node):
     """
 
     def get_logger(self) -> FastLogger:
-        """The node's logger, cheap enough for its 1 kHz and plugin threads (ros_logging)."""
+        """The node's logger, cheap enough for the 1 kHz loop thread (ros_logging)."""
         return self._fast_logger
 
     def __init__(
