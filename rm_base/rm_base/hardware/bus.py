@@ -1,9 +1,11 @@
-"""A managed python-can bus: send, a receive thread that dispatches frames, reconnects.
+"""A managed python-can bus: send, dispatch of received frames, reconnects.
 
-:class:`ManagedBus` wraps one ``can.Bus`` (any interface). Its receive thread only hands
-frames to their owners — handlers registered per arbitration id — and never does control
-work. A bus error, bus-off or an adapter that disappears is logged and counted, the bus
-is closed and reopened with exponential back-off, and nothing raises into the caller:
+:class:`ManagedBus` wraps one ``can.Bus`` (any interface). Received frames are handed to
+their owners — handlers registered per arbitration id — either by the control loop, which
+calls :meth:`ManagedBus.poll` at the start of each tick (the default), or by a receive
+thread of the bus; neither does control work. A bus error, bus-off or an adapter that
+disappears is logged and counted, the bus is closed and reopened with exponential
+back-off, and nothing raises into the caller:
 :meth:`ManagedBus.send` returns False while the bus is down.
 
 Optionally every frame sent and received is written to a python-can log file
@@ -18,7 +20,7 @@ import enum
 import logging
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 import can
@@ -113,9 +115,9 @@ _DEFAULT = _Default()
 
 
 class ManagedBus:
-    """One CAN bus with a receive thread, dispatch by arbitration id and reconnection.
+    """One CAN bus: dispatch by arbitration id (polled or a receive thread), reconnection.
 
-    Handlers run on the receive thread; they must be quick (decode and store). A handler
+    Handlers run on the polling or the receive thread; they must be quick (decode, store). A handler
     returns True if the frame was for it; a frame nobody claims is counted as unmatched.
 
     Example:
@@ -360,22 +362,7 @@ class ManagedBus:
         if bus is None:
             self._send_errors += 1
             return False
-        try:
-            bus.send(msg, timeout=self.config.send_timeout_s)
-        except (can.CanError, OSError, ValueError) as err:
-            self._send_errors += 1
-            self._consecutive_send_failures += 1
-            if self._consecutive_send_failures == 1:
-                self._note_error(f'send failed: {err!r}')
-            if self._consecutive_send_failures >= self.config.send_failures_to_reopen:
-                self._reopen_requested = True
-            return False
-        self._consecutive_send_failures = 0
-        self._sent += 1
-        self._bits += frame_bits(msg)
-        if self._log_sink is not None:
-            self._log_sink.sent(msg, self.name)
-        return True
+        return self._sent_by(bus.send, msg, (msg,))
 
     def send_many(self, msgs: list[can.Message]) -> int:
         """Send a tick's frames in order; never raises.
@@ -386,12 +373,15 @@ class ManagedBus:
         Returns:
             How many the driver accepted.
         """
-        bus = self._bus
-        many = getattr(bus, 'send_many', None)
+        many = getattr(self._bus, 'send_many', None)
         if many is None:
             return sum(self.send(msg) for msg in msgs)
+        return len(msgs) if self._sent_by(many, msgs, msgs) else 0
+
+    def _sent_by(self, driver_send: Any, what: Any, msgs: Sequence[can.Message]) -> bool:
+        """Hand what to driver_send and count msgs as sent or failed; never raises."""
         try:
-            many(msgs, timeout=self.config.send_timeout_s)
+            driver_send(what, timeout=self.config.send_timeout_s)
         except (can.CanError, OSError, ValueError) as err:
             self._send_errors += len(msgs)
             self._consecutive_send_failures += 1
@@ -399,14 +389,14 @@ class ManagedBus:
                 self._note_error(f'send failed: {err!r}')
             if self._consecutive_send_failures >= self.config.send_failures_to_reopen:
                 self._reopen_requested = True
-            return 0
+            return False
         self._consecutive_send_failures = 0
         self._sent += len(msgs)
         self._bits += sum(map(frame_bits, msgs))
         if self._log_sink is not None:
             for msg in msgs:
                 self._log_sink.sent(msg, self.name)
-        return len(msgs)
+        return True
 
     # --- receiving ---------------------------------------------------------------------------
     def poll(self) -> int:
