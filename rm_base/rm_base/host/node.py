@@ -121,6 +121,7 @@ class RobotHost(Node):
         except BaseException:
             self._shut_down = True
             self._leave_loop()
+            io.release()
             self._outbox.stop()
             super().destroy_node()
             raise
