@@ -213,6 +213,19 @@ class DiagnosticsReporter:
         values.update(
             {f'period_error {edge} [us]': n for edge, n in zip(edges, stats.histogram, strict=True)}
         )
+        lateness = stats.lateness
+        values.update({
+            'lateness p50 [us]': lateness.p50_us,
+            'lateness p99 [us]': lateness.p99_us,
+            'lateness max [us]': lateness.max_us,
+        })
+        # Every component of the loop (feedback, each plugin, actuators, stages, pack,
+        # send): how long it takes, since start.
+        for name, summary in stats.components:
+            values[f'{name} runs'] = summary.count
+            values[f'{name} p50 [us]'] = summary.p50_us
+            values[f'{name} p99 [us]'] = summary.p99_us
+            values[f'{name} max [us]'] = summary.max_us
         return _status(f'{self._prefix}scheduler', level, message, 'scheduler', values)
 
     def _commands(self, stats: CommandStats) -> DiagnosticStatus:

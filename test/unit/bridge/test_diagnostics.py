@@ -1,5 +1,6 @@
 """The bridge's DiagnosticArray: levels, messages and values."""
 
+import dataclasses
 import math
 
 import pytest
@@ -148,6 +149,23 @@ def test_scheduler_warns_about_new_overruns_only_once():
     assert v['period_error_max [us]'] == '800'
     assert v['period_error <10 [us]'] == '1'
     assert v['period_error >=5000 [us]'] == '1'
+
+
+def test_the_loop_reports_its_lateness_and_every_component():
+    from rm_base.hardware import DurationSummary
+
+    stats = dataclasses.replace(
+        scheduler_stats(),
+        lateness=DurationSummary(5000, 80.0, 450.0, 3000.0),
+        components=(
+            ('feedback', DurationSummary(5000, 30.0, 110.0, 900.0)),
+            ('plugin chassis', DurationSummary(1000, 240.0, 520.0, 1500.0)),
+        ),
+    )
+    v = values(build(DiagnosticsReporter('b'), scheduler=stats)['b: scheduler'])
+    assert (v['lateness p50 [us]'], v['lateness p99 [us]']) == ('80', '450')
+    assert (v['plugin chassis runs'], v['plugin chassis p99 [us]']) == ('1000', '520')
+    assert v['feedback max [us]'] == '900'
 
 
 def test_scheduler_errors_are_errors():
