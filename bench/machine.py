@@ -2,7 +2,7 @@
 
 Steal comes from the ``cpu`` line of /proc/stat (the ``st`` column of top/vmstat): the
 share of all CPUs' time the hypervisor gave to someone else while we wanted to run. On
-the shared 2-vCPU VM it swings from 0 to 40-70 % within minutes (ROS_WHEELS.md), so every
+the shared 2-vCPU VM it swings from 0 to 40-70 % within minutes (docs/ROS_FROM_WHEELS.md), so every
 timing figure is reported with the steal and the load average of its own window.
 
 Thread CPU time comes from /proc/self/task/<tid>/schedstat (nanoseconds on the CPU),

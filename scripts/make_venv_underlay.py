@@ -2,7 +2,7 @@
 
 The ROS wheels lay the venv out like an ament install prefix (share/, lib/,
 include/), but two things are missing for `rosidl_generate_interfaces` to work
-against it (see ../shared/ROS_WHEELS.md):
+against it (see docs/ROS_FROM_WHEELS.md):
 
 1. The exported CMake files name the include paths of the machine the wheels were
    built on; they are rewritten to this interpreter's Python and numpy include dirs.

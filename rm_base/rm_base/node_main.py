@@ -62,7 +62,7 @@ def spin_until_shutdown(
 ) -> None:
     """Spin until Ctrl-C, SIGTERM or context shutdown (or on_tick returns False).
 
-    EventsExecutor.spin() ignores SIGINT on rclpy 7.1.6 (ROS_WHEELS.md), so this loops on
+    EventsExecutor.spin() ignores SIGINT on rclpy 7.1.6 (docs/ROS_FROM_WHEELS.md), so this loops on
     spin_once with a short timeout instead. While it spins (in the main thread), SIGINT
     and SIGTERM only set a flag that the loop reads after each spin_once: a
     KeyboardInterrupt raised inside a callback the executor was calling from C++ comes

@@ -181,8 +181,9 @@ def _run(args: argparse.Namespace, files: list[pathlib.Path]) -> int:
         rclpy.try_shutdown()
         return 0
 
-    # One EventsExecutor for both nodes' callbacks: 4x cheaper per message than the
-    # SingleThreadedExecutor (ROS_WHEELS.md); its spin() ignores SIGINT, so spin_once.
+    # One EventsExecutor for both nodes' callbacks (the ROS edge): 4x cheaper per message
+    # than the SingleThreadedExecutor (docs/ROS_FROM_WHEELS.md); its spin() ignores
+    # SIGINT, so spin_once.
     executor = EventsExecutor()
     executor.add_node(bridge)
     executor.add_node(host)

@@ -159,7 +159,7 @@ class SimRobot:
 
     # -- life cycle ---------------------------------------------------------------------
     def _spin(self) -> None:
-        # EventsExecutor.spin() ignores shutdown requests on rclpy 7.1.6 (ROS_WHEELS.md).
+        # EventsExecutor.spin() ignores shutdown requests on rclpy 7.1.6 (docs/ROS_FROM_WHEELS.md).
         while not self._stop.is_set() and self.context.ok():
             self.executor.spin_once(timeout_sec=0.05)
 

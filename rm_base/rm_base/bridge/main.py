@@ -45,8 +45,8 @@ def main(args: list[str] | None = None) -> int:
     # The executor runs only the ROS callbacks (/actuator_cmd, the sim services, parameter
     # services): the 1 kHz loop is CanHardware's own thread and the states go out from the
     # node's publisher thread. EventsExecutor costs about a quarter of the
-    # SingleThreadedExecutor's CPU per message (ROS_WHEELS.md: 12 % vs 46 % of a core at
-    # 1000 msg/s); its spin() ignores SIGINT on rclpy 7.1.6, hence spin_once in a loop.
+    # SingleThreadedExecutor's CPU per message (docs/ROS_FROM_WHEELS.md: 12 % vs 46 % of a
+    # core at 1000 msg/s); its spin() ignores SIGINT on rclpy 7.1.6, hence spin_once in a loop.
     executor = EventsExecutor(context=node.context)
     executor.add_node(node)
     try:

@@ -47,7 +47,8 @@ NODE_NAME = 'can_bridge'
 #   plain thread + idle SingleThreadedExecutor     7.7-10.3 %
 # The thread is at least as cheap as the best executor timer, never waits behind
 # /actuator_cmd callbacks on the executor, and works whichever executor spins the node
-# (main() uses the EventsExecutor for the callbacks: 4x cheaper per message, ROS_WHEELS.md).
+# (main() uses the EventsExecutor for the callbacks: 4x cheaper per message,
+# docs/ROS_FROM_WHEELS.md).
 
 # /actuator_cmd: reliable, as the plugins publish it; rm_robot waits for reliable readers
 # to acknowledge its final zero command on shutdown.

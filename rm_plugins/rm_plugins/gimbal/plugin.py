@@ -12,8 +12,8 @@ Outputs:
 States (``GimbalMode``, numbered as ``GimbalCmd``), all chosen in ``_decide``:
 
 - PASSIVE: joints off (limp). Commanded, or no command within ``command_timeout`` (the
-  watchdog; limp is the safe state of DESIGN.md: a gimbal that lost its operator must not
-  keep driving), or a command rejected as invalid (NaN, unknown mode or frame), or the
+  watchdog; limp is every mechanism's safe state: a gimbal that lost its operator must
+  not keep driving), or a command rejected as invalid (NaN, unknown mode or frame), or the
   IMU or a joint has no fresh data (no stabilisation is possible without them).
 - RATE: ``rate_yaw``/``rate_pitch`` (clamped to the axis' max_rate) are integrated into
   a target held in the *world* frame, so the aim stays put while the chassis turns or
