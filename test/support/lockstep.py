@@ -13,7 +13,7 @@ clock set by the harness). Each tick the simulator moves one period, then one lo
 runs at the new time (feedback, due plugins, update, pack, send: ``CanBridgeNode.step``).
 Commands are handed to the plugins through the same callbacks their subscriptions run
 (``RobotHost.inject``), stamped on the simulated clock; what a plugin publishes reaches
-the plugins subscribed to it at once (``deliver_locally``); the simulated Hi220's frames
+the plugins subscribed to it at once (outbox loopback); the simulated Hi220's frames
 are decoded as the Hi220 plugin decodes them and handed to /imu's subscribers. No
 executor spins, nothing waits on DDS or a terminal: the same inputs give the same numbers
 on every run, whatever the machine's load.
@@ -100,7 +100,7 @@ class LockstepRobot:
             self.world.imu_sink = self._on_imu_frame if 'imu' in plugins else _drop
             self.host = RobotHost(
                 hardware=self.bridge.hardware,
-                deliver_locally=True,
+                take_from_dds=False,
                 context=self.context,
                 parameter_overrides=[_parameter(k, v) for k, v in host.items()],
             )

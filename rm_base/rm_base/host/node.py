@@ -16,6 +16,8 @@ from rm_base.hardware import CanHardware, Scheduler
 from rm_base.host.plugin_task import PluginTask, TickInputs
 from rm_base.plugin import PluginBase, PluginLoader, PluginParams
 from rm_base.plugin.errors import ParameterError
+from rm_base.plugin.inbox import STAGE_NAME as INBOX_STAGE
+from rm_base.plugin.inbox import Inbox
 from rm_base.plugin.node_io import DdsJointIO, node_io, use_local_io
 from rm_base.plugin.outbox import Outbox
 from rm_base.ros_logging import FastLogger
@@ -56,9 +58,10 @@ class RobotHost(Node):
       joint targets on the actuators directly; without it (rm_robot as a process of its
       own) the host runs a loop of plugins only, at ``loop_rate``, and joint targets go
       out on /actuator_cmd.
-    - ROS stays at the edge: subscriptions (on the executor ``main`` spins) store the
-      latest command for the loop; every message a plugin publishes goes through an
-      outbox thread, never from the loop thread.
+    - ROS stays at the edge: the loop's first stage takes the plugins' subscriptions
+      (an ``Inbox``, no executor) and their callbacks store the latest command; every
+      message a plugin publishes goes through an outbox thread, never from the loop
+      thread. The executor ``main`` spins runs only services and the state timer.
     - Services: ``~/<name>/enable`` (std_srvs/SetBool) per plugin and
       ``~/enable_all`` (std_srvs/SetBool, true = enable all, false = disable all).
     - Publishes each plugin's rm_msgs/PluginState on ``~/<name>/state`` (latched) at
@@ -73,8 +76,9 @@ class RobotHost(Node):
         hardware: the CAN hardware to drive in-process (its loop runs the plugins);
             None: DDS joint I/O and a loop of the host's own.
         now: the plugins' clock (default: the node clock's ``now``).
-        deliver_locally: hand every message a plugin publishes at once to the plugins
-            that subscribe its topic (lockstep: no executor spins, nothing waits on DDS).
+        take_from_dds: the loop takes the plugins' subscriptions from DDS (an
+            ``Inbox``); False for lockstep, where commands come only through ``inject``
+            (and what the plugins publish, which always reaches them at once).
         **kwargs: passed to ``rclpy.node.Node`` (``context``, ``parameter_overrides``, ...).
 
     Raises:
@@ -92,7 +96,7 @@ class RobotHost(Node):
         loader: PluginLoader | None = None,
         hardware: CanHardware | None = None,
         now: Callable[[], Any] | None = None,
-        deliver_locally: bool = False,
+        take_from_dds: bool = True,
         **kwargs: Any,
     ) -> None:
         super().__init__(NODE_NAME, **kwargs)
@@ -112,8 +116,13 @@ class RobotHost(Node):
             self._own_loop = True
             inputs = TickInputs(now or self.get_clock().now)
         io.outbox = self._outbox
-        if deliver_locally:
-            self._outbox.loopback = io.inject
+        # what a plugin publishes reaches the robot's other plugins at once, not over DDS
+        self._outbox.loopback = io.deliver
+        # Lockstep: every command comes through inject; DDS deliveries would arrive at
+        # ticks that differ from run to run, so nothing takes them.
+        self._inbox = Inbox(self) if take_from_dds else None
+        io.inbox = self._inbox
+        self._warned_foreign: set[str] = set()
         self._io = io
         self._outbox.start()
         try:
@@ -123,6 +132,7 @@ class RobotHost(Node):
             self._leave_loop()
             io.release()
             self._outbox.stop()
+            self._destroy_inbox()
             super().destroy_node()
             raise
 
@@ -148,7 +158,7 @@ class RobotHost(Node):
     def add_local_handler(self, topic: str, callback: Callable[[Any, int], Any]) -> None:
         """Also give callback(msg, receive_ns) what ``inject`` hands to topic's plugins.
 
-        With ``deliver_locally`` that includes every message the plugins publish on it.
+        That includes every message the plugins publish on it.
         """
         self._io.add_handler(self.resolve_topic_name(topic), callback)
 
@@ -183,12 +193,19 @@ class RobotHost(Node):
         if self._own_loop:
             self.loop.stop()
         else:
+            self.loop.remove_stage(INBOX_STAGE)
             for task in self._tasks.values():
                 self.loop.remove_stage(task.name)
+
+    def _destroy_inbox(self) -> None:
+        if self._inbox is not None:
+            self._inbox.destroy()
+            self._inbox = None
 
     def destroy_node(self) -> None:
         """Shut the plugins down (zero output), then destroy the node."""
         self.shutdown()
+        self._destroy_inbox()
         super().destroy_node()
 
     # -- set-up -------------------------------------------------------------------------
@@ -258,6 +275,8 @@ class RobotHost(Node):
         self.create_service(SetBool, '~/enable_all', self._on_enable_all)
         self.create_timer(state_period, self._on_state_timer)
 
+        if self._inbox is not None:  # first: a command reaches its plugin in the same tick
+            self.loop.add_stage(self._inbox)
         for name, task in self._tasks.items():
             plugin = task.plugin
             if start_enabled[name]:
@@ -304,3 +323,10 @@ class RobotHost(Node):
     def _on_state_timer(self) -> None:
         for task in self._tasks.values():
             task.plugin.publish_state()
+        for topic, count in self._io.foreign_publishers().items():
+            if topic not in self._warned_foreign:
+                self._warned_foreign.add(topic)
+                self.get_logger().warning(
+                    f'{count} publisher(s) of other nodes on {topic}: not heard by the '
+                    "plugins, which take that topic from this robot's own plugin"
+                )

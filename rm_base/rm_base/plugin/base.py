@@ -398,14 +398,8 @@ class PluginBase:
             qos: subscription QoS; default best effort, depth 5 (matches any publisher).
         """
         self._require_init()
-        clock = self.node.get_clock()
-        self.node.create_subscription(
-            msg_type,
-            topic,
-            lambda msg: callback(msg, clock.now().nanoseconds),
-            qos if qos is not None else qos_profile_sensor_data,
-        )
-        self._io.add_handler(self.node.resolve_topic_name(topic), callback)
+        qos = qos if qos is not None else qos_profile_sensor_data
+        self._io.subscribe(msg_type, self.node.resolve_topic_name(topic), callback, qos)
 
     def create_publisher(self, msg_type: type, topic: str, qos: Any) -> Any:
         """Create a publisher for this plugin's own topics (states, odometry).

@@ -11,7 +11,9 @@ Joint I/O comes in two kinds, chosen by the host before any plugin is initialise
 
 A host may also give the I/O an :class:`~rm_base.plugin.outbox.Outbox`: then every
 publisher a plugin creates through :meth:`NodeIO.create_publisher` hands its messages to
-the outbox's thread, so the control loop never publishes itself.
+the outbox's thread, so the control loop never publishes itself; and an
+:class:`~rm_base.plugin.inbox.Inbox`: then every subscription a plugin makes through
+:meth:`NodeIO.subscribe` is taken by the loop itself, never by an executor.
 
 Created on first use per node (``node_io(node)``: DDS) or by the host
 (``use_local_io(node, hardware)``), and kept as long as the node lives. The plugin layer
@@ -27,8 +29,10 @@ from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any, Protocol
 
 from rclpy.qos import qos_profile_sensor_data
+from rclpy.serialization import deserialize_message
 
 from rm_base.plugin.errors import JointClaimError, TargetRejectedError
+from rm_base.plugin.inbox import Inbox
 from rm_base.plugin.joints import (
     ActuatorMode,
     JointState,
@@ -74,9 +78,11 @@ class NodeIO(abc.ABC):
         self.node = node
         self.joint_states = joint_states
         self.outbox: Outbox | None = None
+        self.inbox: Inbox | None = None
         self._claims: dict[str, str] = {}
         self._lock = threading.Lock()
         self._handlers: dict[str, list[Callable[[Any, int], Any]]] = {}
+        self._local: dict[str, int] = {}  # topic: publishers of this node's plugins
 
     @abc.abstractmethod
     def send(self, targets: Mapping[str, JointTarget], now: Any) -> None:
@@ -98,9 +104,64 @@ class NodeIO(abc.ABC):
         """Undo what the plugins set up in the loop (power limits). Idempotent."""
 
     def create_publisher(self, msg_type: type, topic: str, qos: Any) -> Any:
-        """A publisher for a plugin: through the outbox if there is one."""
+        """A publisher for a plugin: through the outbox if there is one.
+
+        With an outbox its messages also reach this node's plugins directly (``deliver``),
+        so the inbox stops taking that topic from DDS.
+        """
         publisher = self.node.create_publisher(msg_type, topic, qos)
-        return publisher if self.outbox is None else self.outbox.wrap(publisher)
+        if self.outbox is None:
+            return publisher
+        name = publisher.topic_name
+        with self._lock:
+            self._local[name] = self._local.get(name, 0) + 1
+        if self.inbox is not None:
+            self.inbox.drop(name)
+        return self.outbox.wrap(publisher)
+
+    def deliver(self, topic: str, raw: bytes, msg_type: type) -> int:
+        """Hand a message this node publishes (serialised) to its plugins on topic.
+
+        The outbox's loopback: one copy for all the topic's callbacks, none if there are
+        none. Returns the number of callbacks that got it.
+        """
+        with self._lock:
+            handlers = tuple(self._handlers.get(topic, ()))
+        if not handlers:
+            return 0
+        msg = deserialize_message(raw, msg_type)
+        receive_ns = self.node.get_clock().now().nanoseconds
+        for handler in handlers:
+            handler(msg, receive_ns)
+        return len(handlers)
+
+    def foreign_publishers(self) -> dict[str, int]:
+        """Publishers the plugins do not hear, as {topic: count}.
+
+        Those of other nodes on topics that this node's plugins both publish and
+        subscribe: the plugins get such a topic in-process from their own publisher.
+        """
+        with self._lock:
+            local = {t: n for t, n in self._local.items() if t in self._handlers}
+        counts = {t: self.node.count_publishers(t) - n for t, n in local.items()}
+        return {t: n for t, n in counts.items() if n > 0}
+
+    def subscribe(
+        self, msg_type: type, topic: str, callback: Callable[[Any, int], Any], qos: Any
+    ) -> None:
+        """Subscribe a plugin's callback(msg, receive_ns) to topic (a resolved name).
+
+        Through the loop's inbox if there is one, else on the node (its executor calls
+        back); ``inject`` reaches the callback either way.
+        """
+        if self.inbox is not None:
+            self.inbox.subscribe(msg_type, topic, callback, qos)
+        else:
+            clock = self.node.get_clock()
+            self.node.create_subscription(
+                msg_type, topic, lambda msg: callback(msg, clock.now().nanoseconds), qos
+            )
+        self.add_handler(topic, callback)
 
     def add_handler(self, topic: str, handler: Callable[[Any, int], Any]) -> None:
         """Record a plugin's subscription callback for topic (a resolved name)."""

@@ -17,7 +17,7 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
-from rclpy.serialization import deserialize_message, serialize_message
+from rclpy.serialization import serialize_message
 
 _log = logging.getLogger(__name__)
 
@@ -60,10 +60,10 @@ class Outbox:
         self.published = 0
         self.dropped = 0
         self.errors = 0
-        # Lockstep: also hands a copy of each message at once to the in-process
-        # subscribers of its topic (``loopback(topic, msg)``), so nothing waits on an
-        # executor.
-        self.loopback: Callable[[str, Any], object] | None = None
+        # Also hands each message at once to the in-process subscribers of its topic
+        # (``loopback(topic, raw, msg_type)``: the serialised snapshot), so nothing
+        # inside the robot waits on DDS.
+        self.loopback: Callable[[str, bytes, type], object] | None = None
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
 
     def wrap(self, publisher: Any) -> _EdgePublisher:
@@ -74,7 +74,7 @@ class Outbox:
         """Queue msg, serialised now, for publisher (any thread; never blocks)."""
         raw = serialize_message(msg)
         if self.loopback is not None:
-            self.loopback(publisher.topic_name, deserialize_message(raw, type(msg)))
+            self.loopback(publisher.topic_name, raw, type(msg))
         queue = self._queue
         if len(queue) == queue.maxlen:
             self.dropped += 1

@@ -199,7 +199,7 @@ class Hi220(PluginBase):
         )
 
         self._clock = self.node.get_clock()
-        self._publisher = self.node.create_publisher(Imu, topic, 10)
+        self._publisher = self.create_publisher(Imu, topic, 10)
         self._diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
         self._lock = threading.Lock()
         self._last_sample_ns: int | None = None  # receipt of the latest sample

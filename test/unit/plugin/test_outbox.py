@@ -65,10 +65,12 @@ def test_when_the_edge_falls_behind_expect_the_oldest_dropped_and_counted():
     assert box.dropped == 2
 
 
-def test_loopback_gets_a_copy_at_once_with_the_topic():
+def test_loopback_gets_the_snapshot_at_once_with_the_topic():
     box = Outbox()
     got = []
-    box.loopback = lambda topic, msg: got.append((topic, msg))
+    box.loopback = lambda topic, raw, msg_type: got.append(
+        (topic, deserialize_message(raw, msg_type))
+    )
     msg = UInt32(data=5)
     box.wrap(FakePublisher()).publish(msg)
     msg.data = 6
