@@ -21,6 +21,7 @@ from rm_base.bridge.errors import ActuatorCmdRejectedError, BridgeConfigError, R
 from rm_base.bridge.frames import FrameTap
 from rm_base.bridge.messages import can_frame_msg, state_msgs, time_msg
 from rm_base.bridge.params import (
+    DEFAULT_PRIORITY,
     BridgeSettings,
     is_ros_own,
     plain,
@@ -248,6 +249,15 @@ class CanBridgeNode(Node):
             True,
             description='the control loop takes the received feedback each tick (no receive '
             'thread per bus)',
+        )
+        declare(
+            'scheduler.priority',
+            params.integer,
+            DEFAULT_PRIORITY,
+            ge=0,
+            le=99,
+            description='real-time (SCHED_FIFO) priority of the control loop thread; 0: '
+            'normal scheduling; without the right to it the loop runs on, with a warning',
         )
         declare(
             'safety.feedback_timeout_s',

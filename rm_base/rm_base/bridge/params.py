@@ -19,6 +19,8 @@ Parameters (units in brackets; typed ones are declared by the node with a descri
 ``scheduler.rate_hz``               [Hz]       control loop rate, 1000
 ``scheduler.receive_in_loop``       bool       the loop takes the feedback (no receive
                                                thread per bus), true
+``scheduler.priority``              0-99       SCHED_FIFO priority of the loop thread,
+                                               50; 0 = normal scheduling
 ``safety.feedback_timeout_s``       [s]        offline after no feedback this long, 0.1
 ``safety.command_timeout_s``        [s]        zero output after no command this long, 0.1
 ``safety.temperature_hysteresis_c`` [°C]       resume below limit - this, 5
@@ -72,6 +74,9 @@ ROS_OWN_PREFIXES = ('qos_overrides.',)
 
 #: Prefixes of the open-ended parameter groups (names chosen by the robot config).
 HARDWARE_PREFIXES = ('buses.', 'joints.')
+
+#: SCHED_FIFO priority of the bridge's loop thread (as ros2_control's ``thread_priority``).
+DEFAULT_PRIORITY = 50
 SIM_BODY_PREFIX = 'sim.body.'
 SIM_IMU_PREFIX = 'sim.imu.'
 _JOINT_SIM_KEY = 'sim'
@@ -174,7 +179,8 @@ def settings_from_parameters(
         typed: the declared, already type-checked parameters: ``publish_rate``,
             ``diagnostics_rate``, ``publish_frames``, ``log_file``, ``sim``,
             ``sim.timing`` (:class:`Timing` or its value), ``sim.seed``,
-            ``scheduler.rate_hz``, ``scheduler.receive_in_loop`` and ``safety.*``;
+            ``scheduler.rate_hz``, ``scheduler.receive_in_loop``, ``scheduler.priority``
+            and ``safety.*``;
             missing ones take their defaults.
         open_params: every other parameter by its flat name (rclpy's own excluded).
 
@@ -208,7 +214,8 @@ def settings_from_parameters(
         else:
             raise BridgeConfigError(
                 f'unknown parameter {name!r}; the bridge takes buses.*, joints.*, '
-                'scheduler.rate_hz, scheduler.receive_in_loop, safety.*, publish_rate, '
+                'scheduler.rate_hz, scheduler.receive_in_loop, scheduler.priority, safety.*, '
+                'publish_rate, '
                 'diagnostics_rate, publish_frames, log_file, sim, sim.timing, sim.seed, '
                 'sim.body.*, sim.imu.*'
             )
@@ -228,6 +235,7 @@ def settings_from_parameters(
     scheduler = {
         'rate_hz': typed.get('scheduler.rate_hz', 1000.0),
         'receive_in_loop': typed.get('scheduler.receive_in_loop', True),
+        'priority': typed.get('scheduler.priority', DEFAULT_PRIORITY),
     }
     safety = {
         key: typed[f'safety.{key}']

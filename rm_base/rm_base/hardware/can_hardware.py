@@ -115,6 +115,7 @@ class CanHardware:
             on_error=on_error if on_error is not None else self._log_and_go_on,
             clock_ns=clock_ns,
             flush=self._send_outgoing,
+            priority=config.priority,
         )
         self.power_limits: dict[str, PowerLimitStage] = {}
         self.receive_in_loop = (

@@ -329,6 +329,7 @@ class HardwareConfig:
     rate_hz: float = 1000.0
     safety: SafetyConfig = SafetyConfig()
     receive_in_loop: bool = True
+    priority: int = 0
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> HardwareConfig:
@@ -366,7 +367,7 @@ class HardwareConfig:
                     f'joints.{j.name}.bus {j.bus!r} is not a configured bus {sorted(bus_names)}'
                 )
         scheduler = _mapping('scheduler', data.get('scheduler') or {})
-        _check_keys('scheduler', scheduler, {'rate_hz', 'receive_in_loop'})
+        _check_keys('scheduler', scheduler, {'rate_hz', 'receive_in_loop', 'priority'})
         rate = _number('scheduler.rate_hz', scheduler.get('rate_hz', 1000.0), positive=True)
         if rate > 10_000:
             raise HardwareConfigError(f'scheduler.rate_hz {rate} above 10000 Hz')
@@ -375,4 +376,11 @@ class HardwareConfig:
             raise HardwareConfigError(
                 f'scheduler.receive_in_loop must be true or false, got {in_loop!r}'
             )
-        return cls(buses, joints, rate, SafetyConfig.from_dict(data.get('safety')), in_loop)
+        priority = scheduler.get('priority', 0)
+        if isinstance(priority, bool) or not isinstance(priority, int) or not 0 <= priority <= 99:
+            raise HardwareConfigError(
+                f'scheduler.priority must be an integer 0-99 (0: normal scheduling), '
+                f'got {priority!r}'
+            )
+        safety = SafetyConfig.from_dict(data.get('safety'))
+        return cls(buses, joints, rate, safety, in_loop, priority)

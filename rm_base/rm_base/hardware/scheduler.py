@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import os
 import threading
 import time
 from collections.abc import Callable, Sequence
@@ -104,6 +105,15 @@ class PeriodStats:
     components: tuple[tuple[str, DurationSummary], ...] = ()
 
 
+def set_fifo_priority(priority: int) -> None:
+    """Put the calling thread under SCHED_FIFO at priority (Linux: pid 0 is the thread).
+
+    Raises:
+        OSError: not permitted (no CAP_SYS_NICE and no RLIMIT_RTPRIO for it).
+    """
+    os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
+
+
 class Scheduler:
     """Runs update -> pack -> send for a set of actuators and packers at a fixed rate."""
 
@@ -119,6 +129,8 @@ class Scheduler:
         report_period_s: float = 5.0,
         thread_name: str = 'can-scheduler',
         flush: Callable[[], object] | None = None,
+        priority: int = 0,
+        set_priority: Callable[[int], None] | None = None,
     ) -> None:
         """Create a stopped scheduler.
 
@@ -136,12 +148,21 @@ class Scheduler:
             thread_name: name of the loop thread.
             flush: called after the frames of a tick were handed to their ``send``
                 functions (which may only collect them), within the ``send`` component.
+            priority: real-time priority of the loop thread (SCHED_FIFO, 1-99), as
+                ros2_control's controller manager asks for its thread; 0 keeps the
+                normal scheduling. Without the right to it the loop runs on, with one
+                warning.
+            set_priority: applies the priority to the calling thread (tests replace it).
 
         Raises:
-            HardwareConfigError: rate_hz not positive.
+            HardwareConfigError: rate_hz not positive, priority outside 0-99.
         """
         if not rate_hz > 0:
             raise HardwareConfigError(f'scheduler rate must be > 0 Hz, got {rate_hz!r}')
+        if not 0 <= priority <= 99:
+            raise HardwareConfigError(f'scheduler priority must be 0-99, got {priority!r}')
+        self.priority = priority
+        self._set_priority = set_priority or set_fifo_priority
         self._actuators = tuple(actuators)
         self._packers = tuple(packers)
         self._inputs: tuple[Stage, ...] = ()
@@ -286,6 +307,14 @@ class Scheduler:
                 _log.error('scheduler thread did not stop within %.1f s', timeout_s)
 
     def _run(self) -> None:
+        if self.priority:
+            try:
+                self._set_priority(self.priority)
+            except OSError as err:  # no CAP_SYS_NICE / RLIMIT_RTPRIO: still a loop
+                _log.warning(
+                    'the loop runs without real-time priority (SCHED_FIFO %d: %s); '
+                    'see docs/PERFORMANCE.md', self.priority, err,
+                )
         clock = self._clock_ns
         period = self.period_ns
         deadline = clock()

@@ -248,8 +248,19 @@ class RobotHost(Node):
             gt=0.0,
             le=10000.0,
         )
+        loop_priority = node_params.integer(
+            'loop_priority',
+            50,
+            ge=0,
+            le=99,
+            description='real-time (SCHED_FIFO) priority of the plugin loop thread when '
+            'rm_robot runs as a process of its own; 0: normal scheduling',
+        )
         if self._own_loop:
-            self.loop = Scheduler([], [], rate_hz=loop_rate, thread_name=f'{NODE_NAME}-loop')
+            self.loop = Scheduler(
+                [], [], rate_hz=loop_rate, thread_name=f'{NODE_NAME}-loop',
+                priority=loop_priority,
+            )
 
         start_enabled = {}
         for name in names:

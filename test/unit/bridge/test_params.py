@@ -62,6 +62,14 @@ def test_typed_settings_are_taken_over():
     assert settings.diagnostics_rate_hz == 2.0
     assert settings.publish_frames is True
     assert settings.hardware_config.rate_hz == 500.0
+    assert settings.hardware_config.priority == 50  # the bridge asks for SCHED_FIFO 50
+
+
+def test_the_loop_priority_reaches_the_hardware_config_and_is_checked():
+    settings = settings_from_parameters({'scheduler.priority': 0}, YAW)
+    assert settings.hardware_config.priority == 0
+    with pytest.raises(HardwareConfigError, match=r'scheduler\.priority must be an integer 0-99'):
+        settings_from_parameters({'scheduler.priority': 100}, YAW)
 
 
 def test_when_a_hardware_key_is_missing_expect_the_hardware_error_naming_it():

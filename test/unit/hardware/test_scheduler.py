@@ -237,3 +237,34 @@ def test_a_removed_stage_no_longer_runs_and_a_name_cannot_be_taken_twice():
     scheduler.tick(T0)
     assert not [e for e in events if e[0] == 'stage']
     scheduler.add_stage(Stage(events, 'plugin x'))  # the name is free again
+
+
+def test_priority_is_asked_for_on_the_loop_thread_and_a_refusal_is_a_warning(caplog):
+    asked = []
+
+    def refuse(priority):
+        asked.append((priority, threading.current_thread().name))
+        raise PermissionError(1, 'Operation not permitted')
+
+    scheduler = Scheduler([], [], priority=50, set_priority=refuse, thread_name='loop-test')
+    with caplog.at_level('WARNING', logger='rm_base.hardware.scheduler'):
+        scheduler.start()
+        assert wait_until(lambda: scheduler.stats().ticks >= 5, timeout=10.0)  # runs on
+        scheduler.stop()
+    assert asked == [(50, 'loop-test')]
+    assert 'without real-time priority (SCHED_FIFO 50' in caplog.text
+
+
+def test_priority_zero_keeps_normal_scheduling():
+    asked = []
+    scheduler = Scheduler([], [], priority=0, set_priority=asked.append)
+    scheduler.start()
+    assert wait_until(lambda: scheduler.stats().ticks >= 5, timeout=10.0)
+    scheduler.stop()
+    assert asked == []
+
+
+@pytest.mark.parametrize('priority', [-1, 100])
+def test_priority_outside_0_to_99_is_refused(priority):
+    with pytest.raises(HardwareConfigError, match='priority must be 0-99'):
+        Scheduler([], [], priority=priority)
