@@ -60,6 +60,9 @@ _FRAMES_QOS_DEPTH = 1000
 # Shortest time between two log lines about rejected commands (or dropped frames) [s].
 _REJECT_LOG_PERIOD = 1.0
 
+# The state publisher waits this long for the end of a loop tick before publishing anyway.
+_TICK_WAIT_S = 0.005
+
 
 class CanBridgeNode(Node):
     """can_bridge: runs the CAN hardware layer and puts it on ROS.
@@ -107,6 +110,7 @@ class CanBridgeNode(Node):
         self._shut_down = False
         self._stop = threading.Event()
         self._publisher_thread: threading.Thread | None = None
+        self._tick_done = threading.Event()
         self._stats_lock = threading.Lock()
         self._accepted = 0
         self._rejected: dict[str, int] = {}
@@ -182,6 +186,7 @@ class CanBridgeNode(Node):
             hw.open()
         else:
             hw.start()
+        hw.scheduler.add_after_tick(self._tick_done.set)
         self._publisher_thread = threading.Thread(
             target=self._run_publisher, name='can_bridge-publish', daemon=True
         )
@@ -437,6 +442,13 @@ class CanBridgeNode(Node):
         next_state = next_diag = time.perf_counter_ns()
         errors = 0
         while not self._stop.is_set():
+            wait_ns = min(next_state, next_diag) - time.perf_counter_ns()
+            if wait_ns > 0 and self._stop.wait(wait_ns / 1e9):
+                break
+            # Publish just after the loop's next tick, in its idle time, not in the middle
+            # of a tick; a loop that does not tick delays the states by a short timeout.
+            self._tick_done.clear()
+            self._tick_done.wait(_TICK_WAIT_S)
             now = time.perf_counter_ns()
             try:
                 if now >= next_state:
@@ -455,9 +467,6 @@ class CanBridgeNode(Node):
                     self.get_logger().error(f'publishing failed ({errors} so far): {err!r}')
                 next_state = now + state_period
                 next_diag = max(next_diag, now + state_period)
-            wait_ns = min(next_state, next_diag) - time.perf_counter_ns()
-            if wait_ns > 0:
-                self._stop.wait(wait_ns / 1e9)
 
     # --- life cycle ---------------------------------------------------------------------------
     def shutdown(self) -> None:

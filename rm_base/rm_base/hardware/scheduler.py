@@ -11,7 +11,10 @@ thread, for deterministic (lockstep) steps. Each tick runs, in this fixed order:
    power limit that scales a group's efforts,
 4. ``pack_command()`` on every packer (actuators with their own frame, command groups),
 5. ``send(msg)`` of every packed frame, each through the send function (bus) paired with
-   its packer.
+   its packer,
+6. the *after-tick callbacks* (:meth:`Scheduler.add_after_tick`): they only wake the
+   threads of the ROS edge (publishers, readers), so that those run in the loop's idle
+   time instead of taking the interpreter from it in the middle of a tick.
 
 Missed deadlines are counted as overruns and skipped, never caught up in a burst. The loop
 measures itself: start lateness and the duration of every component (each stage, the
@@ -167,6 +170,7 @@ class Scheduler:
         self._packers = tuple(packers)
         self._inputs: tuple[Stage, ...] = ()
         self._outputs: tuple[Stage, ...] = ()
+        self._after_tick: tuple[Callable[[], object], ...] = ()
         self._report_period_ns = round(report_period_s * 1e9)
         self._thread_name = thread_name
         self._flush = flush
@@ -214,6 +218,17 @@ class Scheduler:
             self._outputs += (stage,)
         else:
             self._inputs += (stage,)
+
+    def add_after_tick(self, callback: Callable[[], object]) -> None:
+        """Call callback() at the end of every tick, after the frames went out.
+
+        For waking threads (``threading.Event.set``): it must not block or take long.
+        """
+        self._after_tick += (callback,)
+
+    def remove_after_tick(self, callback: Callable[[], object]) -> None:
+        """Stop calling callback after the ticks (no error if it was not added)."""
+        self._after_tick = tuple(c for c in self._after_tick if c != callback)
 
     def remove_stage(self, name: str) -> bool:
         """Remove the stage of that name from the loop (from its next tick on).
@@ -264,6 +279,8 @@ class Scheduler:
             self._flush()
         durations[SEND].record(timer() - t1)
         self._ticks += 1
+        for callback in self._after_tick:
+            callback()
         return len(frames)
 
     def _run_stages(self, stages: tuple[Stage, ...], now_ns: int, dt: float, t: int) -> int:

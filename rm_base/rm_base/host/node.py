@@ -196,6 +196,7 @@ class RobotHost(Node):
             self.loop.remove_stage(INBOX_STAGE)
             for task in self._tasks.values():
                 self.loop.remove_stage(task.name)
+            self.loop.remove_after_tick(self._outbox.wake)
 
     def _destroy_inbox(self) -> None:
         if self._inbox is not None:
@@ -262,6 +263,7 @@ class RobotHost(Node):
                 priority=loop_priority,
             )
 
+        self._io.loop = self.loop
         start_enabled = {}
         for name in names:
             host_params = PluginParams(self, name)
@@ -288,6 +290,8 @@ class RobotHost(Node):
 
         if self._inbox is not None:  # first: a command reaches its plugin in the same tick
             self.loop.add_stage(self._inbox)
+        self._outbox.pace()  # publishes in the loop's idle time
+        self.loop.add_after_tick(self._outbox.wake)
         for name, task in self._tasks.items():
             plugin = task.plugin
             if start_enabled[name]:

@@ -410,6 +410,18 @@ class PluginBase:
         self._require_init()
         return self._io.create_publisher(msg_type, topic, qos)
 
+    def after_tick(self, callback: Callable[[], object]) -> bool:
+        """Call callback() at the end of every tick of the loop that runs the plugins.
+
+        For a plugin's own thread (a serial reader): waking it there lets it run in the
+        loop's idle time. The callback must not block (``threading.Event.set``).
+
+        Returns:
+            False where no loop runs the plugins (then nothing will call it).
+        """
+        self._require_init()
+        return self._io.after_tick(callback)
+
     def power_limit(self, joints: Iterable[str], model: Any) -> Any:
         """A power limit over some of our joints, run in the control loop, or None.
 

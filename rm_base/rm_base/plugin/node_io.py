@@ -79,6 +79,8 @@ class NodeIO(abc.ABC):
         self.joint_states = joint_states
         self.outbox: Outbox | None = None
         self.inbox: Inbox | None = None
+        self.loop: Any = None  # the control loop running the plugins (a Scheduler)
+        self._after_tick: list[Callable[[], object]] = []
         self._claims: dict[str, str] = {}
         self._lock = threading.Lock()
         self._handlers: dict[str, list[Callable[[Any, int], Any]]] = {}
@@ -100,8 +102,18 @@ class NodeIO(abc.ABC):
         """
         return None
 
-    def release(self) -> None:  # noqa: B027 - nothing to undo over DDS
-        """Undo what the plugins set up in the loop (power limits). Idempotent."""
+    def after_tick(self, callback: Callable[[], object]) -> bool:
+        """Call callback() at the end of every loop tick; False if there is no loop."""
+        if self.loop is None:
+            return False
+        self.loop.add_after_tick(callback)
+        self._after_tick.append(callback)
+        return True
+
+    def release(self) -> None:
+        """Undo what the plugins set up in the loop (after-tick callbacks). Idempotent."""
+        while self._after_tick:
+            self.loop.remove_after_tick(self._after_tick.pop())
 
     def create_publisher(self, msg_type: type, topic: str, qos: Any) -> Any:
         """A publisher for a plugin: through the outbox if there is one.
@@ -267,7 +279,8 @@ class LocalJointIO(NodeIO):
         return stage
 
     def release(self) -> None:
-        """Take the plugins' power limits out of the hardware's loop."""
+        """Take the plugins' power limits and after-tick callbacks out of the loop."""
+        super().release()
         while self._power_limits:
             self._hardware.remove_power_limit(self._power_limits.pop())
 

@@ -4,9 +4,13 @@ rclpy's publish hands the message to DDS; on the 1 kHz loop thread that would pu
 inside the robot (docs/ARCHITECTURE.md, "ROS at the edge"). A plugin's publisher is
 wrapped instead (:meth:`Outbox.wrap`): ``publish(msg)`` serialises the message (a C call,
 ~10 µs: the snapshot, so the plugin may reuse its message object at once), appends the
-bytes to a queue and wakes the outbox thread, which publishes them in order. Appending
-never blocks. The queue is bounded: if the edge falls behind, the oldest messages are
-dropped and counted (a state message is superseded by the next one anyway).
+bytes to a queue, and the outbox thread publishes them in order. Appending never blocks.
+The queue is bounded: if the edge falls behind, the oldest messages are dropped and
+counted (a state message is superseded by the next one anyway).
+
+Who wakes the thread: each ``put``, or, once :meth:`Outbox.pace` tied it to a control
+loop, the end of each tick (``wake``), so that it publishes in the loop's idle time and
+never asks for the interpreter in the middle of a tick.
 """
 
 from __future__ import annotations
@@ -60,6 +64,7 @@ class Outbox:
         self.published = 0
         self.dropped = 0
         self.errors = 0
+        self._paced = False
         # Also hands each message at once to the in-process subscribers of its topic
         # (``loopback(topic, raw, msg_type)``: the serialised snapshot), so nothing
         # inside the robot waits on DDS.
@@ -79,7 +84,17 @@ class Outbox:
         if len(queue) == queue.maxlen:
             self.dropped += 1
         queue.append((publisher, raw))
-        self._wake.set()
+        if not self._paced:
+            self._wake.set()
+
+    def pace(self) -> None:
+        """From now on publish only when :meth:`wake` is called (at the end of a tick)."""
+        self._paced = True
+
+    def wake(self) -> None:
+        """Let the thread publish what is queued (the loop's after-tick callback)."""
+        if self._queue:
+            self._wake.set()
 
     def start(self) -> None:
         """Start the publishing thread."""

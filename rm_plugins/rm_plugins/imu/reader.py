@@ -2,7 +2,10 @@
 
 The port is any pyserial URL (``serial.serial_for_url``): a device (``/dev/ttyUSB0``), a
 pseudo-terminal or a symlink to one (the simulator's IMU), ``loop://``, ``socket://h:p``.
-Reads block for at most ``read_timeout`` so ``stop()`` is honoured quickly. Bytes go
+Reads block for at most ``read_timeout`` so ``stop()`` is honoured quickly. Given a
+``pace`` event (set at the end of every control-loop tick), the thread instead waits for
+it and then takes what the port holds, so it decodes in the loop's idle time and never
+asks for the interpreter in the middle of a tick. Bytes go
 through ``HipnucParser``, which resynchronises after garbage and counts what it skips;
 every decoded sample is passed to ``on_sample`` in this thread.
 
@@ -97,6 +100,8 @@ class SerialReader:
             0 disables.
         opener: ``(url, baudrate, timeout) -> port`` (pyserial by default).
         clock_ns: monotonic clock [ns].
+        pace: when given, read only after it is set (at most ``read_timeout`` later
+            regardless), and only what is waiting.
     """
 
     def __init__(
@@ -112,6 +117,7 @@ class SerialReader:
         silence_reopen: float = 1.0,
         opener: Callable[[str, int, float], Any] = open_serial,
         clock_ns: Callable[[], int] = time.monotonic_ns,
+        pace: threading.Event | None = None,
     ) -> None:
         if not 0.0 < read_timeout <= 1.0:
             raise ValueError(f'read_timeout must be in (0, 1] s, got {read_timeout}')
@@ -131,6 +137,7 @@ class SerialReader:
         self._silence_ns = round(silence_reopen * _NS_PER_S)
         self._opener = opener
         self._clock_ns = clock_ns
+        self._pace = pace
         self._parser = HipnucParser()
         self._lock = threading.Lock()
         self._stats = ReaderStats()
@@ -213,9 +220,16 @@ class SerialReader:
 
     def _read_once(self) -> str | None:
         """Read what is there (or wait up to read_timeout); return a problem or None."""
+        pace = self._pace
         try:
-            waiting = self._port.in_waiting
-            data = self._port.read(min(max(1, waiting), _READ_CHUNK))
+            if pace is not None:
+                pace.wait(self._read_timeout)
+                pace.clear()
+                waiting = self._port.in_waiting
+                data = self._port.read(min(waiting, _READ_CHUNK)) if waiting else b''
+            else:
+                waiting = self._port.in_waiting
+                data = self._port.read(min(max(1, waiting), _READ_CHUNK))
         except (serial.SerialException, OSError, TypeError, ValueError) as err:
             # pyserial raises TypeError/ValueError on some ports closed under its feet.
             return f'{self.url} failed: {err}'

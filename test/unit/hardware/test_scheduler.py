@@ -268,3 +268,19 @@ def test_priority_zero_keeps_normal_scheduling():
 def test_priority_outside_0_to_99_is_refused(priority):
     with pytest.raises(HardwareConfigError, match='priority must be 0-99'):
         Scheduler([], [], priority=priority)
+
+
+def test_after_tick_callbacks_run_once_per_tick_after_the_frames_went_out():
+    events = []
+    scheduler, _ = make(events)
+    scheduler.add_after_tick(lambda: events.append(('after',)))
+    for i in range(2):
+        events.clear()
+        scheduler.tick(T0 + i * MS)
+        assert events.count(('after',)) == 1
+        assert events[-1] == ('after',) and events[-2][0] == 'send'
+    callback = events.append
+    scheduler.add_after_tick(callback)
+    scheduler.remove_after_tick(callback)
+    scheduler.tick(T0 + 2 * MS)
+    assert events[-1] == ('after',)

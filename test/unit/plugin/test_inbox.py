@@ -4,6 +4,7 @@ import logging
 
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
+from rm_base.hardware.scheduler import Scheduler
 from rm_base.plugin.inbox import Inbox
 from rm_base.plugin.node_io import DdsJointIO
 from rm_base.plugin.outbox import Outbox
@@ -109,4 +110,18 @@ def test_other_nodes_publishing_a_local_topic_are_reported(ros_context):
     assert wait_until(lambda: io.foreign_publishers() == {'/local_state': 1}, 5.0)
     other.destroy_node()
     io.inbox.destroy()
+    node.destroy_node()
+
+
+def test_after_tick_callbacks_of_plugins_join_the_loop_and_leave_it_on_release(ros_context):
+    node = Node('inbox_test', context=ros_context)
+    io = DdsJointIO(node)
+    assert io.after_tick(lambda: None) is False  # no loop: nothing would call it
+    io.loop = Scheduler([], [])
+    calls = []
+    assert io.after_tick(lambda: calls.append(1)) is True
+    io.loop.tick(0)
+    io.release()
+    io.loop.tick(1_000_000)
+    assert calls == [1]
     node.destroy_node()

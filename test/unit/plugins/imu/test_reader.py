@@ -231,3 +231,51 @@ def test_stop_is_prompt_and_closes_the_port(tmp_path, reader_factory):
     assert reader.stop(timeout=1.0)
     assert not reader.running and not reader.stats().port_open
     port.close()
+
+
+class FakePort:
+    """A port that never blocks: what is written waits in a buffer; reads are recorded."""
+
+    def __init__(self):
+        self.buffer = bytearray()
+        self.reads = []
+        self.lock = threading.Lock()
+
+    def write(self, data):
+        with self.lock:
+            self.buffer += data
+
+    @property
+    def in_waiting(self):
+        with self.lock:
+            return len(self.buffer)
+
+    def read(self, size):
+        with self.lock:
+            data = bytes(self.buffer[:size])
+            del self.buffer[:size]
+            self.reads.append(size)
+            return data
+
+    def close(self):
+        pass
+
+
+def test_a_paced_reader_takes_only_what_waits_once_the_loop_says_so(reader_factory):
+    port = FakePort()
+    pace = threading.Event()
+    got = Collector()
+    reader = reader_factory('fake://', got, opener=lambda *_: port, pace=pace, read_timeout=0.01)
+    reader.start()
+    assert wait(lambda: reader.stats().port_open)
+    for i in range(5):
+        port.write(frame(yaw=0.1 * i))
+
+    def tick():  # what the loop's after-tick callback does
+        pace.set()
+        return len(got.samples) >= 5
+
+    assert wait(tick)
+    # never a blocking one-byte read for nothing: each read takes what was waiting
+    assert port.reads and all(size > 1 for size in port.reads)
+    assert reader.stats().frames_ok == 5
