@@ -35,6 +35,7 @@ from rm_base.bridge.node import NODE_NAME as BRIDGE_NODE_NAME
 from rm_base.errors import ConfigError
 from rm_base.host.node import RobotHost
 from rm_base.node_main import init_ros, spin_until_shutdown
+from rm_base.realtime import raise_edge_priority
 from rm_base.ros_logging import forward_package_logging
 
 from rm_bringup.sim_process import SimProcess
@@ -187,6 +188,7 @@ def _run(args: argparse.Namespace, files: list[pathlib.Path]) -> int:
     executor = EventsExecutor()
     executor.add_node(bridge)
     executor.add_node(host)
+    raise_edge_priority(bridge.settings.edge_priority)
     printer = None if args.no_status else _StatusPrinter(StatusView(host))
     deadline = None if args.duration is None else time.monotonic() + args.duration
     mode = 'on rm_sim' if args.sim else 'on its CAN buses'

@@ -12,6 +12,7 @@ from rm_base.bridge.node import NODE_NAME, CanBridgeNode
 from rm_base.errors import ConfigError
 from rm_base.hardware import BusError
 from rm_base.node_main import init_ros, spin_until_shutdown
+from rm_base.realtime import raise_edge_priority
 from rm_base.ros_logging import forward_package_logging
 
 # The 1 kHz scheduler thread shares the GIL with the receive, publisher and executor
@@ -49,6 +50,7 @@ def main(args: list[str] | None = None) -> int:
     # core at 1000 msg/s); its spin() ignores SIGINT on rclpy 7.1.6, hence spin_once in a loop.
     executor = EventsExecutor(context=node.context)
     executor.add_node(node)
+    raise_edge_priority(node.settings.edge_priority)
     try:
         spin_until_shutdown(executor, node.context)
     finally:

@@ -21,7 +21,6 @@ from rm_base.bridge.errors import ActuatorCmdRejectedError, BridgeConfigError, R
 from rm_base.bridge.frames import FrameTap
 from rm_base.bridge.messages import can_frame_msg, state_msgs, time_msg
 from rm_base.bridge.params import (
-    DEFAULT_PRIORITY,
     BridgeSettings,
     is_ros_own,
     plain,
@@ -32,6 +31,7 @@ from rm_base.bridge.sim_config import world_config
 from rm_base.bridge.sim_services import SimFaultServices
 from rm_base.hardware import CanHardware, CommandRejectedError
 from rm_base.plugin.params import PluginParams
+from rm_base.realtime import EDGE_PRIORITY, LOOP_PRIORITY
 from rm_base.ros_logging import FastLogger
 from rm_base.sim import SimConfigError, SimWorld, Timing
 from rm_msgs.msg import ActuatorCmd, ActuatorState, CanFrame
@@ -258,11 +258,21 @@ class CanBridgeNode(Node):
         declare(
             'scheduler.priority',
             params.integer,
-            DEFAULT_PRIORITY,
+            LOOP_PRIORITY,
             ge=0,
             le=99,
             description='real-time (SCHED_FIFO) priority of the control loop thread; 0: '
             'normal scheduling; without the right to it the loop runs on, with a warning',
+        )
+        declare(
+            'scheduler.edge_priority',
+            params.integer,
+            EDGE_PRIORITY,
+            ge=0,
+            le=99,
+            description="real-time priority the executable gives the process's other "
+            'threads, below the loop (a thread holding the GIL must not be preempted); 0: '
+            'normal scheduling',
         )
         declare(
             'safety.feedback_timeout_s',

@@ -21,6 +21,8 @@ Parameters (units in brackets; typed ones are declared by the node with a descri
                                                thread per bus), true
 ``scheduler.priority``              0-99       SCHED_FIFO priority of the loop thread,
                                                50; 0 = normal scheduling
+``scheduler.edge_priority``         0-99       SCHED_FIFO priority of the process's other
+                                               threads (set by the executable), 10
 ``safety.feedback_timeout_s``       [s]        offline after no feedback this long, 0.1
 ``safety.command_timeout_s``        [s]        zero output after no command this long, 0.1
 ``safety.temperature_hysteresis_c`` [°C]       resume below limit - this, 5
@@ -66,6 +68,7 @@ from typing import Any
 
 from rm_base.bridge.errors import BridgeConfigError
 from rm_base.hardware.config import HardwareConfig
+from rm_base.realtime import EDGE_PRIORITY, LOOP_PRIORITY
 from rm_base.sim import Timing
 
 #: Parameters every rclpy node has; never part of the bridge config.
@@ -74,9 +77,6 @@ ROS_OWN_PREFIXES = ('qos_overrides.',)
 
 #: Prefixes of the open-ended parameter groups (names chosen by the robot config).
 HARDWARE_PREFIXES = ('buses.', 'joints.')
-
-#: SCHED_FIFO priority of the bridge's loop thread (as ros2_control's ``thread_priority``).
-DEFAULT_PRIORITY = 50
 SIM_BODY_PREFIX = 'sim.body.'
 SIM_IMU_PREFIX = 'sim.imu.'
 _JOINT_SIM_KEY = 'sim'
@@ -113,6 +113,8 @@ class BridgeSettings:
         diagnostics_rate_hz: /diagnostics rate [Hz].
         publish_frames: publish every CAN frame on ``~/frames``.
         sim: simulator settings, or None on real hardware.
+        edge_priority: SCHED_FIFO priority the executable gives the process's other
+            threads (:func:`rm_base.realtime.raise_edge_priority`); 0: none.
     """
 
     hardware: Mapping[str, Any]
@@ -121,6 +123,7 @@ class BridgeSettings:
     diagnostics_rate_hz: float = 1.0
     publish_frames: bool = False
     sim: SimSettings | None = None
+    edge_priority: int = EDGE_PRIORITY
 
 
 def plain(value: Any) -> Any:
@@ -179,8 +182,8 @@ def settings_from_parameters(
         typed: the declared, already type-checked parameters: ``publish_rate``,
             ``diagnostics_rate``, ``publish_frames``, ``log_file``, ``sim``,
             ``sim.timing`` (:class:`Timing` or its value), ``sim.seed``,
-            ``scheduler.rate_hz``, ``scheduler.receive_in_loop``, ``scheduler.priority``
-            and ``safety.*``;
+            ``scheduler.rate_hz``, ``scheduler.receive_in_loop``, ``scheduler.priority``,
+            ``scheduler.edge_priority`` and ``safety.*``;
             missing ones take their defaults.
         open_params: every other parameter by its flat name (rclpy's own excluded).
 
@@ -214,7 +217,8 @@ def settings_from_parameters(
         else:
             raise BridgeConfigError(
                 f'unknown parameter {name!r}; the bridge takes buses.*, joints.*, '
-                'scheduler.rate_hz, scheduler.receive_in_loop, scheduler.priority, safety.*, '
+                'scheduler.rate_hz, scheduler.receive_in_loop, scheduler.(edge_)priority, '
+                'safety.*, '
                 'publish_rate, '
                 'diagnostics_rate, publish_frames, log_file, sim, sim.timing, sim.seed, '
                 'sim.body.*, sim.imu.*'
@@ -235,7 +239,7 @@ def settings_from_parameters(
     scheduler = {
         'rate_hz': typed.get('scheduler.rate_hz', 1000.0),
         'receive_in_loop': typed.get('scheduler.receive_in_loop', True),
-        'priority': typed.get('scheduler.priority', DEFAULT_PRIORITY),
+        'priority': typed.get('scheduler.priority', LOOP_PRIORITY),
     }
     safety = {
         key: typed[f'safety.{key}']
@@ -267,6 +271,7 @@ def settings_from_parameters(
         diagnostics_rate_hz=float(typed.get('diagnostics_rate', 1.0)),
         publish_frames=bool(typed.get('publish_frames', False)),
         sim=sim,
+        edge_priority=int(typed.get('scheduler.edge_priority', EDGE_PRIORITY)),
     )
 
 

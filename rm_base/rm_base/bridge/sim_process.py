@@ -40,7 +40,7 @@ BRIDGE_SECTION = 'can_bridge'
 #: The bridge's parameters that it declares itself (the rest are its config tree).
 TYPED = frozenset({
     'publish_rate', 'diagnostics_rate', 'publish_frames', 'log_file', 'scheduler.rate_hz',
-    'scheduler.receive_in_loop', 'scheduler.priority',
+    'scheduler.receive_in_loop', 'scheduler.priority', 'scheduler.edge_priority',
     'safety.feedback_timeout_s', 'safety.command_timeout_s', 'safety.temperature_hysteresis_c',
     'sim', 'sim.timing', 'sim.seed',
 })

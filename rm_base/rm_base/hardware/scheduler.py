@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import dataclasses
 import logging
-import os
 import threading
 import time
 from collections.abc import Callable, Sequence
@@ -38,6 +37,7 @@ import can
 
 from rm_base.hardware.errors import HardwareConfigError
 from rm_base.hardware.timing import DurationHistogram, DurationSummary
+from rm_base.realtime import set_fifo_priority
 
 _log = logging.getLogger(__name__)
 
@@ -108,15 +108,6 @@ class PeriodStats:
     components: tuple[tuple[str, DurationSummary], ...] = ()
 
 
-def set_fifo_priority(priority: int) -> None:
-    """Put the calling thread under SCHED_FIFO at priority (Linux: pid 0 is the thread).
-
-    Raises:
-        OSError: not permitted (no CAP_SYS_NICE and no RLIMIT_RTPRIO for it).
-    """
-    os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))
-
-
 class Scheduler:
     """Runs update -> pack -> send for a set of actuators and packers at a fixed rate."""
 
@@ -184,6 +175,7 @@ class Scheduler:
         self._clock_ns = clock_ns
         self._sleep = sleep
         self._last_tick_ns: int | None = None
+        self._tick_deadline_ns: int | None = None
         self._frames: list[tuple[Callable[[can.Message], object], can.Message]] = []
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -343,6 +335,7 @@ class Scheduler:
                 if start >= next_report:
                     next_report = start + self._report_period_ns
                     self._log_window()
+                self._tick_deadline_ns = deadline + period
                 try:
                     self.tick(start)
                 except Exception as exc:
@@ -351,6 +344,7 @@ class Scheduler:
                     if self.on_error is None or not self.on_error(exc):
                         _log.error('scheduler stopped after an error')
                         break
+                self._tick_deadline_ns = None
                 end = clock()
                 self._max_tick_ns = max(self._max_tick_ns, end - start)
                 deadline += period
@@ -368,6 +362,15 @@ class Scheduler:
                     self._final()
                 except Exception:
                     _log.exception('scheduler final callback failed')
+
+    def time_left_ns(self) -> int | None:
+        """Time until the running tick's deadline (the next period's start) [ns].
+
+        None outside a tick of the loop thread: a tick run by ``tick()`` directly (a
+        stepped loop) has no deadline.
+        """
+        deadline = self._tick_deadline_ns
+        return None if deadline is None else deadline - self._clock_ns()
 
     def _log_window(self) -> None:
         lateness = self._lateness.take_window()

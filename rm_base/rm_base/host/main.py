@@ -11,6 +11,7 @@ from rclpy.experimental import EventsExecutor
 from rm_base.errors import ConfigError
 from rm_base.host.node import NODE_NAME, ExecutorKind, RobotHost
 from rm_base.node_main import init_ros, spin_until_shutdown
+from rm_base.realtime import raise_edge_priority
 
 
 def make_executor(node: RobotHost) -> Executor:
@@ -43,6 +44,7 @@ def main(args: list[str] | None = None) -> int:
 
     executor = make_executor(node)
     executor.add_node(node)
+    raise_edge_priority(node.edge_priority)
     try:
         spin_until_shutdown(executor, node.context)
     finally:

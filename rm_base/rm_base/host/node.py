@@ -20,6 +20,7 @@ from rm_base.plugin.inbox import STAGE_NAME as INBOX_STAGE
 from rm_base.plugin.inbox import Inbox
 from rm_base.plugin.node_io import DdsJointIO, node_io, use_local_io
 from rm_base.plugin.outbox import Outbox
+from rm_base.realtime import EDGE_PRIORITY, LOOP_PRIORITY
 from rm_base.ros_logging import FastLogger
 
 NODE_NAME = 'rm_robot'
@@ -109,7 +110,7 @@ class RobotHost(Node):
             io = use_local_io(self, hardware)
             self.loop = hardware.scheduler
             self._own_loop = False
-            inputs = TickInputs(now or self.get_clock().now, io.refresh)
+            inputs = TickInputs(now or self.get_clock().now, io.refresh, self.loop.time_left_ns)
         else:
             io = node_io(self)
             self.loop = None  # built in _configure, once loop_rate is read
@@ -249,9 +250,17 @@ class RobotHost(Node):
             gt=0.0,
             le=10000.0,
         )
+        self.edge_priority = node_params.integer(
+            'edge_priority',
+            EDGE_PRIORITY,
+            ge=0,
+            le=99,
+            description="real-time priority rm_robot gives the process's other threads, "
+            'below the loop (a thread holding the GIL must not be preempted); 0: normal',
+        )
         loop_priority = node_params.integer(
             'loop_priority',
-            50,
+            LOOP_PRIORITY,
             ge=0,
             le=99,
             description='real-time (SCHED_FIFO) priority of the plugin loop thread when '
@@ -262,6 +271,7 @@ class RobotHost(Node):
                 [], [], rate_hz=loop_rate, thread_name=f'{NODE_NAME}-loop',
                 priority=loop_priority,
             )
+            inputs.time_left = self.loop.time_left_ns
 
         self._io.loop = self.loop
         start_enabled = {}

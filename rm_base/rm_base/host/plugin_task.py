@@ -10,6 +10,14 @@ tick.
 Tasks of one loop share a :class:`TickInputs`: the plugins' clock is read and the local
 joint view refreshed at most once per tick, and only on ticks where a plugin runs.
 
+A run that would not fit before the tick's deadline waits one tick: given the loop's
+``time_left`` (the real-time loop's; a stepped loop has none), a plugin whose typical run
+(a moving average of its own runs) plus the time the loop still needs after the plugins
+(``RESERVE_NS``) exceeds what is left of the period runs at the next tick instead, and
+then unconditionally. So plugins that fall due together (several commands in one tick)
+spread over two ticks rather than push the tick past its deadline; no plugin waits more
+than one tick, and lockstep runs never wait.
+
 The loop never waits for a plugin: ``enable``/``disable`` (ROS services, executor thread)
 take the plugin's lock; the loop only tries it, and runs the plugin at a later tick if it
 is held. No rclpy here.
@@ -18,6 +26,7 @@ is held. No rclpy here.
 from __future__ import annotations
 
 import threading
+import time
 from collections.abc import Callable
 from typing import Any
 
@@ -26,6 +35,10 @@ from rm_base.plugin.base import PluginBase
 _NS_PER_S = 1_000_000_000
 # Shortest time between two runs when new commands arrive: a quarter period, at most this.
 _MAX_GAP_NS = 2_000_000
+#: What a tick needs after the plugins (actuator updates, power limit, pack, send) [ns].
+RESERVE_NS = 200_000
+# Weight of the newest run in the moving average of a plugin's run time.
+_COST_WEIGHT = 0.125
 
 
 class TickInputs:
@@ -35,13 +48,19 @@ class TickInputs:
         now: the plugins' clock (an rclpy Time: the node clock's ``now``).
         refresh: fills the joint-state view from the actuators (LocalJointIO.refresh),
             given the tick's time on the plugins' clock [ns]; None with DDS joint I/O.
+        time_left: ns left until the running tick's deadline, None outside a real-time
+            tick (``Scheduler.time_left_ns``); None: runs never wait for a later tick.
     """
 
     def __init__(
-        self, now: Callable[[], Any], refresh: Callable[[int], None] | None = None
+        self,
+        now: Callable[[], Any],
+        refresh: Callable[[int], None] | None = None,
+        time_left: Callable[[], int | None] | None = None,
     ) -> None:
         self._now = now
         self._refresh = refresh
+        self.time_left = time_left
         self._tick_ns: int | None = None
         self._time: Any = None
 
@@ -71,6 +90,8 @@ class PluginTask:
         command_runs: of those, runs for a new command before the plugin's deadline.
         skipped: the plugin's deadlines that passed without a run (late loop ticks, or
             the plugin's lock held by enable/disable).
+        deferred: runs moved to the next tick because they would not fit in this one.
+        cost_ns: moving average of the plugin's run time [ns].
         errors: failures outside ``plugin.run`` (the clock, the joint view); each
             disables the plugin (zero output), with the error as its reason.
     """
@@ -83,7 +104,10 @@ class PluginTask:
         self.ticks = 0
         self.command_runs = 0
         self.skipped = 0
+        self.deferred = 0
         self.errors = 0
+        self.cost_ns = 0.0
+        self._waiting = False  # deferred at the previous tick: runs now whatever is left
         self._inputs = inputs
         self._min_gap_ns = min(self.period_ns // 4, _MAX_GAP_NS)
         self.phase_ns = phase_ns % self.period_ns
@@ -101,6 +125,7 @@ class PluginTask:
         plugin = self.plugin
         if not plugin.enabled:
             self._next_ns = None
+            self._waiting = False
             return False
         next_ns = self._next_ns
         if next_ns is None:
@@ -113,6 +138,10 @@ class PluginTask:
         )
         if not (due or for_command):
             return False
+        if not self._waiting and not self._fits():
+            self._waiting = True
+            self.deferred += 1
+            return False
         if not self.lock.acquire(blocking=False):
             return False
         try:
@@ -123,9 +152,12 @@ class PluginTask:
                 self.errors += 1
                 plugin.disable(f'loop failed: {type(err).__name__}: {err}')
                 return True
+            started = time.perf_counter_ns()
             plugin.run(now)
+            self.cost_ns += (time.perf_counter_ns() - started - self.cost_ns) * _COST_WEIGHT
         finally:
             self.lock.release()
+        self._waiting = False
         self.ticks += 1
         self._last_ns = now_ns
         if for_command:
@@ -139,6 +171,12 @@ class PluginTask:
                 next_ns += missed * self.period_ns
             self._next_ns = next_ns
         return True
+
+    def _fits(self) -> bool:
+        """Whether a typical run still ends before the tick's deadline (with the reserve)."""
+        time_left = self._inputs.time_left
+        left = time_left() if time_left is not None else None
+        return left is None or left - self.cost_ns >= RESERVE_NS
 
     def enable(self) -> bool:
         """Enable the plugin between two of its runs; return False if it already was."""

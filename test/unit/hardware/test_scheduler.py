@@ -284,3 +284,23 @@ def test_after_tick_callbacks_run_once_per_tick_after_the_frames_went_out():
     scheduler.remove_after_tick(callback)
     scheduler.tick(T0 + 2 * MS)
     assert events[-1] == ('after',)
+
+
+def test_time_left_is_known_only_inside_a_tick_of_the_loop_thread():
+    seen = []
+
+    class Probe:
+        name = 'probe'
+
+        def __call__(self, now_ns, dt):
+            seen.append(scheduler.time_left_ns())
+
+    scheduler = Scheduler([], [], rate_hz=1000.0)
+    scheduler.add_stage(Probe())
+    scheduler.tick(T0)  # stepped: no deadline
+    assert seen == [None]
+    scheduler.start()
+    assert wait_until(lambda: len(seen) >= 20, timeout=10.0)
+    scheduler.stop()
+    assert all(left is not None and left <= 1_000_000 for left in seen[1:])
+    assert scheduler.time_left_ns() is None

@@ -1,8 +1,9 @@
 """PluginTask: a plugin in the loop, run at its own rate and at the next tick for a command."""
 
 import threading
+import time
 
-from rm_base.host.plugin_task import PluginTask, TickInputs
+from rm_base.host.plugin_task import RESERVE_NS, PluginTask, TickInputs
 
 MS = 1_000_000  # ns
 
@@ -145,3 +146,35 @@ def test_a_phase_moves_the_schedule_not_the_rate():
     task = PluginTask(plugin, TickInputs(lambda: Time(clock['ns'])), phase_ns=3 * MS)
     run_ticks(task, clock, 30)
     assert plugin.runs == [3 * MS, 13 * MS, 23 * MS]
+
+
+class SlowPlugin(FakePlugin):
+    """A plugin whose run takes a while of real time, so the task learns its cost."""
+
+    def run(self, now):
+        super().run(now)
+        end = time.perf_counter_ns() + 300_000
+        while time.perf_counter_ns() < end:
+            pass
+
+
+def test_a_run_that_would_pass_the_deadline_waits_one_tick_then_runs_whatever_is_left():
+    left = {'ns': None}
+    plugin = SlowPlugin(1000.0)
+    inputs = TickInputs(lambda: Time(len(plugin.runs)), time_left=lambda: left['ns'])
+    task = PluginTask(plugin, inputs)
+
+    def tick(i):
+        return task(i * MS, 0.001)
+
+    assert tick(0) is True  # no deadline (a stepped loop): runs, learns its cost
+    assert task.cost_ns > 0
+    left['ns'] = RESERVE_NS + task.cost_ns // 2  # not enough left for a typical run
+    assert tick(1) is False
+    assert (task.deferred, task.ticks) == (1, 1)
+    assert tick(2) is True  # at most one tick late, even if still short
+    assert tick(3) is False and task.deferred == 2
+    left['ns'] = RESERVE_NS + 10 * task.cost_ns  # room again: on time
+    assert tick(4) is True and tick(5) is True
+    # a 1 kHz plugin moved by a tick has run once for two of its deadlines
+    assert (task.ticks, task.deferred, task.skipped) == (4, 2, 2)

@@ -1,0 +1,84 @@
+"""Real-time scheduling of the robot's threads (Linux SCHED_FIFO).
+
+The control loop asks for SCHED_FIFO, as ros2_control's controller manager does for its
+thread. In Python that is not enough: every thread of the process needs the interpreter
+lock to run, and a thread that holds it while the kernel preempts it for another process
+(the simulator, a vision pipeline) keeps the loop waiting for as long as it is not
+scheduled, a priority inversion no lock protocol resolves. So the process's other
+threads (executor, publishers, readers, DDS) run at a lower real-time priority than the
+loop: above every normal process, below the loop. They are event-driven and woken after
+the loop's ticks, so they use little CPU; the kernel's real-time throttling
+(``sched_rt_runtime_us``) bounds them anyway. Measured in docs/PERFORMANCE.md.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from pathlib import Path
+
+_log = logging.getLogger(__name__)
+
+#: Priority of the control loop thread (ros2_control's ``thread_priority`` default).
+LOOP_PRIORITY = 50
+#: Priority of every other thread of the robot's process.
+EDGE_PRIORITY = 10
+
+
+def set_fifo_priority(priority: int, thread_id: int = 0) -> None:
+    """Put a thread (0: the calling one) under SCHED_FIFO at priority.
+
+    Raises:
+        OSError: not permitted (no CAP_SYS_NICE and no RLIMIT_RTPRIO for it), or no such
+            thread.
+    """
+    os.sched_setscheduler(thread_id, os.SCHED_FIFO, os.sched_param(priority))
+
+
+def raise_process_threads(priority: int) -> int:
+    """Give every thread of this process that runs under normal scheduling SCHED_FIFO.
+
+    Threads already real-time (the loop) keep their priority; threads created later by
+    one of them inherit the creator's policy (Linux' default for new threads).
+
+    Returns:
+        The number of threads changed.
+
+    Raises:
+        OSError: not permitted.
+    """
+    changed = 0
+    for task in Path('/proc/self/task').iterdir():
+        tid = int(task.name)
+        try:
+            if os.sched_getscheduler(tid) == os.SCHED_FIFO:
+                continue
+            set_fifo_priority(priority, tid)
+        except ProcessLookupError:  # the thread ended meanwhile
+            continue
+        changed += 1
+    return changed
+
+
+def raise_edge_priority(priority: int = EDGE_PRIORITY) -> bool:
+    """Run the process's threads at real-time priority (see the module docstring).
+
+    Call it from an executable's main once its nodes (and their threads) exist; 0 does
+    nothing. Without the right to it, one warning and normal scheduling.
+
+    Returns:
+        Whether the threads now run at priority.
+    """
+    if priority <= 0:
+        return False
+    try:
+        count = raise_process_threads(priority)
+    except OSError as err:
+        _log.warning(
+            'threads keep normal scheduling (SCHED_FIFO %d refused: %s): a thread '
+            'preempted while it holds the interpreter lock delays the loop; see '
+            'docs/PERFORMANCE.md', priority, err,
+        )
+        return False
+    _log.info('%d thread(s) of the process at SCHED_FIFO %d, below the loop', count, priority)
+    return True
