@@ -343,6 +343,11 @@ class ManagedBus:
             self._log_sink.stop()
         _log.info('bus %s shut down', self.name)
 
+    def after_tick(self) -> None:
+        """Let the bus's log writer write what is queued (in the loop's idle time)."""
+        if self._log_sink is not None:
+            self._log_sink.wake()
+
     def __enter__(self) -> ManagedBus:
         return self
 

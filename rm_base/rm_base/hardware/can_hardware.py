@@ -123,6 +123,8 @@ class CanHardware:
         )
         if self.receive_in_loop:
             self.scheduler.add_stage(_FeedbackStage(tuple(self.buses.values())))
+        for bus in self.buses.values():
+            self.scheduler.add_after_tick(bus.after_tick)
 
     def _check_ids(self, own_frames: list[Actuator]) -> None:
         sent: dict[tuple[str, int], str] = {

@@ -117,8 +117,9 @@ class RobotHost(Node):
             self._own_loop = True
             inputs = TickInputs(now or self.get_clock().now)
         io.outbox = self._outbox
-        # what a plugin publishes reaches the robot's other plugins at once, not over DDS
+        # what a plugin publishes reaches the robot's other plugins in-process, not over DDS
         self._outbox.loopback = io.deliver
+        self._outbox.loopback_at_put = not take_from_dds  # lockstep: in the same tick
         # Lockstep: every command comes through inject; DDS deliveries would arrive at
         # ticks that differ from run to run, so nothing takes them.
         self._inbox = Inbox(self) if take_from_dds else None

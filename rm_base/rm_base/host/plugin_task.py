@@ -11,8 +11,9 @@ Tasks of one loop share a :class:`TickInputs`: the plugins' clock is read and th
 joint view refreshed at most once per tick, and only on ticks where a plugin runs.
 
 A run that would not fit before the tick's deadline waits one tick: given the loop's
-``time_left`` (the real-time loop's; a stepped loop has none), a plugin whose typical run
-(a moving average of its own runs) plus the time the loop still needs after the plugins
+``time_left`` (the real-time loop's; a stepped loop has none), a plugin whose long run
+(moving mean plus twice the moving mean deviation of its own runs, as TCP estimates a
+round trip) plus the time the loop still needs after the plugins
 (``RESERVE_NS``) exceeds what is left of the period runs at the next tick instead, and
 then unconditionally. So plugins that fall due together (several commands in one tick)
 spread over two ticks rather than push the tick past its deadline; no plugin waits more
@@ -37,8 +38,9 @@ _NS_PER_S = 1_000_000_000
 _MAX_GAP_NS = 2_000_000
 #: What a tick needs after the plugins (actuator updates, power limit, pack, send) [ns].
 RESERVE_NS = 200_000
-# Weight of the newest run in the moving average of a plugin's run time.
-_COST_WEIGHT = 0.125
+# Weights of the newest run in the moving mean and mean deviation of a plugin's run time.
+_MEAN_WEIGHT = 0.125
+_DEV_WEIGHT = 0.25
 
 
 class TickInputs:
@@ -91,7 +93,7 @@ class PluginTask:
         skipped: the plugin's deadlines that passed without a run (late loop ticks, or
             the plugin's lock held by enable/disable).
         deferred: runs moved to the next tick because they would not fit in this one.
-        cost_ns: moving average of the plugin's run time [ns].
+        cost_ns: a long run of the plugin: moving mean + 2 moving mean deviations [ns].
         errors: failures outside ``plugin.run`` (the clock, the joint view); each
             disables the plugin (zero output), with the error as its reason.
     """
@@ -107,6 +109,8 @@ class PluginTask:
         self.deferred = 0
         self.errors = 0
         self.cost_ns = 0.0
+        self._mean_ns = 0.0
+        self._dev_ns = 0.0
         self._waiting = False  # deferred at the previous tick: runs now whatever is left
         self._inputs = inputs
         self._min_gap_ns = min(self.period_ns // 4, _MAX_GAP_NS)
@@ -154,7 +158,7 @@ class PluginTask:
                 return True
             started = time.perf_counter_ns()
             plugin.run(now)
-            self.cost_ns += (time.perf_counter_ns() - started - self.cost_ns) * _COST_WEIGHT
+            self._learn(time.perf_counter_ns() - started)
         finally:
             self.lock.release()
         self._waiting = False
@@ -172,8 +176,14 @@ class PluginTask:
             self._next_ns = next_ns
         return True
 
+    def _learn(self, run_ns: int) -> None:
+        error = run_ns - self._mean_ns
+        self._mean_ns += error * _MEAN_WEIGHT
+        self._dev_ns += (abs(error) - self._dev_ns) * _DEV_WEIGHT
+        self.cost_ns = self._mean_ns + 2.0 * self._dev_ns
+
     def _fits(self) -> bool:
-        """Whether a typical run still ends before the tick's deadline (with the reserve)."""
+        """Whether a long run still ends before the tick's deadline (with the reserve)."""
         time_left = self._inputs.time_left
         left = time_left() if time_left is not None else None
         return left is None or left - self.cost_ns >= RESERVE_NS

@@ -57,18 +57,24 @@ class Outbox:
     """
 
     def __init__(self, name: str = 'ros-edge-publish', max_queued: int = MAX_QUEUED) -> None:
-        self._queue: collections.deque[tuple[Any, Any]] = collections.deque(maxlen=max_queued)
+        # (publisher, serialised message, its type if the thread hands it to the loopback)
+        self._queue: collections.deque[tuple[Any, bytes, type | None]] = collections.deque(
+            maxlen=max_queued
+        )
         self._wake = threading.Event()
         self._stop = False
         self._publish_lock = threading.Lock()  # flush() and the thread publish in order
         self.published = 0
         self.dropped = 0
         self.errors = 0
+        self.loopback_errors = 0
         self._paced = False
-        # Also hands each message at once to the in-process subscribers of its topic
+        # Also hands each message to the in-process subscribers of its topic
         # (``loopback(topic, raw, msg_type)``: the serialised snapshot), so nothing
-        # inside the robot waits on DDS.
+        # inside the robot waits on DDS: from the outbox thread, before publishing it,
+        # or, with ``loopback_at_put`` (lockstep: the same tick on every run), at once.
         self.loopback: Callable[[str, bytes, type], object] | None = None
+        self.loopback_at_put = False
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
 
     def wrap(self, publisher: Any) -> _EdgePublisher:
@@ -78,12 +84,13 @@ class Outbox:
     def put(self, publisher: Any, msg: Any) -> None:
         """Queue msg, serialised now, for publisher (any thread; never blocks)."""
         raw = serialize_message(msg)
-        if self.loopback is not None:
+        in_thread = self.loopback is not None and not self.loopback_at_put
+        if self.loopback is not None and not in_thread:
             self.loopback(publisher.topic_name, raw, type(msg))
         queue = self._queue
         if len(queue) == queue.maxlen:
             self.dropped += 1
-        queue.append((publisher, raw))
+        queue.append((publisher, raw, type(msg) if in_thread else None))
         if not self._paced:
             self._wake.set()
 
@@ -105,7 +112,9 @@ class Outbox:
         with self._publish_lock:
             queue = self._queue
             while queue:
-                publisher, msg = queue.popleft()
+                publisher, msg, loop_type = queue.popleft()
+                if loop_type is not None:
+                    self._hand_back(publisher.topic_name, msg, loop_type)
                 try:
                     publisher.publish(msg)
                     self.published += 1
@@ -113,6 +122,14 @@ class Outbox:
                     self.errors += 1
                     if self.errors == 1:
                         _log.error('publishing %s failed: %r', publisher.topic_name, err)
+
+    def _hand_back(self, topic: str, raw: bytes, msg_type: type) -> None:
+        try:
+            self.loopback(topic, raw, msg_type)
+        except Exception as err:  # a subscriber's callback: the message is still published
+            self.loopback_errors += 1
+            if self.loopback_errors == 1:
+                _log.error('in-process delivery on %s failed: %r', topic, err)
 
     def stop(self, timeout_s: float = 2.0) -> None:
         """Publish what is queued, then end the thread. Idempotent."""

@@ -67,6 +67,7 @@ def test_when_the_edge_falls_behind_expect_the_oldest_dropped_and_counted():
 
 def test_loopback_gets_the_snapshot_at_once_with_the_topic():
     box = Outbox()
+    box.loopback_at_put = True
     got = []
     box.loopback = lambda topic, raw, msg_type: got.append(
         (topic, deserialize_message(raw, msg_type))
@@ -76,3 +77,32 @@ def test_loopback_gets_the_snapshot_at_once_with_the_topic():
     msg.data = 6
     assert [(topic, m.data) for topic, m in got] == [('/fake', 5)]
     box.stop()
+
+
+def test_loopback_from_the_thread_gets_the_snapshot_before_it_is_published():
+    box = Outbox()
+    pub = FakePublisher()
+    order = []
+    box.loopback = lambda topic, raw, msg_type: order.append(
+        ('local', deserialize_message(raw, msg_type).data)
+    )
+    pub.publish = lambda raw: order.append(('dds', deserialize_message(raw, UInt32).data))
+    msg = UInt32(data=5)
+    box.wrap(pub).publish(msg)
+    msg.data = 6
+    assert order == []  # nothing in the publishing (loop) thread
+    box.flush()
+    assert order == [('local', 5), ('dds', 5)]
+
+
+def test_a_failing_loopback_is_counted_and_the_message_still_published():
+    box = Outbox()
+    pub = FakePublisher()
+
+    def fail(topic, raw, msg_type):
+        raise ValueError('bad subscriber')
+
+    box.loopback = fail
+    box.wrap(pub).publish(UInt32(data=3))
+    box.flush()
+    assert box.loopback_errors == 1 and pub.published == [3]
