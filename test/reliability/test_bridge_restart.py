@@ -90,7 +90,9 @@ def test_when_the_bridge_restarts_expect_the_shooter_safe_meanwhile_and_no_shot_
     mark = len(robot.history('/shooter_state'))
     restart_bridge(robot)
     restarted = time.monotonic()
-    assert abs(trigger_angle(robot)) < 1e-9  # a new world: the trigger starts at 0
+    # A new world: the trigger starts at 0. The new bridge's loop takes /actuator_cmd from
+    # its first tick, so the commands still in flight may have moved it a hair since.
+    assert abs(trigger_angle(robot)) < 0.25 * SLOT  # the old world held it > 3 slots
     # Back: the shooter feeds a ball again and waits READY; it must not step the trigger on
     # towards the old bridge's 3 rad.
     assert wait_until(

@@ -57,6 +57,7 @@ from rclpy.qos import qos_profile_sensor_data  # noqa: E402
 from reliability.rigs import WireWatch, hardware_config  # noqa: E402
 from reliability.wire import check_actuator_states, max_efforts  # noqa: E402
 from rm_base.bridge import CanBridgeNode  # noqa: E402
+from rm_base.realtime import raise_edge_priority  # noqa: E402
 from rm_base.sim import Fault, FaultKind  # noqa: E402
 from support.robot import CONFIG_DIR, load_parameters  # noqa: E402
 
@@ -137,6 +138,7 @@ class Robot:
         self.executor = EventsExecutor(context=self.context)
         self.executor.add_node(self.bridge)
         self.executor.add_node(self.node)
+        raise_edge_priority(self.bridge.settings.edge_priority)  # as can_bridge's main does
         self._stop = threading.Event()
         self._spinner = threading.Thread(target=self._spin, name='soak-spin', daemon=True)
         self._spinner.start()

@@ -30,6 +30,7 @@ from rm_base.bridge.params import (
 from rm_base.bridge.sim_config import world_config
 from rm_base.bridge.sim_services import SimFaultServices
 from rm_base.hardware import CanHardware, CommandRejectedError
+from rm_base.plugin.inbox import Inbox
 from rm_base.plugin.params import PluginParams
 from rm_base.realtime import EDGE_PRIORITY, LOOP_PRIORITY
 from rm_base.ros_logging import FastLogger
@@ -111,6 +112,7 @@ class CanBridgeNode(Node):
         self._stop = threading.Event()
         self._publisher_thread: threading.Thread | None = None
         self._tick_done = threading.Event()
+        self._inbox: Inbox | None = None
         self._stats_lock = threading.Lock()
         self._accepted = 0
         self._rejected: dict[str, int] = {}
@@ -119,8 +121,7 @@ class CanBridgeNode(Node):
         try:
             self._setup()
         except BaseException:
-            self.shutdown()
-            super().destroy_node()
+            self.destroy_node()
             raise
 
     # --- set-up ------------------------------------------------------------------------
@@ -172,9 +173,18 @@ class CanBridgeNode(Node):
             if settings.publish_frames
             else None
         )
-        self._command_sub = self.create_subscription(
-            ActuatorCmd, 'actuator_cmd', self._on_actuator_cmd, _COMMAND_QOS
-        )
+        if self.stepped:  # lockstep: the test's executor delivers, in its own order
+            self._inbox = None
+            self._command_sub = self.create_subscription(
+                ActuatorCmd, 'actuator_cmd', self._on_actuator_cmd, _COMMAND_QOS
+            )
+        else:  # the loop takes /actuator_cmd at the start of each tick (no executor hop)
+            self._inbox = Inbox(self, name='actuator_cmd')
+            self._inbox.subscribe(
+                ActuatorCmd, self.resolve_topic_name('actuator_cmd'),
+                lambda msg, _receive_ns: self._on_actuator_cmd(msg), _COMMAND_QOS,
+            )
+            hw.scheduler.add_stage(self._inbox)
         if self.sim_world is not None:
             self._sim_services = SimFaultServices(
                 self, self.sim_world, self.hardware.joint_names,
@@ -500,4 +510,7 @@ class CanBridgeNode(Node):
     def destroy_node(self) -> None:
         """Shut the hardware down (zero output first), then destroy the node."""
         self.shutdown()
+        if self._inbox is not None:
+            self._inbox.destroy()
+            self._inbox = None
         super().destroy_node()

@@ -40,11 +40,11 @@ class Inbox:
         node: the node whose name, namespace, context and clock the subscriptions follow;
             the inbox creates ``<node name>_inbox`` beside it, which must never be added
             to an executor.
+        name: its name among the loop's components.
     """
 
-    name = STAGE_NAME
-
-    def __init__(self, node: Node) -> None:
+    def __init__(self, node: Node, name: str = STAGE_NAME) -> None:
+        self.name = name
         self._clock = node.get_clock()
         self._node = Node(
             f'{node.get_name()}_inbox',
