@@ -1,4 +1,6 @@
-"""Start-up and spin loop shared by the rm_ros2 executables (can_bridge, rm_robot, bringup).
+"""Start-up, spin loop and inbox node shared by the executables (can_bridge, rm_robot, ...).
+
+``inbox_node`` makes the never-spun node a control loop takes subscriptions from.
 
 if not init_ros('rm_robot', args):
 return 1
@@ -17,9 +19,25 @@ from collections.abc import Sequence
 import rclpy
 from rclpy.context import Context
 from rclpy.executors import Executor, ExternalShutdownException
+from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
 from rm_base.ros_env import init_error_line, params_file_error, prepare_ros_process
+
+
+def inbox_node(owner: Node) -> Node:
+    """A node beside owner (``<name>_inbox``, same namespace and context) for an Inbox.
+
+    No executor may spin it: the control loop takes its subscriptions itself
+    (:class:`rm_base.plugin.inbox.Inbox`). No parameter services: it has no parameters.
+    """
+    return Node(
+        f'{owner.get_name()}_inbox',
+        namespace=owner.get_namespace(),
+        context=owner.context,
+        start_parameter_services=False,
+    )
+
 
 # How long one spin_once may block [s]; bounds the reaction to SIGINT/SIGTERM.
 SPIN_TIMEOUT = 0.1

@@ -613,6 +613,11 @@ def main(argv: list[str] | None = None) -> int:
         'command_mixes': commander.mixes,
         'scheduler': {
             'ticks': sched.ticks,
+            # ticks run per second of loop time (every deadline is a tick run or skipped)
+            'ticks_per_s': round(
+                sched.ticks / max(sched.ticks + sched.skipped_ticks, 1) * 1e9 / sched.period_ns,
+                1,
+            ),
             'overruns': sched.overruns,
             'skipped_ticks': sched.skipped_ticks,
             'max_error_ms': round(sched.max_error_us / 1e3, 1),

@@ -30,6 +30,7 @@ from rm_base.bridge.params import (
 from rm_base.bridge.sim_config import world_config
 from rm_base.bridge.sim_services import SimFaultServices
 from rm_base.hardware import CanHardware, CommandRejectedError
+from rm_base.node_main import inbox_node
 from rm_base.plugin.inbox import Inbox
 from rm_base.plugin.params import PluginParams
 from rm_base.realtime import EDGE_PRIORITY, LOOP_PRIORITY
@@ -179,7 +180,7 @@ class CanBridgeNode(Node):
                 ActuatorCmd, 'actuator_cmd', self._on_actuator_cmd, _COMMAND_QOS
             )
         else:  # the loop takes /actuator_cmd at the start of each tick (no executor hop)
-            self._inbox = Inbox(self, name='actuator_cmd')
+            self._inbox = Inbox(inbox_node(self), self.get_clock(), name='actuator_cmd')
             self._inbox.subscribe(
                 ActuatorCmd, self.resolve_topic_name('actuator_cmd'),
                 lambda msg, _receive_ns: self._on_actuator_cmd(msg), _COMMAND_QOS,

@@ -14,6 +14,7 @@ from std_srvs.srv import SetBool
 
 from rm_base.hardware import CanHardware, Scheduler
 from rm_base.host.plugin_task import PluginTask, TickInputs
+from rm_base.node_main import inbox_node
 from rm_base.plugin import PluginBase, PluginLoader, PluginParams
 from rm_base.plugin.errors import ParameterError
 from rm_base.plugin.inbox import STAGE_NAME as INBOX_STAGE
@@ -122,7 +123,7 @@ class RobotHost(Node):
         self._outbox.loopback_at_put = not take_from_dds  # lockstep: in the same tick
         # Lockstep: every command comes through inject; DDS deliveries would arrive at
         # ticks that differ from run to run, so nothing takes them.
-        self._inbox = Inbox(self) if take_from_dds else None
+        self._inbox = Inbox(inbox_node(self), self.get_clock()) if take_from_dds else None
         io.inbox = self._inbox
         self._warned_foreign: set[str] = set()
         self._io = io

@@ -2,7 +2,8 @@
 
 A message an executor delivers costs the loop a thread switch and a wait for the GIL
 behind the executor's thread (docs/PERFORMANCE.md). The inbox's subscriptions live on a
-node of their own that no executor spins: DDS (native threads, no GIL) keeps what arrives
+node that no executor spins (``rm_base.node_main.inbox_node`` makes one beside the owner):
+DDS (native threads, no GIL) keeps what arrives
 in each subscription's queue, and the loop's first stage, :meth:`Inbox.__call__`, takes
 every waiting message and hands it to the plugin's callback, the same callback a
 subscription or ``inject`` runs. A command reaches its plugin at the next tick.
@@ -17,8 +18,6 @@ import logging
 import time
 from collections.abc import Callable
 from typing import Any
-
-from rclpy.node import Node
 
 _log = logging.getLogger(__name__)
 
@@ -37,21 +36,17 @@ class Inbox:
     """A loop stage that takes the messages of its subscriptions (``Stage``).
 
     Args:
-        node: the node whose name, namespace, context and clock the subscriptions follow;
-            the inbox creates ``<node name>_inbox`` beside it, which must never be added
-            to an executor.
+        node: the node that holds the subscriptions; it must never be added to an
+            executor. The inbox destroys it with itself.
+        clock: stamps each message's receive time (the owner's clock: simulated time
+            where the owner uses it).
         name: its name among the loop's components.
     """
 
-    def __init__(self, node: Node, name: str = STAGE_NAME) -> None:
+    def __init__(self, node: Any, clock: Any, name: str = STAGE_NAME) -> None:
         self.name = name
-        self._clock = node.get_clock()
-        self._node = Node(
-            f'{node.get_name()}_inbox',
-            namespace=node.get_namespace(),
-            context=node.context,
-            start_parameter_services=False,
-        )
+        self._clock = clock
+        self._node = node
         self._subscriptions: tuple[tuple[Any, type, Callable[[Any, int], Any], str], ...] = ()
         self.taken_by_topic: dict[str, int] = {}
         self._by_topic: dict[str, list[Any]] = {}

@@ -5,6 +5,7 @@ import logging
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from rm_base.hardware.scheduler import Scheduler
+from rm_base.node_main import inbox_node
 from rm_base.plugin.inbox import Inbox
 from rm_base.plugin.node_io import DdsJointIO
 from rm_base.plugin.outbox import Outbox
@@ -24,7 +25,7 @@ def _take_until(inbox, got, count, timeout=5.0):
 
 def test_messages_reach_the_callback_only_when_the_loop_takes_them(ros_context):
     node = Node('inbox_test', context=ros_context)
-    inbox = Inbox(node)
+    inbox = Inbox(inbox_node(node), node.get_clock())
     got = []
     inbox.subscribe(UInt32, '/inbox_cmd', lambda msg, ns: got.append((msg.data, ns)), 10)
     pub = node.create_publisher(UInt32, '/inbox_cmd', 10)
@@ -46,7 +47,7 @@ def test_a_failing_callback_is_counted_and_logged_and_the_next_message_still_arr
     ros_context, caplog
 ):
     node = Node('inbox_test', context=ros_context)
-    inbox = Inbox(node)
+    inbox = Inbox(inbox_node(node), node.get_clock())
     got = []
 
     def callback(msg, ns):
@@ -74,7 +75,7 @@ def test_a_topic_published_in_process_reaches_the_plugins_by_the_outbox_not_from
     io = DdsJointIO(node)
     io.outbox = Outbox()
     io.outbox.loopback = io.deliver
-    io.inbox = Inbox(node)
+    io.inbox = Inbox(inbox_node(node), node.get_clock())
     got = []
     io.subscribe(UInt32, '/local_state', lambda msg, ns: got.append(msg.data), 10)
     publisher = io.create_publisher(UInt32, '/local_state', 10)
@@ -100,7 +101,7 @@ def test_other_nodes_publishing_a_local_topic_are_reported(ros_context):
     node = Node('inbox_test', context=ros_context)
     io = DdsJointIO(node)
     io.outbox = Outbox()
-    io.inbox = Inbox(node)
+    io.inbox = Inbox(inbox_node(node), node.get_clock())
     io.subscribe(UInt32, '/local_state', lambda msg, ns: None, qos_profile_sensor_data)
     io.create_publisher(UInt32, '/local_state', 10)
     io.create_publisher(UInt32, '/not_subscribed', 10)
