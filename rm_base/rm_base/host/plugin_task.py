@@ -15,9 +15,10 @@ A run that would not fit before the tick's deadline waits one tick: given the lo
 (moving mean plus twice the moving mean deviation of its own runs, as TCP estimates a
 round trip) plus the time the loop still needs after the plugins
 (``RESERVE_NS``) exceeds what is left of the period runs at the next tick instead, and
-then unconditionally. So plugins that fall due together (several commands in one tick)
-spread over two ticks rather than push the tick past its deadline; no plugin waits more
-than one tick, and lockstep runs never wait.
+then unconditionally. So scheduled runs that fall due together spread over two ticks
+rather than push the tick past its deadline; no plugin waits more than one tick. A run
+for a new command is never moved (command latency comes first), and lockstep runs never
+wait.
 
 The loop never waits for a plugin: ``enable``/``disable`` (ROS services, executor thread)
 take the plugin's lock; the loop only tries it, and runs the plugin at a later tick if it
@@ -142,7 +143,8 @@ class PluginTask:
         )
         if not (due or for_command):
             return False
-        if not self._waiting and not self._fits():
+        # a run for a new command is never moved: command latency comes first
+        if not self._new_command and not self._waiting and not self._fits():
             self._waiting = True
             self.deferred += 1
             return False

@@ -178,3 +178,14 @@ def test_a_run_that_would_pass_the_deadline_waits_one_tick_then_runs_whatever_is
     assert tick(4) is True and tick(5) is True
     # a 1 kHz plugin moved by a tick has run once for two of its deadlines
     assert (task.ticks, task.deferred, task.skipped) == (4, 2, 2)
+
+
+def test_a_run_for_a_new_command_is_never_moved_to_a_later_tick():
+    plugin = SlowPlugin(100.0)
+    inputs = TickInputs(lambda: Time(len(plugin.runs)), time_left=lambda: 0)  # no time left
+    task = PluginTask(plugin, inputs)
+    assert task(0, 0.001) is False  # its scheduled run waits a tick...
+    assert task(MS, 0.001) is True  # ...then runs
+    plugin.command_listener()  # a command arrives
+    assert task(2 * MS, 0.001) is False  # too soon after the last run (a quarter period)
+    assert task(4 * MS, 0.001) is True and task.command_runs == 1 and task.deferred == 1
