@@ -387,9 +387,10 @@ class PluginBase:
     ) -> None:
         """Subscribe to a topic; ``callback(msg, receive_ns)`` must only store the message.
 
-        Use this, not ``node.create_subscription``: the host can then also deliver
-        messages to the callback itself (``RobotHost.inject``: lockstep, in-process
-        topics), through the same code a subscription runs.
+        Use this, not ``node.create_subscription``: hosted in the control loop, the loop
+        takes the messages itself at each tick (no executor in between), a topic another
+        plugin of the robot publishes arrives in-process, and ``RobotHost.inject``
+        (lockstep) reaches the same callback.
 
         Args:
             topic: topic name (relative names follow the node's namespace).

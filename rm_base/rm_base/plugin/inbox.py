@@ -3,10 +3,10 @@
 A message an executor delivers costs the loop a thread switch and a wait for the GIL
 behind the executor's thread (docs/PERFORMANCE.md). The inbox's subscriptions live on a
 node that no executor spins (``rm_base.node_main.inbox_node`` makes one beside the owner):
-DDS (native threads, no GIL) keeps what arrives
-in each subscription's queue, and the loop's first stage, :meth:`Inbox.__call__`, takes
-every waiting message and hands it to the plugin's callback, the same callback a
-subscription or ``inject`` runs. A command reaches its plugin at the next tick.
+DDS (native threads, no GIL) keeps what arrives in each subscription's queue, and the
+loop's first stage, :meth:`Inbox.__call__`, takes every waiting message and hands it to
+the plugin's callback, the same callback a subscription or ``inject`` runs. A command
+reaches its plugin at the next tick.
 
 Taking is rclpy's own ``handle.take_message`` (what its executors call; rclpy 7.1.6 has
 no public take): ~2 µs per subscription when nothing is waiting.
