@@ -12,14 +12,8 @@ from rm_base.bridge.node import NODE_NAME, CanBridgeNode
 from rm_base.errors import ConfigError
 from rm_base.hardware import BusError
 from rm_base.node_main import init_ros, spin_until_shutdown
-from rm_base.realtime import raise_edge_priority
+from rm_base.realtime import raise_edge_priority, shorten_gil_switch_interval
 from rm_base.ros_logging import forward_package_logging
-
-# The 1 kHz scheduler thread shares the GIL with the receive, publisher and executor
-# threads (and the physics thread on rm_sim). A thread that wakes up may wait up to one
-# switch interval (5 ms by default) for a CPU-bound one to yield; 1 ms keeps a tick late
-# by at most about a period.
-_GIL_SWITCH_INTERVAL = 0.001  # [s]
 
 
 def _one_line(err: BaseException) -> str:
@@ -30,7 +24,7 @@ def main(args: list[str] | None = None) -> int:
     """Run can_bridge until SIGINT/SIGTERM; return the exit status (1 on a config error)."""
     if not init_ros(NODE_NAME, args):
         return 1
-    sys.setswitchinterval(min(sys.getswitchinterval(), _GIL_SWITCH_INTERVAL))
+    shorten_gil_switch_interval()
     handler = forward_package_logging(NODE_NAME)
     try:
         node = CanBridgeNode()

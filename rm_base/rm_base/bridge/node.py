@@ -40,18 +40,8 @@ from rm_msgs.msg import ActuatorCmd, ActuatorState, CanFrame
 
 NODE_NAME = 'can_bridge'
 
-# State publishing runs on a plain thread sleeping to absolute deadlines, not on an
-# executor timer. Measured on this 2-vCPU VM (rclpy 7.1.6, 8 joints, /joint_states +
-# /actuator_states at 200 Hz, one subscriber process, CPU of the publishing process from
-# getrusage over 8 s, steal < 0.3 %, two runs each):
-#   SingleThreadedExecutor timer                  12.9-17.9 % of a core
-#   EventsExecutor timer                           8.7-9.6 %
-#   plain thread + idle EventsExecutor             6.7-8.8 %
-#   plain thread + idle SingleThreadedExecutor     7.7-10.3 %
-# The thread is at least as cheap as the best executor timer, never waits behind
-# /actuator_cmd callbacks on the executor, and works whichever executor spins the node
-# (main() uses the EventsExecutor for the callbacks: 4x cheaper per message,
-# docs/ROS_FROM_WHEELS.md).
+# The states go out from a plain thread woken after the loop's ticks, not from an executor
+# timer: cheaper, and never behind callbacks (docs/PERFORMANCE.md, "Smaller choices").
 
 # /actuator_cmd: reliable, as the plugins publish it; rm_robot waits for reliable readers
 # to acknowledge its final zero command on shutdown.

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import re
-import sys
 from collections.abc import Callable
 from enum import Enum
 from typing import Any
@@ -21,18 +20,13 @@ from rm_base.plugin.inbox import STAGE_NAME as INBOX_STAGE
 from rm_base.plugin.inbox import Inbox
 from rm_base.plugin.node_io import DdsJointIO, node_io, use_local_io
 from rm_base.plugin.outbox import Outbox
-from rm_base.realtime import EDGE_PRIORITY, LOOP_PRIORITY
+from rm_base.realtime import EDGE_PRIORITY, LOOP_PRIORITY, shorten_gil_switch_interval
 from rm_base.ros_logging import FastLogger
 
 NODE_NAME = 'rm_robot'
 
 # A plugin name becomes a parameter prefix and a topic/service name token.
 _PLUGIN_NAME = re.compile(r'[A-Za-z][A-Za-z0-9_]*')
-
-# The loop shares the interpreter with the ROS edge (executor, outbox); a thread that
-# wakes waits for the GIL up to the switch interval (5 ms by default) behind a busy one
-# (docs/PERFORMANCE.md).
-_GIL_SWITCH_INTERVAL = 0.0005  # [s]
 
 # How long shutdown waits for reliable readers (the bridge) to acknowledge zero output [s].
 _ACK_TIMEOUT = 0.5
@@ -103,7 +97,7 @@ class RobotHost(Node):
     ) -> None:
         super().__init__(NODE_NAME, **kwargs)
         self._fast_logger = FastLogger(super().get_logger())
-        sys.setswitchinterval(min(sys.getswitchinterval(), _GIL_SWITCH_INTERVAL))
+        shorten_gil_switch_interval()
         self._tasks: dict[str, PluginTask] = {}
         self._shut_down = False
         self._outbox = Outbox(f'{NODE_NAME}-publish')

@@ -493,7 +493,7 @@ class DamiaoDevice(_MitDevice):
         self._target_velocity = 0.0
         self._velocity_limit = 0.0
         self._integral = 0.0
-        # System frames are accepted on the bare id and on id + mode offset (PROTOCOLS.md
+        # System frames are accepted on the bare id and on id + mode offset (docs/PROTOCOLS.md
         # §2.2: the official SDKs disagree).
         self._listen = frozenset({motor_id, self.command_id})
 

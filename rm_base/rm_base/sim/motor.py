@@ -143,7 +143,7 @@ class MotorParams:
 
 # Approximate catalogue values (datasheets and team measurements, rounded); every one can be
 # overridden per motor from the config. Gear ratios and torque constants follow
-# PROTOCOLS.md §1.5 and §2; back-EMF constants are chosen so that the no-load output speed at
+# docs/PROTOCOLS.md §1.5 and §2; back-EMF constants are chosen so that the no-load output speed at
 # 24 V matches the datasheets (M3508 ~480 rpm, M2006 ~500 rpm, GM6020 ~320 rpm,
 # DM4310 ~200 rpm); inertias and frictions are order-of-magnitude estimates.
 MOTOR_DEFAULTS: dict[MotorType, MotorParams] = {

@@ -186,12 +186,8 @@ class SimChannel:
             if not self._can_hand_over():
                 lock.acquire()
             else:
-                # The real-time physics thread holds the lock for a whole tick (~0.2 ms).
-                # A sender waiting for it gives up the GIL and must win it back, which
-                # cost the CAN scheduler thread most of its deadlines (bench/). Hand the
-                # frame over instead: the tick puts it on the bus before it releases the
-                # lock, which is when a waiting sender would have got it. (A copy: the
-                # caller may reuse its message once send returns.)
+                # Waiting for the physics tick's lock would cost the sender the GIL; hand
+                # the frame (a copy) to the tick, which sends it before it lets go.
                 self._handed_over.append((sender, copy.copy(msg), timestamp))
                 if not lock.acquire(blocking=False):
                     return

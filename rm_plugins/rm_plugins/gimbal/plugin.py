@@ -4,9 +4,10 @@ Inputs:
     /gimbal_cmd (rm_msgs/GimbalCmd, watched): the mode, rates or target point.
     /imu (sensor_msgs/Imu): orientation and rates of the gimbal (the IMU is on it).
     /odom (nav_msgs/Odometry): the chassis pose, for targets given in the odom frame.
-    /actuator_states: the yaw and pitch joints (through the framework).
+    the yaw and pitch joints' states (through the framework).
 Outputs:
-    /actuator_cmd: velocity targets of the yaw and pitch joints, every tick.
+    velocity targets of the yaw and pitch joints, every run (the actuators directly in
+    the one-process robot, /actuator_cmd otherwise).
     /gimbal_state (rm_msgs/GimbalState): state, reason, world angles, targets, joints.
 
 States (``GimbalMode``, numbered as ``GimbalCmd``), all chosen in ``_decide``:
@@ -27,14 +28,10 @@ States (``GimbalMode``, numbered as ``GimbalCmd``), all chosen in ``_decide``:
 
 Control (see ``rm_plugins.gimbal.control``): an angle PID per axis on the IMU's world
 angle gives a world rate; the joint velocity target is that rate minus the rate of the
-joint's base (IMU rate minus joint velocity: the chassis spin for yaw), and the bridge's
-1 kHz velocity loop closes it on the motor encoder. Why not the classic angle PID -> gyro
-rate PID -> motor current in this plugin: the inner loop wants 1 kHz without jitter, and
-this loop runs in a Python thread behind a topic hop, stalled now and then by CPU steal
-for tens of ms. A velocity target survives such a stall (the motor keeps turning at a
-sane rate under its own 1 kHz loop); a stale current does not. The IMU gyro still enters
-every tick, as the base-rate feed-forward that makes the gimbal ignore the chassis' spin.
-In TRACK the line of sight's own rate (from the odometry twist) is fed forward too.
+joint's base (IMU rate minus joint velocity: the chassis spin for yaw), and the joint's
+own 1 kHz velocity loop in the control loop closes it on the motor encoder. The IMU gyro
+enters every run as that base-rate feed-forward; in TRACK the line of sight's own rate
+(from the odometry twist) is fed forward too.
 
 Pitch is clamped to ``[pitch_min, pitch_max]`` twice: the world target is clamped to what
 those joint limits allow, and the joint velocity is bounded near a limit.

@@ -37,7 +37,7 @@ def test_m3508_feedback_is_converted_to_the_output_shaft():
     assert fb.position == pytest.approx(math.pi / M3508_GEAR)
     # 1000 rpm rotor = 104.72 rad/s / 19.2032 = 5.45329 rad/s at the output
     assert fb.velocity == pytest.approx(1000 * 2 * math.pi / 60 / M3508_GEAR)
-    # 1000 raw * 20/16384 A * 0.3 N·m/A = 0.366211 N·m (PROTOCOLS.md F1, sign flipped)
+    # 1000 raw * 20/16384 A * 0.3 N·m/A = 0.366211 N·m (docs/PROTOCOLS.md F1, sign flipped)
     assert fb.effort == pytest.approx(0.366211, abs=1e-6)
     assert fb.temperature == 40
 

@@ -1,4 +1,4 @@
-"""DJI C620/C610/GM6020 protocol: PROTOCOLS.md vectors D1–D5, F1–F3, round trips, errors."""
+"""DJI C620/C610/GM6020 protocol: docs/PROTOCOLS.md vectors D1–D5, F1–F3, round trips, errors."""
 
 import math
 
@@ -44,7 +44,7 @@ def test_d2_frame_built_from_amps_and_slots():
 
 
 def test_d4_gm6020_current_mode_with_the_safe_3a_scale():
-    # ±1.5 A at 3 A per 16384 -> ±8192; with the 1.62 A scale 1.5 A -> 15170 (PROTOCOLS.md).
+    # ±1.5 A at 3 A per 16384 -> ±8192; with the 1.62 A scale 1.5 A -> 15170 (docs/PROTOCOLS.md).
     spec = dji.make_dji_spec(DjiKind.GM6020_CURRENT)
     assert spec.command_slot(1) == (0x1FE, 0)
     assert spec.command_slot(2) == (0x1FE, 1)

@@ -13,7 +13,7 @@ Family options (``joints.<name>.<key>``):
 * ``feedback_amps_per_raw``: A per raw unit of the feedback current;
 * GM6020 voltage mode only: ``resistance`` [Ω] (1.8) and ``back_emf_constant`` [V·s/rad]
   (60/(2π·13.33 rpm/V) = 0.716), the model that turns an effort into a voltage:
-  ``V = R·I + Ke·ω``. Both are datasheet-level values (not in PROTOCOLS.md).
+  ``V = R·I + Ke·ω``. Both are datasheet-level values (not in docs/PROTOCOLS.md).
 """
 
 from __future__ import annotations

@@ -4,7 +4,7 @@
 (kp = kd = 0). State comes from the arm's joint angle frames (0x2A5..0x2A7, 0.001°) and
 the driver high-speed feedback (0x251..0x256: velocity, current; effort = current ×
 the SDK's per-joint coefficient). Those feedback layouts are from piper_sdk docstrings,
-not PROTOCOLS.md (UNVERIFIED on an arm).
+not docs/PROTOCOLS.md (UNVERIFIED on an arm).
 
 This layer does not run the arm's own enable / mode sequence (EnablePiper, MotionCtrl_2
 with MIT mode 0xAD); the arm must be put into MIT mode first.

@@ -1,6 +1,6 @@
 """MIT Cheetah (Ben Katz) motor firmware: same command frame as Damiao, different reply.
 
-PROTOCOLS.md §2.7. Commands use :func:`rm_base.hardware.protocols.mit.pack_mit_command`
+docs/PROTOCOLS.md §2.7. Commands use :func:`rm_base.hardware.protocols.mit.pack_mit_command`
 sent to the motor's CAN id; special frames are enable (FC), disable (FD) and set zero
 (FE) — there is **no clear-error** frame. Every received frame is answered to the master
 id (default 0) with::

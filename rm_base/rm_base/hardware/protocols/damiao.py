@@ -1,6 +1,6 @@
 """Damiao (DM) motors: MIT, POS_VEL, VEL and POS_FORCE commands, feedback, system frames.
 
-PROTOCOLS.md §2. Commands go to ``motor_id + mode offset`` (MIT 0x000, POS_VEL 0x100,
+docs/PROTOCOLS.md §2. Commands go to ``motor_id + mode offset`` (MIT 0x000, POS_VEL 0x100,
 VEL 0x200, POS_FORCE 0x300); feedback comes from the master id (MST_ID register) with::
 
     byte 0: low nibble motor id, high nibble state / error code

@@ -1,6 +1,6 @@
 """DJI DR16 receiver (DT7 remote) DBUS frames: 18 bytes, UART 100000 bps 8E1.
 
-PROTOCOLS.md §5 (DJI Dev-Board-C ``remote_control.c``, rm_control ``rm_dbus``)::
+docs/PROTOCOLS.md §5 (DJI Dev-Board-C ``remote_control.c``, rm_control ``rm_dbus``)::
 
     bits 0..43   four 11-bit stick channels, raw 364..1684, centre 1024
     bits 44..45  switch A        bits 46..47  switch B      (1 UP, 3 MID, 2 DOWN)

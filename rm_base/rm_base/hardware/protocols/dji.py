@@ -6,7 +6,7 @@ Both directions are here, because the simulator plays the motor with the same co
   :func:`decode_feedback`;
 * device side: :func:`unpack_command`, :func:`encode_feedback`.
 
-Frame layouts, ids and scales are from PROTOCOLS.md §1 (DJI Dev-Board-C examples, C610
+Frame layouts, ids and scales are from docs/PROTOCOLS.md §1 (DJI Dev-Board-C examples, C610
 manual, rm_control). Command frames carry four big-endian int16 values, one per slot;
 feedback frames carry rotor angle (0..8191 ticks), rotor speed (rpm, before any gearbox),
 torque current (raw) and temperature (°C; the C610 sends none).

@@ -1,6 +1,6 @@
 """HiPNUC IMU serial protocol (HI220 / HI221 / HI226 ...): framing, 0x91 and legacy items.
 
-PROTOCOLS.md §4. A frame is::
+docs/PROTOCOLS.md §4. A frame is::
 
     5A A5 | LEN (uint16 LE, payload only) | CRC16 (uint16 LE) | payload (LEN bytes)
 

@@ -1,7 +1,7 @@
 """The MIT-mode command frame shared by Damiao motors and the MIT Cheetah firmware.
 
 One 8-byte frame carries position (16 bit), velocity, kp, kd and torque (12 bit each),
-each a float mapped linearly onto an unsigned integer over a range (PROTOCOLS.md §2.3)::
+each a float mapped linearly onto an unsigned integer over a range (docs/PROTOCOLS.md §2.3)::
 
     data[0..1] = q             data[2] = dq[11:4]     data[3] = dq[3:0] | kp[11:8]
     data[4]    = kp[7:0]       data[5] = kd[11:4]     data[6] = kd[3:0] | tau[11:8]

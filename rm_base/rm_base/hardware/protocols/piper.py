@@ -1,6 +1,6 @@
 """AgileX Piper arm: per-joint MIT command frames 0x15A..0x15F with a 4-bit check value.
 
-PROTOCOLS.md §3 (piper_sdk 0.6.1). Same bit packing as the MIT frame for position (16),
+docs/PROTOCOLS.md §3 (piper_sdk 0.6.1). Same bit packing as the MIT frame for position (16),
 velocity, kp, kd (12 each), but torque has only 8 bits and the last nibble is a check::
 
     data[6] = kd[3:0] << 4 | t[7:4]
@@ -11,7 +11,7 @@ position ±12.5 rad, velocity ±45 rad/s, kp 0..500, kd −5..5, torque ±8 N·m
 2025-07; older SDKs/firmware used ±18 — UNVERIFIED which your arm runs, so the torque
 range is a parameter: :data:`PIPER_MIT_LIMITS_LEGACY`).
 
-Feedback (not in PROTOCOLS.md; from the piper_sdk 0.6.1 message docstrings, UNVERIFIED on
+Feedback (not in docs/PROTOCOLS.md; from the piper_sdk 0.6.1 message docstrings, UNVERIFIED on
 an arm): joint angles in 0x2A5/0x2A6/0x2A7, two joints per frame as int32 big-endian in
 0.001°; per-joint "high-speed" driver feedback in 0x251..0x256: speed int16 BE in
 0.001 rad/s, current int16 BE in 0.001 A, position int32 BE (unit unclear, not decoded
