@@ -5,7 +5,7 @@ import re
 import subprocess
 
 ROOT = pathlib.Path(__file__).resolve().parents[1]
-# DESIGN.md, docs/PROTOCOLS.md, ../PERFORMANCE.md ...: an upper-case Markdown file name
+# an upper-case Markdown file name, with docs/ or ../ before it or not
 _CITED = re.compile(r'(?<![\w.])((?:\.\./|docs/)*[A-Z][A-Z_]+\.md)\b')
 _TEXT = ('.py', '.md', '.yaml', '.yml', '.sh', '.toml', '.ini', '.txt', '.xml', '.launch.py')
 

@@ -5,7 +5,7 @@ A plugin author needs ``PluginBase`` and the helpers it hands out (``PluginParam
 """
 
 from rm_base.plugin.base import STATE_QOS, PluginBase
-from rm_base.plugin.commands import CommandInput, CommandStatus
+from rm_base.plugin.commands import CommandInput, CommandStatus, LatestMessage
 from rm_base.plugin.errors import (
     JointClaimError,
     ParameterError,
@@ -42,6 +42,7 @@ __all__ = [
     'JointState',
     'JointStateView',
     'JointTarget',
+    'LatestMessage',
     'ParameterError',
     'PluginBase',
     'PluginConfigError',

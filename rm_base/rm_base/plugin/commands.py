@@ -50,6 +50,34 @@ def stamp_ns_of(msg: object) -> int | None:
     return stamp_ns or None
 
 
+class LatestMessage:
+    """The newest message of a topic and its time, from a subscription callback to run().
+
+    For inputs that are not commands (no watchdog, no stale check): the IMU, odometry.
+    ``put`` is the subscription callback; ``get`` returns ``(msg, time_ns)`` or None.
+
+    Args:
+        use_stamp: the message's time is its header stamp (the receive time when it has
+            none); False: always the receive time.
+    """
+
+    def __init__(self, *, use_stamp: bool = True) -> None:
+        self._use_stamp = use_stamp
+        self._lock = threading.Lock()
+        self._value: tuple[Any, int] | None = None
+
+    def put(self, msg: Any, receive_ns: int) -> None:
+        """Keep msg as the newest (any thread)."""
+        time_ns = (stamp_ns_of(msg) or receive_ns) if self._use_stamp else receive_ns
+        with self._lock:
+            self._value = (msg, time_ns)
+
+    def get(self) -> tuple[Any, int] | None:
+        """The newest message and its time [ns], or None before the first."""
+        with self._lock:
+            return self._value
+
+
 class _Throttle:
     """Lets one message through per period; counts the ones held back."""
 

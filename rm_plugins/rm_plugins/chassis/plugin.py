@@ -51,7 +51,6 @@ when it sits on the gimbal), from the wheels otherwise.
 from __future__ import annotations
 
 import math
-import threading
 from collections.abc import Sequence
 from typing import Any, NamedTuple
 
@@ -61,7 +60,7 @@ from rclpy.qos import qos_profile_sensor_data
 from rm_base.control import ChassisMotionMode
 from rm_base.errors import InputRejectedError
 from rm_base.geometry import Twist2D, quaternion_from_yaw, wrap_to_pi, yaw_from_quaternion
-from rm_base.plugin import JointTarget, PluginBase
+from rm_base.plugin import JointTarget, LatestMessage, PluginBase
 from rm_base.plugin.commands import stamp_ns_of
 from sensor_msgs.msg import Imu
 
@@ -129,22 +128,6 @@ class _Throttle:
         return f' ({held} more since the last report)' if held else ''
 
 
-class _LatestImu:
-    """The newest sensor_msgs/Imu with its receive time, shared by two threads."""
-
-    def __init__(self) -> None:
-        self._lock = threading.Lock()
-        self._sample: tuple[Any, int] | None = None
-
-    def put(self, msg: Any, receive_ns: int) -> None:
-        with self._lock:
-            self._sample = (msg, receive_ns)
-
-    def get(self) -> tuple[Any, int] | None:
-        with self._lock:
-            return self._sample
-
-
 class StandChassis(PluginBase):
     """Mecanum/omni chassis; see the module docstring. Parameters: ``config.read_config``."""
 
@@ -169,7 +152,7 @@ class StandChassis(PluginBase):
         self._power_stage = self.power_limit(cfg.wheel_joints, cfg.power_model)
         self._odometry = Odometry(cfg.wheels)
         self._predictor = SpeedPredictor()
-        self._imu = _LatestImu()
+        self._imu = LatestMessage(use_stamp=False)
         if cfg.imu_mount is not ImuMount.NONE:
             # Sensor QoS (best effort, keep last): an old IMU sample is worthless.
             self.subscribe(cfg.imu_topic, Imu, self._imu.put, qos_profile_sensor_data)

@@ -40,7 +40,6 @@ those joint limits allow, and the joint velocity is bounded near a limit.
 from __future__ import annotations
 
 import math
-import threading
 from dataclasses import dataclass
 from enum import IntEnum
 from typing import Any
@@ -50,8 +49,7 @@ from rclpy.qos import qos_profile_sensor_data
 from rm_base.errors import InputRejectedError
 from rm_base.geometry import rpy_from_quaternion, wrap_to_pi, yaw_from_quaternion
 from rm_base.geometry.aim import AimSolution, aim_from_point
-from rm_base.plugin import JointTarget, PluginBase
-from rm_base.plugin.commands import stamp_ns_of
+from rm_base.plugin import JointTarget, LatestMessage, PluginBase
 from sensor_msgs.msg import Imu
 
 from rm_msgs.msg import GimbalCmd, GimbalState
@@ -67,23 +65,6 @@ class GimbalMode(IntEnum):
     PASSIVE = GimbalCmd.PASSIVE
     RATE = GimbalCmd.RATE
     TRACK = GimbalCmd.TRACK
-
-
-class _Latest:
-    """The newest message of a topic with its stamp, handed from a callback to run()."""
-
-    def __init__(self) -> None:
-        self._lock = threading.Lock()
-        self._value: tuple[Any, int] | None = None
-
-    def put(self, msg: Any, receive_ns: int) -> None:
-        stamp_ns = stamp_ns_of(msg) or receive_ns
-        with self._lock:
-            self._value = (msg, stamp_ns)
-
-    def get(self) -> tuple[Any, int] | None:
-        with self._lock:
-            return self._value
 
 
 @dataclass(frozen=True)
@@ -164,8 +145,8 @@ class StandGimbal(PluginBase):
         cfg = self.config
         self.claim_joints([cfg.yaw.joint, cfg.pitch.joint])
         self.command = self.subscribe_command(cfg.command_topic, GimbalCmd)
-        self._imu = _Latest()
-        self._odom = _Latest()
+        self._imu = LatestMessage()
+        self._odom = LatestMessage()
         self.subscribe(cfg.imu_topic, Imu, self._imu.put, qos_profile_sensor_data)
         self.subscribe(cfg.odom_topic, Odometry, self._odom.put, qos_profile_sensor_data)
         self._gimbal_state_pub = self.create_publisher(GimbalState, cfg.state_topic, 10)

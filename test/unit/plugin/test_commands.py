@@ -2,7 +2,7 @@
 
 import pytest
 from geometry_msgs.msg import Twist
-from rm_base.plugin import CommandInput, CommandStatus
+from rm_base.plugin import CommandInput, CommandStatus, LatestMessage
 
 from rm_msgs.msg import ChassisCmd
 
@@ -132,3 +132,18 @@ def test_clear_forgets_the_command(command):
 def test_when_timeout_is_not_positive_expect_value_error(log):
     with pytest.raises(ValueError, match='timeout of /x must be > 0 s'):
         CommandInput('/x', 0.0, log)
+
+
+def test_latest_message_keeps_the_newest_with_its_stamp_or_receive_time():
+    stamped = ChassisCmd()
+    stamped.header.stamp.sec, stamped.header.stamp.nanosec = 2, 5
+    unstamped = Twist()
+    latest = LatestMessage()
+    assert latest.get() is None
+    latest.put(stamped, 9_000_000_000)
+    assert latest.get() == (stamped, 2_000_000_005)  # the header stamp
+    latest.put(unstamped, 9_000_000_000)
+    assert latest.get() == (unstamped, 9_000_000_000)  # no header: the receive time
+    by_arrival = LatestMessage(use_stamp=False)
+    by_arrival.put(stamped, 7)
+    assert by_arrival.get() == (stamped, 7)
