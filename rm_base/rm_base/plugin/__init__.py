@@ -5,7 +5,7 @@ A plugin author needs ``PluginBase`` and the helpers it hands out (``PluginParam
 """
 
 from rm_base.plugin.base import STATE_QOS, PluginBase
-from rm_base.plugin.commands import CommandInput, CommandStatus, LatestMessage
+from rm_base.plugin.commands import CommandInput, CommandStatus, LatestMessage, LogThrottle
 from rm_base.plugin.errors import (
     JointClaimError,
     ParameterError,
@@ -43,6 +43,7 @@ __all__ = [
     'JointStateView',
     'JointTarget',
     'LatestMessage',
+    'LogThrottle',
     'ParameterError',
     'PluginBase',
     'PluginConfigError',

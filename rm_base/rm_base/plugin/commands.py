@@ -78,24 +78,31 @@ class LatestMessage:
             return self._value
 
 
-class _Throttle:
-    """Lets one message through per period; counts the ones held back."""
+class LogThrottle:
+    """One log line per period for a kind of event; counts the ones held back.
+
+    Args:
+        period_ns: shortest time between two lines [ns].
+    """
 
     def __init__(self, period_ns: int) -> None:
         self._period_ns = period_ns
         self._next_ns: int | None = None
-        self.suppressed = 0
+        self._held = 0
 
-    def due(self, now_ns: int) -> bool:
+    def due(self, now_ns: int) -> str | None:
+        """Whether to log an event at now_ns, and how to end its line.
+
+        Returns:
+            None: hold this one back. Else log now and end the line with the text
+            returned: `` (N more since the last report)``, or empty.
+        """
         if self._next_ns is not None and now_ns < self._next_ns:
-            self.suppressed += 1
-            return False
+            self._held += 1
+            return None
         self._next_ns = now_ns + self._period_ns
-        return True
-
-    def take_suppressed(self) -> str:
-        count, self.suppressed = self.suppressed, 0
-        return f' ({count} more since the last report)' if count else ''
+        held, self._held = self._held, 0
+        return f' ({held} more since the last report)' if held else ''
 
 
 class CommandInput(Generic[M]):
@@ -130,7 +137,7 @@ class CommandInput(Generic[M]):
         self._msg: M | None = None
         self._stamp_ns = 0
         self._rejected = 0
-        self._stale_log = _Throttle(round(log_period * _NS_PER_S))
+        self._stale_log = LogThrottle(round(log_period * _NS_PER_S))
         # Run-thread side: whether the current "no command" episode has been reported.
         self._reported_missing = False
 
@@ -159,9 +166,8 @@ class CommandInput(Generic[M]):
         if age_ns > self._timeout_ns or -age_ns > self._timeout_ns:
             with self._lock:
                 self._rejected += 1
-                due = self._stale_log.due(receive_ns)
-                more = self._stale_log.take_suppressed() if due else ''
-            if due:
+                more = self._stale_log.due(receive_ns)
+            if more is not None:
                 when = (
                     f'{age_ns / _NS_PER_S:.3f} s old'
                     if age_ns > 0

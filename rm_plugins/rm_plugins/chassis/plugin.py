@@ -60,7 +60,7 @@ from rclpy.qos import qos_profile_sensor_data
 from rm_base.control import ChassisMotionMode
 from rm_base.errors import InputRejectedError
 from rm_base.geometry import Twist2D, quaternion_from_yaw, wrap_to_pi, yaw_from_quaternion
-from rm_base.plugin import JointTarget, LatestMessage, PluginBase
+from rm_base.plugin import JointTarget, LatestMessage, LogThrottle, PluginBase
 from rm_base.plugin.commands import stamp_ns_of
 from sensor_msgs.msg import Imu
 
@@ -112,22 +112,6 @@ class _Decision(NamedTuple):
     yaw_joint: Any = None  # the yaw joint's JointState when following the gimbal
 
 
-class _Throttle:
-    """One log line per period; counts the ones held back."""
-
-    def __init__(self) -> None:
-        self._next_ns = 0
-        self._held = 0
-
-    def due(self, now_ns: int) -> str | None:
-        if now_ns < self._next_ns:
-            self._held += 1
-            return None
-        self._next_ns = now_ns + _LOG_PERIOD_NS
-        held, self._held = self._held, 0
-        return f' ({held} more since the last report)' if held else ''
-
-
 class StandChassis(PluginBase):
     """Mecanum/omni chassis; see the module docstring. Parameters: ``config.read_config``."""
 
@@ -164,7 +148,9 @@ class StandChassis(PluginBase):
         self._next_publish_ns = 0
         self._last_odom_ns: int | None = None
         self._imu_used_ns: int | None = None
-        self._throttles = {kind: _Throttle() for kind in ('chassis_cmd', 'vel_cmd', 'imu')}
+        self._throttles = {
+            kind: LogThrottle(_LOG_PERIOD_NS) for kind in ('chassis_cmd', 'vel_cmd', 'imu')
+        }
         self._report = _Report(len(cfg.wheel_joints))
         self.on_reset()
 

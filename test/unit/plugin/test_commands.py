@@ -2,7 +2,7 @@
 
 import pytest
 from geometry_msgs.msg import Twist
-from rm_base.plugin import CommandInput, CommandStatus, LatestMessage
+from rm_base.plugin import CommandInput, CommandStatus, LatestMessage, LogThrottle
 
 from rm_msgs.msg import ChassisCmd
 
@@ -147,3 +147,11 @@ def test_latest_message_keeps_the_newest_with_its_stamp_or_receive_time():
     by_arrival = LatestMessage(use_stamp=False)
     by_arrival.put(stamped, 7)
     assert by_arrival.get() == (stamped, 7)
+
+
+def test_log_throttle_lets_one_line_through_per_period_and_counts_the_rest():
+    throttle = LogThrottle(1_000)
+    assert throttle.due(0) == ''
+    assert throttle.due(10) is None and throttle.due(999) is None
+    assert throttle.due(1_000) == ' (2 more since the last report)'
+    assert throttle.due(2_000) == ''
