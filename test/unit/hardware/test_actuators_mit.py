@@ -5,6 +5,7 @@ import math
 import can
 import pytest
 from rm_base.hardware.actuators import ACTUATOR_TYPES, Mode
+from rm_base.hardware.actuators.mit import fit_mit_target
 from rm_base.hardware.errors import HardwareConfigError, ValueRangeError
 from rm_base.hardware.protocols import cheetah, damiao, mit, piper
 from rm_base.hardware.protocols.mit import MitCommand, SystemCommand
@@ -249,3 +250,14 @@ def test_piper_rejects_bad_joint_ids_and_gears():
         make('piper', id=7)
     with pytest.raises(HardwareConfigError, match='Piper joints are 1:1'):
         make('piper', id=1, gear_ratio=2.0)
+
+
+@pytest.mark.parametrize(
+    ('kp', 'kd', 'moved'),
+    [(10.0, 1.0, 'position'), (0.0, 2.0, 'velocity'), (0.0, 0.0, 'feed-forward')],
+)
+def test_an_mit_target_is_moved_so_the_motor_law_gives_the_effort(kp, kd, moved):
+    p, v, ff = fit_mit_target(kp, kd, 1.0, 3.0, 0.5, q=0.2, dq=-1.0, effort=2.0)
+    assert kp * (p - 0.2) + kd * (v + 1.0) + ff == pytest.approx(2.0)
+    changed = {'position': p != 1.0, 'velocity': v != 3.0, 'feed-forward': ff != 0.5}
+    assert [name for name, c in changed.items() if c] == [moved]

@@ -69,6 +69,29 @@ def limits_from_config(name: str, base: MitLimits, overrides: Any) -> MitLimits:
         raise HardwareConfigError(f'joints.{name}.limits: {err}') from err
 
 
+def fit_mit_target(
+    kp: float, kd: float, p: float, v: float, ff: float, *, q: float, dq: float, effort: float
+) -> tuple[float, float, float]:
+    """Move an MIT target so that ``kp(p - q) + kd(v - dq) + ff`` is effort at (q, dq).
+
+    The position moves if there is a stiffness, else the velocity if there is a damping,
+    else the feed-forward becomes effort: the motor's own law then applies the (clamped)
+    effort now and keeps the gains' behaviour around it.
+
+    Returns:
+        The new (position, velocity, feed-forward).
+    """
+    excess = kp * (p - q) + kd * (v - dq) + ff - effort
+    if excess != 0.0:
+        if kp > 0.0:
+            p -= excess / kp
+        elif kd > 0.0:
+            v -= excess / kd
+        else:
+            ff = effort
+    return p, v, ff
+
+
 def _sat(x: float, limit: float) -> float:
     return limit if x > limit else -limit if x < -limit else x
 
@@ -135,14 +158,7 @@ class MitActuator(Actuator):
         q, dq = feedback.position, feedback.velocity
         estimate = kp * (p - q) + kd * (v - dq) + ff
         target = max(-self.max_effort, min(self.max_effort, estimate))
-        excess = estimate - target
-        if excess != 0.0:
-            if kp > 0.0:
-                p -= excess / kp
-            elif kd > 0.0:
-                v -= excess / kd
-            else:
-                ff = target
+        p, v, ff = fit_mit_target(kp, kd, p, v, ff, q=q, dq=dq, effort=target)
         # joint -> motor shaft, then back into the motor's wrapped position range
         span_turns = self._position_unwrapper.turns * 2.0 * lim.p_max
         to_dev = g * (d * (p - self._turn_shift) + self.zero_offset) - span_turns

@@ -18,7 +18,7 @@ from __future__ import annotations
 import can
 
 from rm_base.hardware.actuators.base import Actuator, Defaults, Feedback, JointCommand, Mode
-from rm_base.hardware.actuators.mit import limits_from_config
+from rm_base.hardware.actuators.mit import fit_mit_target, limits_from_config
 from rm_base.hardware.config import JointConfig, SafetyConfig
 from rm_base.hardware.errors import HardwareConfigError
 from rm_base.hardware.protocols import piper
@@ -77,15 +77,10 @@ class PiperJoint(Actuator):
             self._fields = MitCommand(0.0, 0.0, 0.0, 0.0, d * effort)
             return effort
         kp, kd = command.kp, command.kd
-        p, v, ff = command.position, command.velocity, command.effort
-        excess = kp * (p - feedback.position) + kd * (v - feedback.velocity) + ff - effort
-        if excess != 0.0:
-            if kp > 0.0:
-                p -= excess / kp
-            elif kd > 0.0:
-                v -= excess / kd
-            else:
-                ff = effort
+        p, v, ff = fit_mit_target(
+            kp, kd, command.position, command.velocity, command.effort,
+            q=feedback.position, dq=feedback.velocity, effort=effort,
+        )
         self._fields = MitCommand(d * p + self.zero_offset, d * v, kp, kd, d * ff)
         return effort
 
