@@ -12,6 +12,7 @@ Both classes are immutable: the matrix they expose is read-only.
 from __future__ import annotations
 
 import math
+from typing import Self
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -65,29 +66,83 @@ def _frozen(matrix: NDArray[np.float64]) -> NDArray[np.float64]:
     return matrix
 
 
-class SE2:
-    """A rigid transform in the plane: rotation by yaw, then translation by (x, y)."""
+class _RigidTransform:
+    """What SE2 and SE3 share: a frozen homogeneous matrix of size DIM + 1."""
 
     __slots__ = ('_matrix',)
+    DIM = 0  # 2 or 3
 
     def __init__(self, matrix: ArrayLike | None = None) -> None:
-        """Create a transform from a 3x3 homogeneous matrix (None: identity).
+        """Create a transform from a homogeneous matrix (None: identity).
 
         Raises:
-            InputRejectedError: If matrix is not a finite 3x3 rigid transform.
+            InputRejectedError: If matrix is not a finite rigid transform of this size.
         """
-        self._matrix = _frozen(np.eye(3) if matrix is None else _check_homogeneous(matrix, 3))
+        size = self.DIM + 1
+        self._matrix = _frozen(
+            np.eye(size) if matrix is None else _check_homogeneous(matrix, size)
+        )
 
     @classmethod
-    def _trusted(cls, matrix: NDArray[np.float64]) -> SE2:
+    def _trusted(cls, matrix: NDArray[np.float64]) -> Self:
         transform = object.__new__(cls)
         transform._matrix = _frozen(matrix)
         return transform
 
     @classmethod
-    def identity(cls) -> SE2:
+    def identity(cls) -> Self:
         """Return the identity transform."""
-        return cls._trusted(np.eye(3))
+        return cls._trusted(np.eye(cls.DIM + 1))
+
+    @property
+    def matrix(self) -> NDArray[np.float64]:
+        """The homogeneous matrix (read-only)."""
+        return self._matrix
+
+    @property
+    def translation(self) -> NDArray[np.float64]:
+        """The translation [m] (read-only)."""
+        return self._matrix[: self.DIM, self.DIM]
+
+    @property
+    def rotation(self) -> NDArray[np.float64]:
+        """The rotation matrix (read-only)."""
+        return self._matrix[: self.DIM, : self.DIM]
+
+    def compose(self, other: Self) -> Self:
+        """Return ``self @ other``: other applied first, then self."""
+        return self._trusted(self._matrix @ other._matrix)
+
+    def __matmul__(self, other: Self) -> Self:
+        if type(other) is not type(self):
+            return NotImplemented
+        return self.compose(other)
+
+    def inverse(self) -> Self:
+        """Return the inverse transform (T_b_a for T_a_b)."""
+        n = self.DIM
+        rotation_t = self._matrix[:n, :n].T
+        inverse = np.eye(n + 1)
+        inverse[:n, :n] = rotation_t
+        inverse[:n, n] = -rotation_t @ self._matrix[:n, n]
+        return self._trusted(inverse)
+
+    def apply(self, points: ArrayLike) -> NDArray[np.float64]:
+        """Transform one point (shape (DIM,)) or many (shape (N, DIM)) [m].
+
+        Raises:
+            InputRejectedError: If points has the wrong shape or a NaN/inf value.
+        """
+        n = self.DIM
+        array = _check_points(points, n)
+        return array @ self._matrix[:n, :n].T + self._matrix[:n, n]
+
+
+class SE2(_RigidTransform):
+    """A rigid transform in the plane: rotation by yaw, then translation by (x, y)."""
+
+    __slots__ = ()
+    DIM = 2
 
     @classmethod
     def from_xy_yaw(cls, x: float, y: float, yaw: float) -> SE2:
@@ -106,11 +161,6 @@ class SE2:
         return self.x, self.y, self.yaw
 
     @property
-    def matrix(self) -> NDArray[np.float64]:
-        """The 3x3 homogeneous matrix (read-only)."""
-        return self._matrix
-
-    @property
     def x(self) -> float:
         """Translation along x [m]."""
         return float(self._matrix[0, 2])
@@ -125,64 +175,15 @@ class SE2:
         """Rotation [rad], counter-clockwise, in [-pi, pi]."""
         return math.atan2(self._matrix[1, 0], self._matrix[0, 0])
 
-    @property
-    def translation(self) -> NDArray[np.float64]:
-        """(x, y) [m] (read-only)."""
-        return self._matrix[:2, 2]
-
-    @property
-    def rotation(self) -> NDArray[np.float64]:
-        """The 2x2 rotation matrix (read-only)."""
-        return self._matrix[:2, :2]
-
-    def compose(self, other: SE2) -> SE2:
-        """Return ``self @ other``: other applied first, then self."""
-        return self._trusted(self._matrix @ other._matrix)
-
-    def __matmul__(self, other: SE2) -> SE2:
-        if not isinstance(other, SE2):
-            return NotImplemented
-        return self.compose(other)
-
-    def inverse(self) -> SE2:
-        """Return the inverse transform (T_b_a for T_a_b)."""
-        rotation_t = self._matrix[:2, :2].T
-        inverse = np.eye(3)
-        inverse[:2, :2] = rotation_t
-        inverse[:2, 2] = -rotation_t @ self._matrix[:2, 2]
-        return self._trusted(inverse)
-
-    def apply(self, points: ArrayLike) -> NDArray[np.float64]:
-        """Transform one point (shape (2,)) or many (shape (N, 2)) [m].
-
-        Raises:
-            InputRejectedError: If points has the wrong shape or a NaN/inf value.
-        """
-        array = _check_points(points, 2)
-        return array @ self._matrix[:2, :2].T + self._matrix[:2, 2]
-
     def __repr__(self) -> str:
         return f'SE2.from_xy_yaw({self.x!r}, {self.y!r}, {self.yaw!r})'
 
 
-class SE3:
+class SE3(_RigidTransform):
     """A rigid transform in space: a rotation, then a translation."""
 
-    __slots__ = ('_matrix',)
-
-    def __init__(self, matrix: ArrayLike | None = None) -> None:
-        """Create a transform from a 4x4 homogeneous matrix (None: identity).
-
-        Raises:
-            InputRejectedError: If matrix is not a finite 4x4 rigid transform.
-        """
-        self._matrix = _frozen(np.eye(4) if matrix is None else _check_homogeneous(matrix, 4))
-
-    @classmethod
-    def _trusted(cls, matrix: NDArray[np.float64]) -> SE3:
-        transform = object.__new__(cls)
-        transform._matrix = _frozen(matrix)
-        return transform
+    __slots__ = ()
+    DIM = 3
 
     @classmethod
     def _from_parts(cls, translation: ArrayLike, rotation: NDArray[np.float64]) -> SE3:
@@ -190,11 +191,6 @@ class SE3:
         matrix[:3, :3] = rotation
         matrix[:3, 3] = _check_vector('translation', translation, 3)
         return cls._trusted(matrix)
-
-    @classmethod
-    def identity(cls) -> SE3:
-        """Return the identity transform."""
-        return cls._trusted(np.eye(4))
 
     @classmethod
     def from_translation_quaternion(cls, translation: ArrayLike, quaternion: ArrayLike) -> SE3:
@@ -230,21 +226,6 @@ class SE3:
         return SE2.from_xy_yaw(float(self._matrix[0, 3]), float(self._matrix[1, 3]), self.rpy[2])
 
     @property
-    def matrix(self) -> NDArray[np.float64]:
-        """The 4x4 homogeneous matrix (read-only)."""
-        return self._matrix
-
-    @property
-    def translation(self) -> NDArray[np.float64]:
-        """(x, y, z) [m] (read-only)."""
-        return self._matrix[:3, 3]
-
-    @property
-    def rotation(self) -> NDArray[np.float64]:
-        """The 3x3 rotation matrix (read-only)."""
-        return self._matrix[:3, :3]
-
-    @property
     def quaternion(self) -> Quaternion:
         """The rotation as a unit quaternion (x, y, z, w) with w >= 0."""
         return quaternion_from_rotation_matrix(self._matrix[:3, :3])
@@ -253,32 +234,6 @@ class SE3:
     def rpy(self) -> tuple[float, float, float]:
         """The rotation as (roll, pitch, yaw) [rad]."""
         return rpy_from_quaternion(self.quaternion)
-
-    def compose(self, other: SE3) -> SE3:
-        """Return ``self @ other``: other applied first, then self."""
-        return self._trusted(self._matrix @ other._matrix)
-
-    def __matmul__(self, other: SE3) -> SE3:
-        if not isinstance(other, SE3):
-            return NotImplemented
-        return self.compose(other)
-
-    def inverse(self) -> SE3:
-        """Return the inverse transform (T_b_a for T_a_b)."""
-        rotation_t = self._matrix[:3, :3].T
-        inverse = np.eye(4)
-        inverse[:3, :3] = rotation_t
-        inverse[:3, 3] = -rotation_t @ self._matrix[:3, 3]
-        return self._trusted(inverse)
-
-    def apply(self, points: ArrayLike) -> NDArray[np.float64]:
-        """Transform one point (shape (3,)) or many (shape (N, 3)) [m].
-
-        Raises:
-            InputRejectedError: If points has the wrong shape or a NaN/inf value.
-        """
-        array = _check_points(points, 3)
-        return array @ self._matrix[:3, :3].T + self._matrix[:3, 3]
 
     def __repr__(self) -> str:
         translation = tuple(self.translation.tolist())
