@@ -26,7 +26,7 @@ from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 
 from rm_base.hardware import BusStats, HoldReason, JointState, Mode, PeriodStats
-from rm_base.hardware.scheduler import HISTOGRAM_EDGES_US
+from rm_base.hardware.timing import HISTOGRAM_EDGES_US
 
 OK = DiagnosticStatus.OK
 WARN = DiagnosticStatus.WARN

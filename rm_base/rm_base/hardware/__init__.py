@@ -32,8 +32,8 @@ from rm_base.hardware.errors import (
 )
 from rm_base.hardware.groups import DjiCommandGroup
 from rm_base.hardware.power_stage import PowerLimitStage
-from rm_base.hardware.scheduler import PeriodStats, Scheduler, Stage
-from rm_base.hardware.timing import DurationHistogram, DurationSummary
+from rm_base.hardware.scheduler import Scheduler, Stage
+from rm_base.hardware.timing import DurationHistogram, DurationSummary, PeriodStats
 
 __all__ = [
     'ACTUATOR_TYPES',

@@ -26,7 +26,6 @@ python-can's ``ThreadBasedCyclicSendTask``); without a hook the loop stops.
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import threading
 import time
@@ -36,14 +35,15 @@ from typing import Protocol
 import can
 
 from rm_base.hardware.errors import HardwareConfigError
-from rm_base.hardware.timing import DurationHistogram, DurationSummary
+from rm_base.hardware.timing import (
+    HISTOGRAM_EDGES_US,
+    DurationHistogram,
+    DurationSummary,
+    PeriodStats,
+)
 from rm_base.realtime import set_fifo_priority
 
 _log = logging.getLogger(__name__)
-
-#: Upper edges of the period-error histogram buckets [µs]; the last bucket is open.
-HISTOGRAM_EDGES_US = (10, 50, 100, 200, 500, 1000, 2000, 5000)
-
 
 class Updatable(Protocol):
     """Anything updated once per tick (an actuator)."""
@@ -74,38 +74,6 @@ class Stage(Protocol):
 
 #: Names of the loop's own components in :meth:`Scheduler.component_stats`.
 ACTUATORS, PACK, SEND = 'actuators', 'pack', 'send'
-
-
-@dataclasses.dataclass(frozen=True)
-class PeriodStats:
-    """Timing of the scheduler loop.
-
-    Attributes:
-        period_ns: nominal period [ns].
-        ticks: ticks run.
-        overruns: deadlines missed (a tick ended after the next deadline).
-        skipped_ticks: deadlines skipped because of overruns.
-        max_error_us: largest |start - deadline| seen [µs].
-        mean_error_us: mean |start - deadline| [µs].
-        histogram: counts per bucket of |start - deadline|; bucket i holds errors below
-            ``HISTOGRAM_EDGES_US[i]`` µs, the last one the rest.
-        max_tick_us: longest tick (stages + update + pack + send) [µs].
-        errors: exceptions passed to on_error.
-        lateness: start lateness (start - deadline) since start.
-        components: duration of each component since start, by name, in loop order.
-    """
-
-    period_ns: int
-    ticks: int
-    overruns: int
-    skipped_ticks: int
-    max_error_us: float
-    mean_error_us: float
-    histogram: tuple[int, ...]
-    max_tick_us: float
-    errors: int
-    lateness: DurationSummary = dataclasses.field(default_factory=DurationSummary.empty)
-    components: tuple[tuple[str, DurationSummary], ...] = ()
 
 
 class Scheduler:

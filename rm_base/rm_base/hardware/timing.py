@@ -1,4 +1,4 @@
-"""Cheap duration statistics for the 1 kHz loop: p50 / p99 / max per component.
+"""The loop's timing statistics: p50 / p99 / max per component, and PeriodStats.
 
 A :class:`DurationHistogram` counts durations in geometric buckets (5 % wide, 1 µs to
 10 s), so recording is one ``bisect`` and a list increment, and a percentile is read off
@@ -102,3 +102,39 @@ def _percentile(counts: list[int], count: int, q: float, max_ns: int) -> float:
             edge = BUCKET_EDGES_NS[i] if i < len(BUCKET_EDGES_NS) else max_ns
             return float(min(edge, max_ns))
     return float(max_ns)
+
+
+#: Upper edges of the period-error histogram buckets [µs]; the last bucket is open.
+HISTOGRAM_EDGES_US = (10, 50, 100, 200, 500, 1000, 2000, 5000)
+
+
+@dataclasses.dataclass(frozen=True)
+class PeriodStats:
+    """Timing of the scheduler loop.
+
+    Attributes:
+        period_ns: nominal period [ns].
+        ticks: ticks run.
+        overruns: deadlines missed (a tick ended after the next deadline).
+        skipped_ticks: deadlines skipped because of overruns.
+        max_error_us: largest |start - deadline| seen [µs].
+        mean_error_us: mean |start - deadline| [µs].
+        histogram: counts per bucket of |start - deadline|; bucket i holds errors below
+            ``HISTOGRAM_EDGES_US[i]`` µs, the last one the rest.
+        max_tick_us: longest tick (stages + update + pack + send) [µs].
+        errors: exceptions passed to on_error.
+        lateness: start lateness (start - deadline) since start.
+        components: duration of each component since start, by name, in loop order.
+    """
+
+    period_ns: int
+    ticks: int
+    overruns: int
+    skipped_ticks: int
+    max_error_us: float
+    mean_error_us: float
+    histogram: tuple[int, ...]
+    max_tick_us: float
+    errors: int
+    lateness: DurationSummary = dataclasses.field(default_factory=DurationSummary.empty)
+    components: tuple[tuple[str, DurationSummary], ...] = ()

@@ -5,7 +5,8 @@ import threading
 import can
 import pytest
 from rm_base.hardware.errors import HardwareConfigError
-from rm_base.hardware.scheduler import HISTOGRAM_EDGES_US, Scheduler
+from rm_base.hardware.scheduler import Scheduler
+from rm_base.hardware.timing import HISTOGRAM_EDGES_US
 from support.ros import wait_until
 
 from .helpers import MS, T0
