@@ -19,13 +19,15 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+from rm_base.plugin.commands import LogThrottle
+
 _log = logging.getLogger(__name__)
 
 #: Stage name in the loop's timing statistics.
 STAGE_NAME = 'commands'
 
-# A failing callback is logged at most this often, with the count [s].
-_ERROR_LOG_PERIOD_S = 1.0
+# A failing callback is logged at most this often, with the count [ns].
+_ERROR_LOG_PERIOD_NS = 1_000_000_000
 
 
 def _never_called(msg: Any) -> None:  # the inbox takes the messages, no executor
@@ -51,9 +53,13 @@ class Inbox:
         self.taken_by_topic: dict[str, int] = {}
         self._by_topic: dict[str, list[Any]] = {}
         self._local: set[str] = set()
-        self.taken = 0
         self.errors = 0
-        self._next_error_log = 0.0
+        self._error_log = LogThrottle(_ERROR_LOG_PERIOD_NS)
+
+    @property
+    def taken(self) -> int:
+        """Messages taken so far, all topics."""
+        return sum(self.taken_by_topic.values())
 
     def subscribe(
         self, msg_type: type, topic: str, callback: Callable[[Any, int], Any], qos: Any
@@ -99,15 +105,13 @@ class Inbox:
                     callback(info[0], self._clock.now().nanoseconds)
                 except Exception:  # a plugin's callback must not stop the loop
                     self._callback_failed()
-        self.taken += taken
         return taken > 0
 
     def _callback_failed(self) -> None:
         self.errors += 1
-        now = time.monotonic()
-        if now >= self._next_error_log:
-            self._next_error_log = now + _ERROR_LOG_PERIOD_S
-            _log.exception('a subscription callback failed (%d so far)', self.errors)
+        more = self._error_log.due(time.monotonic_ns())
+        if more is not None:
+            _log.exception('a subscription callback failed%s', more)
 
     def destroy(self) -> None:
         """Destroy the inbox's node (and its subscriptions)."""

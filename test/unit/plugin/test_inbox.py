@@ -63,7 +63,7 @@ def test_a_failing_callback_is_counted_and_logged_and_the_next_message_still_arr
     with caplog.at_level(logging.ERROR, logger='rm_base.plugin.inbox'):
         _take_until(inbox, got, 1)
     assert got == [1] and inbox.errors == 1
-    assert 'a subscription callback failed (1 so far)' in caplog.text
+    assert 'a subscription callback failed' in caplog.text
     inbox.destroy()
     node.destroy_node()
 
