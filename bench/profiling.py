@@ -1,9 +1,10 @@
 """CPU profiles per thread of the running robot (``bench/run.py --profile``).
 
 cProfile profiles only the thread that enables it, so the robot process wraps one
-frequently called method per thread on the *instance* (a plugin's ``run``, the
-scheduler's ``tick``, each bus's ``dispatch``, the bridge's ``publish_states``, the
-world's ``_tick``; the main thread checks in its spin loop). While a window is open the
+frequently called method per thread on the *instance* (the loop's ``tick``, the
+bridge's ``publish_states``, the outbox's ``flush``, the IMU reader's ``_read_once``, the
+world's ``_tick`` where rm_sim runs in the process; the main thread checks in its spin
+loop). While a window is open the
 wrapper enables a ``cProfile.Profile`` in its thread, and disables it when the window
 closes. The timer is cProfile's default (wall clock, cheap): sleeps and waits show up
 as such (``time.sleep``, lock ``acquire``, ``spin_once``) and are read past. The thread

@@ -358,11 +358,15 @@ class Robot:
 
         profiles = ThreadProfiles()
         targets: list[tuple[Any, str]] = []
+        # one method per thread, called once per wake-up of that thread
         if self.hw is not None:
             targets += [(self.hw.scheduler, 'tick'), (self.bridge, 'publish_states')]
-            targets += [(bus, 'dispatch') for bus in self.hw.buses.values()]
-            targets += [(self.bridge.sim_world, '_tick')]
-        targets += [(self.host.plugin(n), 'run') for n in self._plugins]
+            if self.bridge.sim_world is not None:  # rm_sim in this process (split layout)
+                targets += [(self.bridge.sim_world, '_tick')]
+        if self.host is not None:
+            targets += [(self.host._outbox, 'flush')]
+            if 'imu' in self._plugins:
+                targets += [(self.host.plugin('imu').reader, '_read_once')]
         for obj, attribute in targets:
             profiles.wrap(obj, attribute)
         profiles.active = True

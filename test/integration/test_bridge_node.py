@@ -252,6 +252,21 @@ def test_actuator_states_carry_every_field(make_rig):
     assert names == ['wheel']
 
 
+def test_states_nobody_subscribes_are_not_built_and_the_next_subscriber_gets_them(make_rig):
+    rig = make_rig()
+    for sub in list(rig.driver.subscriptions):
+        if sub.topic_name in ('/joint_states', '/actuator_states'):
+            rig.driver.destroy_subscription(sub)
+    pub = rig.bridge._joint_states_pub
+    assert wait_until(lambda: pub.get_subscription_count() == 0, WAIT)
+    unheard = rig.bridge.states_unheard
+    assert wait_until(lambda: rig.bridge.states_unheard > unheard + 10, WAIT)
+    got = []
+    rig.driver.create_subscription(JointState, 'joint_states', got.append, 10)
+    assert wait_until(lambda: len(got) >= 3, WAIT)
+    assert list(got[-1].name) == ['wheel']
+
+
 def test_diagnostics_report_joints_bus_scheduler_and_commands(make_rig):
     rig = make_rig()
     rig.spin_up()

@@ -109,6 +109,7 @@ class CanBridgeNode(Node):
         self._rejected: dict[str, int] = {}
         self._last_rejection: str | None = None
         self._frames_dropped_reported = 0
+        self.states_unheard = 0  # state periods with no subscriber: nothing built
         try:
             self._setup()
         except BaseException:
@@ -413,12 +414,23 @@ class CanBridgeNode(Node):
             return CommandStats(self._accepted, dict(self._rejected), self._last_rejection)
 
     def publish_states(self) -> None:
-        """Publish joint_states and actuator_states once (the publisher thread's job)."""
+        """Publish joint_states and actuator_states once (the publisher thread's job).
+
+        A topic nobody subscribes is not built (the one-process robot's plugins read the
+        joints in-process); the first subscriber gets the next period's message.
+        """
         assert self.hardware is not None
+        joints = self._joint_states_pub.get_subscription_count() > 0
+        actuators = self._actuator_states_pub.get_subscription_count() > 0
+        if not (joints or actuators):
+            self.states_unheard += 1
+            return
         states = self.hardware.states()
         joint_states, actuator_states = state_msgs(states, self.get_clock().now().to_msg())
-        self._joint_states_pub.publish(joint_states)
-        self._actuator_states_pub.publish(actuator_states)
+        if joints:
+            self._joint_states_pub.publish(joint_states)
+        if actuators:
+            self._actuator_states_pub.publish(actuator_states)
 
     def publish_diagnostics(self) -> None:
         """Publish /diagnostics once (the publisher thread's job)."""

@@ -114,6 +114,7 @@ class RobotHost(Node):
         io.outbox = self._outbox
         # what a plugin publishes reaches the robot's other plugins in-process, not over DDS
         self._outbox.loopback = io.deliver
+        self._outbox.listens = io.listens
         self._outbox.loopback_at_put = not take_from_dds  # lockstep: in the same tick
         # Lockstep: every command comes through inject; DDS deliveries would arrive at
         # ticks that differ from run to run, so nothing takes them.

@@ -45,6 +45,7 @@ from rm_base.plugin.commands import CommandInput
 from rm_base.plugin.errors import PluginConfigError, PluginInitError, TargetRejectedError
 from rm_base.plugin.joints import JointStateView, JointTarget
 from rm_base.plugin.node_io import NodeIO, node_io
+from rm_base.plugin.outbox import is_heard
 from rm_base.plugin.params import PluginParams
 from rm_base.plugin.state_machine import DefaultState, StateMachine, Transition
 from rm_base.ros_logging import FastLogger
@@ -402,14 +403,34 @@ class PluginBase:
         qos = qos if qos is not None else qos_profile_sensor_data
         self._io.subscribe(msg_type, self.node.resolve_topic_name(topic), callback, qos)
 
-    def create_publisher(self, msg_type: type, topic: str, qos: Any) -> Any:
+    def create_publisher(
+        self, msg_type: type, topic: str, qos: Any, *, hand_over: bool = False
+    ) -> Any:
         """Create a publisher for this plugin's own topics (states, odometry).
 
         Use this, not ``node.create_publisher``: hosted in the control loop, a plugin's
         messages are published by the ROS edge's thread, never by the loop itself.
+
+        Args:
+            msg_type: message class.
+            topic: topic name (relative names follow the node's namespace).
+            qos: QoS profile or history depth.
+            hand_over: the plugin builds a new message for every publish and never
+                changes it afterwards; the robot's other plugins then get that object,
+                with no serialised copy. By default publish() takes a snapshot, so a
+                plugin may refill one message object.
         """
         self._require_init()
-        return self._io.create_publisher(msg_type, topic, qos)
+        return self._io.create_publisher(msg_type, topic, qos, hand_over)
+
+    @staticmethod
+    def heard(publisher: Any) -> bool:
+        """Whether a message published now on publisher would reach anyone.
+
+        A plugin builds a periodic report only then: nobody gets a message no plugin of
+        the robot and no other node subscribes (the next one goes to the first subscriber).
+        """
+        return is_heard(publisher)
 
     def after_tick(self, callback: Callable[[], object]) -> bool:
         """Call callback() at the end of every tick of the loop that runs the plugins.

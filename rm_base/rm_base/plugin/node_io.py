@@ -115,11 +115,14 @@ class NodeIO(abc.ABC):
         while self._after_tick:
             self.loop.remove_after_tick(self._after_tick.pop())
 
-    def create_publisher(self, msg_type: type, topic: str, qos: Any) -> Any:
+    def create_publisher(
+        self, msg_type: type, topic: str, qos: Any, hand_over: bool = False
+    ) -> Any:
         """A publisher for a plugin: through the outbox if there is one.
 
         With an outbox its messages also reach this node's plugins directly (``deliver``),
-        so the inbox stops taking that topic from DDS.
+        so the inbox stops taking that topic from DDS. ``hand_over``: see
+        :meth:`Outbox.wrap <rm_base.plugin.outbox.Outbox.wrap>`.
         """
         publisher = self.node.create_publisher(msg_type, topic, qos)
         if self.outbox is None:
@@ -129,23 +132,28 @@ class NodeIO(abc.ABC):
             self._local[name] = self._local.get(name, 0) + 1
         if self.inbox is not None:
             self.inbox.drop(name)
-        return self.outbox.wrap(publisher)
+        return self.outbox.wrap(publisher, hand_over)
 
-    def deliver(self, topic: str, raw: bytes, msg_type: type) -> int:
-        """Hand a message this node publishes (serialised) to its plugins on topic.
+    def deliver(self, topic: str, data: Any, msg_type: type) -> int:
+        """Hand a message this node publishes to its plugins on topic.
 
-        The outbox's loopback: one copy for all the topic's callbacks, none if there are
-        none. Returns the number of callbacks that got it.
+        The outbox's loopback: data is the serialised snapshot (one copy for all the
+        topic's callbacks, none if there are none) or the message itself, handed over.
+        Returns the number of callbacks that got it.
         """
         with self._lock:
             handlers = tuple(self._handlers.get(topic, ()))
         if not handlers:
             return 0
-        msg = deserialize_message(raw, msg_type)
+        msg = deserialize_message(data, msg_type) if isinstance(data, bytes) else data
         receive_ns = self.node.get_clock().now().nanoseconds
         for handler in handlers:
             handler(msg, receive_ns)
         return len(handlers)
+
+    def listens(self, topic: str) -> bool:
+        """Whether a plugin of this node subscribes topic (a resolved name)."""
+        return bool(self._handlers.get(topic))
 
     def foreign_publishers(self) -> dict[str, int]:
         """Publishers the plugins do not hear, as {topic: count}.

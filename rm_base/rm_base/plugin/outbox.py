@@ -5,8 +5,16 @@ inside the robot (docs/ARCHITECTURE.md, "ROS at the edge"). A plugin's publisher
 wrapped instead (:meth:`Outbox.wrap`): ``publish(msg)`` serialises the message (a C call,
 ~10 µs: the snapshot, so the plugin may reuse its message object at once), appends the
 bytes to a queue, and the outbox thread publishes them in order. Appending never blocks.
+A publisher that hands its messages over (``hand_over``: a new message for each publish,
+never changed after) skips the snapshot: the robot's own subscribers get that object, and
+the outbox thread serialises it for DDS.
 The queue is bounded: if the edge falls behind, the oldest messages are dropped and
 counted (a state message is superseded by the next one anyway).
+
+A message nobody would get is not serialised at all: no plugin of this process listens
+to its topic, no other node subscribes (the publisher's matched subscriptions) and the
+topic keeps nothing for late joiners (volatile durability). Such messages are counted
+(``unheard``); the first subscriber gets the next one, as it would from DDS.
 
 Who wakes the thread: each ``put``, or, once :meth:`Outbox.pace` tied it to a control
 loop, the end of each tick (``wake``), so that it publishes in the loop's idle time and
@@ -21,6 +29,7 @@ import threading
 from collections.abc import Callable
 from typing import Any
 
+from rclpy.qos import DurabilityPolicy
 from rclpy.serialization import serialize_message
 
 _log = logging.getLogger(__name__)
@@ -29,16 +38,38 @@ _log = logging.getLogger(__name__)
 MAX_QUEUED = 1000
 
 
+def _always(topic: str) -> bool:
+    return True
+
+
+def _latched(publisher: Any) -> bool:
+    # a late joiner gets the last message: every message counts
+    return bool(publisher.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL)
+
+
+def is_heard(publisher: Any) -> bool:
+    """Whether a message published now would reach anyone (an rclpy or outbox publisher)."""
+    if isinstance(publisher, _EdgePublisher):
+        return publisher.heard()
+    return _latched(publisher) or publisher.get_subscription_count() > 0
+
+
 class _EdgePublisher:
     """Stands in for an rclpy publisher: ``publish`` goes through the outbox."""
 
-    def __init__(self, outbox: Outbox, publisher: Any) -> None:
+    def __init__(self, outbox: Outbox, publisher: Any, hand_over: bool) -> None:
         self._outbox = outbox
         self.publisher = publisher
         self.topic_name = publisher.topic_name
+        self.hand_over = hand_over
+        self.latched = _latched(publisher)
 
     def publish(self, msg: Any) -> None:
-        self._outbox.put(self.publisher, msg)
+        self._outbox.put(self, msg)
+
+    def heard(self) -> bool:
+        """Whether a message published now would reach anyone (else it is not sent)."""
+        return self._outbox.heard(self)
 
     def get_subscription_count(self) -> int:
         return self.publisher.get_subscription_count()
@@ -57,10 +88,10 @@ class Outbox:
     """
 
     def __init__(self, name: str = 'ros-edge-publish', max_queued: int = MAX_QUEUED) -> None:
-        # (publisher, serialised message, its type if the thread hands it to the loopback)
-        self._queue: collections.deque[tuple[Any, bytes, type | None]] = collections.deque(
-            maxlen=max_queued
-        )
+        # (edge publisher, serialised message or the message handed over, its type if the
+        # thread hands it to the loopback, whether it goes on DDS)
+        self._queue: collections.deque[tuple[_EdgePublisher, Any, type | None, bool]]
+        self._queue = collections.deque(maxlen=max_queued)
         self._wake = threading.Event()
         self._stop = False
         self._publish_lock = threading.Lock()  # flush() and the thread publish in order
@@ -70,27 +101,53 @@ class Outbox:
         self.loopback_errors = 0
         self._paced = False
         # Also hands each message to the in-process subscribers of its topic
-        # (``loopback(topic, raw, msg_type)``: the serialised snapshot), so nothing
+        # (``loopback(topic, data, msg_type)``: the serialised snapshot, or the message
+        # itself if handed over), so nothing
         # inside the robot waits on DDS: from the outbox thread, before publishing it,
         # or, with ``loopback_at_put`` (lockstep: the same tick on every run), at once.
         self.loopback: Callable[[str, bytes, type], object] | None = None
         self.loopback_at_put = False
+        # whether the loopback has subscribers on a topic (unknown: assume so)
+        self.listens: Callable[[str], bool] = _always
+        self.unheard = 0
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
 
-    def wrap(self, publisher: Any) -> _EdgePublisher:
-        """Return a publisher whose messages go through this outbox."""
-        return _EdgePublisher(self, publisher)
+    def wrap(self, publisher: Any, hand_over: bool = False) -> _EdgePublisher:
+        """Return a publisher whose messages go through this outbox.
 
-    def put(self, publisher: Any, msg: Any) -> None:
-        """Queue msg, serialised now, for publisher (any thread; never blocks)."""
-        raw = serialize_message(msg)
-        in_thread = self.loopback is not None and not self.loopback_at_put
-        if self.loopback is not None and not in_thread:
-            self.loopback(publisher.topic_name, raw, type(msg))
+        Args:
+            publisher: an rclpy publisher.
+            hand_over: the caller builds a new message for each publish and never changes
+                it after: no snapshot is taken (see the module docstring).
+        """
+        return _EdgePublisher(self, publisher, hand_over)
+
+    def heard(self, edge: _EdgePublisher) -> bool:
+        """Whether a message put for edge now would reach anyone."""
+        return (
+            (self.loopback is not None and self.listens(edge.topic_name))
+            or edge.latched
+            or edge.publisher.get_subscription_count() > 0
+        )
+
+    def put(self, edge: _EdgePublisher, msg: Any) -> None:
+        """Queue msg for edge's publisher (any thread; never blocks)."""
+        topic = edge.topic_name
+        local = self.loopback is not None and self.listens(topic)
+        outside = edge.latched or edge.publisher.get_subscription_count() > 0
+        if not (local or outside):
+            self.unheard += 1
+            return
+        data = msg if edge.hand_over else serialize_message(msg)
+        if local and self.loopback_at_put:
+            self.loopback(topic, data, type(msg))
+            local = False
+        if not (local or outside):
+            return
         queue = self._queue
         if len(queue) == queue.maxlen:
             self.dropped += 1
-        queue.append((publisher, raw, type(msg) if in_thread else None))
+        queue.append((edge, data, type(msg) if local else None, outside))
         if not self._paced:
             self._wake.set()
 
@@ -112,20 +169,22 @@ class Outbox:
         with self._publish_lock:
             queue = self._queue
             while queue:
-                publisher, msg, loop_type = queue.popleft()
+                edge, data, loop_type, outside = queue.popleft()
                 if loop_type is not None:
-                    self._hand_back(publisher.topic_name, msg, loop_type)
+                    self._hand_back(edge.topic_name, data, loop_type)
+                if not outside:
+                    continue
                 try:
-                    publisher.publish(msg)
+                    edge.publisher.publish(data)  # bytes go out as they are
                     self.published += 1
                 except Exception as err:  # e.g. the context is shutting down
                     self.errors += 1
                     if self.errors == 1:
-                        _log.error('publishing %s failed: %r', publisher.topic_name, err)
+                        _log.error('publishing %s failed: %r', edge.topic_name, err)
 
-    def _hand_back(self, topic: str, raw: bytes, msg_type: type) -> None:
+    def _hand_back(self, topic: str, data: Any, msg_type: type) -> None:
         try:
-            self.loopback(topic, raw, msg_type)
+            self.loopback(topic, data, msg_type)
         except Exception as err:  # a subscriber's callback: the message is still published
             self.loopback_errors += 1
             if self.loopback_errors == 1:

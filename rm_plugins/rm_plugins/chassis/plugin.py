@@ -452,8 +452,10 @@ class StandChassis(PluginBase):
             return
         self._next_publish_ns = max(self._next_publish_ns + self._publish_period_ns, now_ns)
         stamp = now.to_msg()
-        self._publish_state(stamp)
-        self._publish_odometry(stamp)
+        if self.heard(self._chassis_state_pub):
+            self._publish_state(stamp)
+        if self._tf is not None or self.heard(self._odom_pub):
+            self._publish_odometry(stamp)
 
     def _publish_state(self, stamp: Any) -> None:
         cfg, report = self.config, self._report

@@ -457,6 +457,8 @@ class StandGimbal(PluginBase):
         mode = self.state
         if now_ns < self._next_state_ns and mode is self._published_mode:
             return
+        if not self.heard(self._gimbal_state_pub):
+            return
         self._next_state_ns = now_ns + self._state_period_ns
         self._published_mode = mode
         offset = self._odom_offset.value or 0.0

@@ -111,7 +111,8 @@ class UpboardGpio(PluginBase):
         self.transition(DefaultState.ACTIVE, f'{len(self.pins)} pin(s) on the backend')
         for msg in self._take_commands():
             self._apply(msg, now.nanoseconds)
-        self.state_pub.publish(self._state_message(now))
+        if self.heard(self.state_pub):
+            self.state_pub.publish(self._state_message(now))
 
     def on_disable(self) -> None:
         """Put the outputs back to their initial (safe) values."""

@@ -199,7 +199,8 @@ class Hi220(PluginBase):
         )
 
         self._clock = self.node.get_clock()
-        self._publisher = self.create_publisher(Imu, topic, 10)
+        # a new message per sample: the gimbal and chassis get it with no copy
+        self._publisher = self.create_publisher(Imu, topic, 10, hand_over=True)
         self._diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
         self._lock = threading.Lock()
         self._last_sample_ns: int | None = None  # receipt of the latest sample

@@ -508,6 +508,8 @@ class StandShooter(PluginBase):
         )
         if not force and key == self._last_published and now_ns < self._next_publish_ns:
             return
+        if not self.heard(self.state_pub):
+            return
         self._last_published = key
         self._next_publish_ns = now_ns + self._state_period_ns
         joints = self.joint_states.snapshot(self.config.friction_joints)

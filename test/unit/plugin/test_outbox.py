@@ -2,8 +2,10 @@
 
 import threading
 
+import pytest
+from rclpy.qos import DurabilityPolicy, QoSProfile
 from rclpy.serialization import deserialize_message
-from rm_base.plugin.outbox import Outbox
+from rm_base.plugin.outbox import Outbox, is_heard
 from std_msgs.msg import UInt32
 from support.ros import wait_until
 
@@ -11,12 +13,19 @@ from support.ros import wait_until
 class FakePublisher:
     topic_name = '/fake'
 
-    def __init__(self):
+    def __init__(self, subscribers=1, durability=DurabilityPolicy.VOLATILE):
         self.published = []
         self.threads = set()
+        self.subscribers = subscribers
+        self.qos_profile = QoSProfile(depth=10, durability=durability)
 
-    def publish(self, raw):
-        self.published.append(deserialize_message(raw, UInt32).data)
+    def get_subscription_count(self):
+        return self.subscribers
+
+    def publish(self, msg):  # as rclpy's: serialised bytes or a message
+        if isinstance(msg, bytes):
+            msg = deserialize_message(msg, UInt32)
+        self.published.append(msg.data)
         self.threads.add(threading.current_thread().name)
 
 
@@ -106,3 +115,61 @@ def test_a_failing_loopback_is_counted_and_the_message_still_published():
     box.wrap(pub).publish(UInt32(data=3))
     box.flush()
     assert box.loopback_errors == 1 and pub.published == [3]
+
+
+def test_a_message_nobody_would_get_is_not_serialised_and_is_counted():
+    box = Outbox()
+    pub = FakePublisher(subscribers=0)
+    box.loopback = lambda topic, raw, msg_type: pytest.fail('no plugin listens')
+    box.listens = lambda topic: False
+    wrapped = box.wrap(pub)
+    wrapped.publish(UInt32(data=1))
+    pub.subscribers = 1  # someone subscribes: the next message is theirs
+    wrapped.publish(UInt32(data=2))
+    box.stop()
+    assert pub.published == [2] and box.unheard == 1
+
+
+def test_a_plugin_listening_in_process_gets_messages_no_other_node_subscribes():
+    box = Outbox()
+    box.loopback_at_put = True
+    got = []
+    box.loopback = lambda topic, raw, msg_type: got.append(deserialize_message(raw, msg_type).data)
+    box.listens = lambda topic: topic == '/fake'
+    box.wrap(FakePublisher(subscribers=0)).publish(UInt32(data=4))
+    box.stop()
+    assert got == [4] and box.unheard == 0
+
+
+def test_a_latched_topic_keeps_every_message_for_late_joiners():
+    box = Outbox()
+    pub = FakePublisher(subscribers=0, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    box.wrap(pub).publish(UInt32(data=9))
+    box.stop()
+    assert pub.published == [9] and box.unheard == 0
+
+
+def test_a_message_handed_over_reaches_the_robot_as_it_is_and_dds_serialised():
+    box = Outbox()
+    pub = FakePublisher()
+    got = []
+    box.loopback = lambda topic, data, msg_type: got.append(data)
+    msg = UInt32(data=3)
+    box.wrap(pub, hand_over=True).publish(msg)
+    box.flush()
+    assert got[0] is msg  # no copy
+    assert pub.published == [3]  # serialised for DDS by the outbox
+
+
+def test_is_heard_says_whether_anyone_would_get_a_message():
+    box = Outbox()
+    box.loopback = lambda topic, data, msg_type: None
+    box.listens = lambda topic: False
+    pub = FakePublisher(subscribers=0)
+    assert not is_heard(pub) and not is_heard(box.wrap(pub))
+    pub.subscribers = 1  # another node
+    assert is_heard(pub) and is_heard(box.wrap(pub))
+    latched = FakePublisher(subscribers=0, durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    assert is_heard(latched) and is_heard(box.wrap(latched))
+    box.listens = lambda topic: topic == '/fake'  # a plugin of the robot
+    assert is_heard(box.wrap(FakePublisher(subscribers=0)))
