@@ -8,8 +8,10 @@ production path has no extra branch): one ``array.append`` per tick while record
 Definitions (the scheduler's own):
 
 * period error: ``|start - deadline|`` of a tick, deadlines on an absolute grid [µs];
-* missed deadline: a deadline skipped because the previous tick ended after it
-  (``skipped_ticks``); the share is ``skipped / (ticks + skipped)``;
+* missed deadline: a tick that ended after the next tick's deadline (``overruns``; the
+  next tick then runs at once, late, and periods that passed whole are ``skipped``); the
+  share is ``overruns / ticks``. Loops the bench only watches from outside (the bare
+  sleeper, an rclpy timer) count the periods with no tick: ``skipped / (ticks + skipped)``;
 * tick duration: update + pack + send of one tick [µs] (timed by wrapping the instance's
   ``tick`` while recording). On rm_sim a send waits for the simulated world's lock, so
   time the physics thread holds it shows up here.
@@ -77,11 +79,14 @@ def tick_summary(
 ) -> dict[str, Any]:
     """Period error percentiles [µs] and the missed-deadline share [%] of one window."""
     s = summary(abs(e) / 1e3 for e in errors_ns)
-    deadlines = ticks + skipped
+    if overruns is None:
+        missed, deadlines = skipped, ticks + skipped
+    else:
+        missed, deadlines = overruns, ticks
     return {
         'ticks': ticks,
         'skipped': skipped,
         'overruns': overruns,
-        'missed_pct': 100.0 * skipped / deadlines if deadlines else float('nan'),
+        'missed_pct': 100.0 * missed / deadlines if deadlines else float('nan'),
         'error_us': s,
     }

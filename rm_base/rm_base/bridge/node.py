@@ -54,6 +54,8 @@ _REJECT_LOG_PERIOD = 1.0
 
 # The state publisher waits this long for the end of a loop tick before publishing anyway.
 _TICK_WAIT_S = 0.005
+# With nobody subscribed to the states, how often to look for a subscriber again [ns].
+_UNHEARD_CHECK_NS = 50_000_000
 
 
 class CanBridgeNode(Node):
@@ -109,7 +111,7 @@ class CanBridgeNode(Node):
         self._rejected: dict[str, int] = {}
         self._last_rejection: str | None = None
         self._frames_dropped_reported = 0
-        self.states_unheard = 0  # state periods with no subscriber: nothing built
+        self.states_unheard = 0  # state publications skipped: nobody subscribed
         try:
             self._setup()
         except BaseException:
@@ -432,6 +434,12 @@ class CanBridgeNode(Node):
         if actuators:
             self._actuator_states_pub.publish(actuator_states)
 
+    def _states_heard(self) -> bool:
+        return (
+            self._joint_states_pub.get_subscription_count() > 0
+            or self._actuator_states_pub.get_subscription_count() > 0
+        )
+
     def publish_diagnostics(self) -> None:
         """Publish /diagnostics once (the publisher thread's job)."""
         assert self.hardware is not None
@@ -468,6 +476,13 @@ class CanBridgeNode(Node):
             wait_ns = min(next_state, next_diag) - time.perf_counter_ns()
             if wait_ns > 0 and self._stop.wait(wait_ns / 1e9):
                 break
+            now = time.perf_counter_ns()
+            if now >= next_state and self._frame_tap is None and not self._states_heard():
+                # nothing to build, no tick to wait for; look again for a subscriber soon
+                self.states_unheard += 1
+                next_state = max(next_state + state_period, now + _UNHEARD_CHECK_NS)
+                if now < next_diag:
+                    continue
             # Publish just after the loop's next tick, in its idle time, not in the middle
             # of a tick; a loop that does not tick delays the states by a short timeout.
             self._tick_done.clear()

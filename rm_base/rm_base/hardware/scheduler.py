@@ -16,7 +16,10 @@ thread, for deterministic (lockstep) steps. Each tick runs, in this fixed order:
    threads of the ROS edge (publishers, readers), so that those run in the loop's idle
    time instead of taking the interpreter from it in the middle of a tick.
 
-Missed deadlines are counted as overruns and skipped, never caught up in a burst. The loop
+A tick that ends after the next deadline is an overrun (a missed deadline): the next tick
+then starts at once, late, if its period has not passed yet (as a firmware loop on
+``vTaskDelayUntil`` does); periods that passed whole are skipped and counted, never caught
+up in a burst. The loop
 measures itself: start lateness and the duration of every component (each stage, the
 actuator updates, packing, sending) as p50 / p99 / max (:mod:`rm_base.hardware.timing`),
 and logs the window every ``report_period_s`` with the three most expensive components.
@@ -318,7 +321,9 @@ class Scheduler:
                 deadline += period
                 if end > deadline:
                     self._overruns += 1
-                    missed = (end - deadline) // period + 1
+                    # Late by less than a period: the next tick runs at once, late, in its
+                    # own period. Periods that passed whole are skipped, never burst.
+                    missed = (end - deadline) // period
                     self._skipped += missed
                     deadline += missed * period
                 delay_ns = deadline - clock()

@@ -116,7 +116,7 @@ class PeriodStats:
         period_ns: nominal period [ns].
         ticks: ticks run.
         overruns: deadlines missed (a tick ended after the next deadline).
-        skipped_ticks: deadlines skipped because of overruns.
+        skipped_ticks: periods skipped whole because of overruns (no tick ran in them).
         max_error_us: largest |start - deadline| seen [µs].
         mean_error_us: mean |start - deadline| [µs].
         histogram: counts per bucket of |start - deadline|; bucket i holds errors below

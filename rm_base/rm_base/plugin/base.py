@@ -423,6 +423,12 @@ class PluginBase:
         self._require_init()
         return self._io.create_publisher(msg_type, topic, qos, hand_over)
 
+    @property
+    def in_loop(self) -> bool:
+        """Whether a control loop runs this plugin (its after-tick callbacks get called)."""
+        self._require_init()
+        return self._io.loop is not None
+
     @staticmethod
     def heard(publisher: Any) -> bool:
         """Whether a message published now on publisher would reach anyone.

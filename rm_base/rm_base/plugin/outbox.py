@@ -6,8 +6,9 @@ wrapped instead (:meth:`Outbox.wrap`): ``publish(msg)`` serialises the message (
 ~10 µs: the snapshot, so the plugin may reuse its message object at once), appends the
 bytes to a queue, and the outbox thread publishes them in order. Appending never blocks.
 A publisher that hands its messages over (``hand_over``: a new message for each publish,
-never changed after) skips the snapshot: the robot's own subscribers get that object, and
-the outbox thread serialises it for DDS.
+never changed after) skips the snapshot: the robot's own subscribers get that object at
+once, in the publishing thread (their callbacks only store it), and the outbox thread
+serialises it for DDS if another node subscribes.
 The queue is bounded: if the edge falls behind, the oldest messages are dropped and
 counted (a state message is superseded by the next one anyway).
 
@@ -139,8 +140,9 @@ class Outbox:
             self.unheard += 1
             return
         data = msg if edge.hand_over else serialize_message(msg)
-        if local and self.loopback_at_put:
-            self.loopback(topic, data, type(msg))
+        # a message handed over costs its subscribers no copy: they get it at once
+        if local and (self.loopback_at_put or edge.hand_over):
+            self._hand_back(topic, data, type(msg))
             local = False
         if not (local or outside):
             return

@@ -97,7 +97,10 @@ class UpboardGpio(PluginBase):
         self._overflowed = 0
         self._next_log_ns = 0
         self._suppressed = 0
-        self.state_pub = self.create_publisher(GpioState, STATE_TOPIC, STATE_QOS_DEPTH)
+        # a new message each run: the shooter (ball switch) gets it with no copy
+        self.state_pub = self.create_publisher(
+            GpioState, STATE_TOPIC, STATE_QOS_DEPTH, hand_over=True
+        )
         self.subscribe(COMMAND_TOPIC, GpioCmd, self._on_command, COMMAND_QOS)
         self.logger.info(
             f'{backend_kind.value} backend: '

@@ -210,8 +210,7 @@ class Hi220(PluginBase):
         self._report_published = 0
         self._report_ns: int | None = None
         self._report_bad = 0
-        # read after each loop tick, in its idle time (no loop: the reader's own pace)
-        pace = threading.Event()
+        # read after the loop's ticks, in its idle time (no loop: the reader's own pace)
         self.reader = SerialReader(
             self.port,
             self.baudrate,
@@ -221,8 +220,10 @@ class Hi220(PluginBase):
             backoff_min=backoff_min,
             backoff_max=backoff_max,
             silence_reopen=silence,
-            pace=pace if self.after_tick(pace.set) else None,
+            paced=self.in_loop,
         )
+        if self.reader.paced:
+            self.after_tick(self.reader.wake)
 
     # -- lifecycle --------------------------------------------------------------------------
 

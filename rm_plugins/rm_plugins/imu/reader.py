@@ -2,10 +2,12 @@
 
 The port is any pyserial URL (``serial.serial_for_url``): a device (``/dev/ttyUSB0``), a
 pseudo-terminal or a symlink to one (the simulator's IMU), ``loop://``, ``socket://h:p``.
-Reads block for at most ``read_timeout`` so ``stop()`` is honoured quickly. Given a
-``pace`` event (set at the end of every control-loop tick), the thread instead waits for
-it and then takes what the port holds, so it decodes in the loop's idle time and never
-asks for the interpreter in the middle of a tick. Bytes go
+Reads block for at most ``read_timeout`` so ``stop()`` is honoured quickly. A ``paced``
+reader instead waits for :meth:`SerialReader.wake` (the control loop calls it at the end
+of every tick) and then takes what the port holds, so it decodes in the loop's idle time
+and never asks for the interpreter in the middle of a tick. It learns how far apart data
+arrives and lets the wakes before the next arrival pass: a 400 Hz IMU costs about one
+thread wake-up per frame, not one per tick. Bytes go
 through ``HipnucParser``, which resynchronises after garbage and counts what it skips;
 every decoded sample is passed to ``on_sample`` in this thread.
 
@@ -29,6 +31,11 @@ from rm_base.hardware.protocols.hipnuc import HipnucParser, ImuSample
 _NS_PER_S = 1_000_000_000
 _LOG_PERIOD_NS = 5 * _NS_PER_S
 _READ_CHUNK = 4096
+# Paced reads: weight of the newest gap between arrivals in their moving mean, the share
+# of that mean after an arrival during which wakes pass, and gaps too long to learn from.
+_GAP_WEIGHT = 0.125
+_GAP_SHARE = 0.5
+_MAX_GAP_NS = 50_000_000
 
 
 class Logger(Protocol):
@@ -100,7 +107,7 @@ class SerialReader:
             0 disables.
         opener: ``(url, baudrate, timeout) -> port`` (pyserial by default).
         clock_ns: monotonic clock [ns].
-        pace: when given, read only after it is set (at most ``read_timeout`` later
+        paced: read only when woken (:meth:`wake`; at most ``read_timeout`` later
             regardless), and only what is waiting.
     """
 
@@ -117,7 +124,7 @@ class SerialReader:
         silence_reopen: float = 1.0,
         opener: Callable[[str, int, float], Any] = open_serial,
         clock_ns: Callable[[], int] = time.monotonic_ns,
-        pace: threading.Event | None = None,
+        paced: bool = False,
     ) -> None:
         if not 0.0 < read_timeout <= 1.0:
             raise ValueError(f'read_timeout must be in (0, 1] s, got {read_timeout}')
@@ -137,7 +144,11 @@ class SerialReader:
         self._silence_ns = round(silence_reopen * _NS_PER_S)
         self._opener = opener
         self._clock_ns = clock_ns
-        self._pace = pace
+        self._pace = threading.Event() if paced else None
+        self._next_wake_ns = 0  # wakes before this pass: no data is expected yet
+        self._data_ns: int | None = None  # when the last read found data
+        self._gap_ns = 0.0  # moving mean of the time between reads that found data
+        self.wakes_passed = 0  # wakes let pass: no data expected yet
         self._parser = HipnucParser()
         self._lock = threading.Lock()
         self._stats = ReaderStats()
@@ -160,6 +171,8 @@ class SerialReader:
     def stop(self, timeout: float = 2.0) -> bool:
         """Stop the thread and close the port; return False if the thread did not end."""
         self._stop.set()
+        if self._pace is not None:
+            self._pace.set()  # a paced thread waits for its wake
         thread, self._thread = self._thread, None
         if thread is not None:
             thread.join(timeout)
@@ -167,6 +180,25 @@ class SerialReader:
                 return False
         self._close()
         return True
+
+    @property
+    def paced(self) -> bool:
+        """Whether the reader reads only when woken."""
+        return self._pace is not None
+
+    def wake(self) -> None:
+        """Let a paced reader read what arrived (the loop's after-tick callback).
+
+        Does nothing before the next data is expected (``_GAP_SHARE`` of the usual gap
+        between arrivals after the last one), so the thread is not woken for nothing.
+        """
+        pace = self._pace
+        if pace is None:
+            return
+        if self._clock_ns() >= self._next_wake_ns:
+            pace.set()
+        else:
+            self.wakes_passed += 1
 
     @property
     def running(self) -> bool:
@@ -235,10 +267,13 @@ class SerialReader:
             return f'{self.url} failed: {err}'
         now_ns = self._clock_ns()
         if not data:
+            self._next_wake_ns = 0  # look again at the next wake
             if self._silence_ns and now_ns - self._last_byte_ns > self._silence_ns:
                 return f'no byte from {self.url} for {self._silence_ns / _NS_PER_S:.1f} s'
             return None
         self._last_byte_ns = now_ns
+        if pace is not None:
+            self._expect_next(now_ns)
         parser = self._parser
         samples = parser.feed(data)
         with self._lock:
@@ -258,6 +293,17 @@ class SerialReader:
                     self._update(sample_errors=self._stats.sample_errors + 1)
                 self._log_throttled(f'sample rejected: {type(err).__name__}: {err}')
         return None
+
+    def _expect_next(self, now_ns: int) -> None:
+        """Learn the gap between arrivals; skip the wakes before the next one is due."""
+        last, self._data_ns = self._data_ns, now_ns
+        if last is None:
+            return
+        gap = now_ns - last
+        if gap > _MAX_GAP_NS:  # a pause (stall, reopen): not the device's rate
+            return
+        self._gap_ns += (gap - self._gap_ns) * _GAP_WEIGHT
+        self._next_wake_ns = now_ns + int(self._gap_ns * _GAP_SHARE)
 
     def _lose(self, problem: str) -> None:
         self._close()

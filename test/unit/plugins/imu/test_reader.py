@@ -263,19 +263,45 @@ class FakePort:
 
 def test_a_paced_reader_takes_only_what_waits_once_the_loop_says_so(reader_factory):
     port = FakePort()
-    pace = threading.Event()
     got = Collector()
-    reader = reader_factory('fake://', got, opener=lambda *_: port, pace=pace, read_timeout=0.01)
+    reader = reader_factory('fake://', got, opener=lambda *_: port, paced=True, read_timeout=0.01)
     reader.start()
     assert wait(lambda: reader.stats().port_open)
     for i in range(5):
         port.write(frame(yaw=0.1 * i))
 
     def tick():  # what the loop's after-tick callback does
-        pace.set()
+        reader.wake()
         return len(got.samples) >= 5
 
     assert wait(tick)
     # never a blocking one-byte read for nothing: each read takes what was waiting
     assert port.reads and all(size > 1 for size in port.reads)
     assert reader.stats().frames_ok == 5
+
+
+def test_a_paced_reader_lets_the_wakes_pass_until_the_next_data_is_due(reader_factory):
+    port = FakePort()
+    got = Collector()
+    now = [0]
+    reader = reader_factory(
+        'fake://', got, opener=lambda *_: port, paced=True, read_timeout=1.0,
+        clock_ns=lambda: now[0], silence_reopen=0.0,
+    )
+    reader.start()
+    assert wait(lambda: reader.stats().port_open)
+    gap = 2_500_000  # [ns] a 400 Hz device
+    for i in range(20):  # data every 2.5 ms, the loop waking the reader then
+        now[0] += gap
+        port.write(frame(yaw=0.01 * i))
+        reader.wake()
+        assert wait(lambda n=i + 1: len(got.samples) == n)
+    reads = len(port.reads)
+    now[0] += gap // 4  # the next tick, long before the next frame is due
+    reader.wake()
+    assert reader.wakes_passed == 1
+    now[0] += gap  # due: the wake goes through, the frame is read
+    port.write(frame(yaw=0.5))
+    reader.wake()
+    assert wait(lambda: len(got.samples) == 21)
+    assert len(port.reads) == reads + 1 and reader.wakes_passed == 1
