@@ -15,10 +15,11 @@ A run that would not fit before the tick's deadline waits one tick: given the lo
 (moving mean plus twice the moving mean deviation of its own runs, as TCP estimates a
 round trip) plus the time the loop still needs after the plugins
 (``RESERVE_NS``) exceeds what is left of the period runs at the next tick instead, and
-then unconditionally. So scheduled runs that fall due together spread over two ticks
-rather than push the tick past its deadline; no plugin waits more than one tick. A run
-for a new command is never moved (command latency comes first), and lockstep runs never
-wait.
+then unconditionally. So runs that fall due together (several commands arriving at
+once, or scheduled runs) spread over two ticks rather than push the tick past its
+deadline; no plugin waits more than one tick. A run for a new command moves too: had it
+run, the frames of this tick would have gone out late and the next tick with them, so
+its command reaches the motors about as soon either way. Lockstep runs never wait.
 
 The loop never waits for a plugin: ``enable``/``disable`` (ROS services, executor thread)
 take the plugin's lock; the loop only tries it, and runs the plugin at a later tick if it
@@ -143,8 +144,7 @@ class PluginTask:
         )
         if not (due or for_command):
             return False
-        # a run for a new command is never moved: command latency comes first
-        if not self._new_command and not self._waiting and not self._fits():
+        if not self._waiting and not self._fits():
             self._waiting = True
             self.deferred += 1
             return False

@@ -180,7 +180,7 @@ def test_a_run_that_would_pass_the_deadline_waits_one_tick_then_runs_whatever_is
     assert (task.ticks, task.deferred, task.skipped) == (4, 2, 2)
 
 
-def test_a_run_for_a_new_command_is_never_moved_to_a_later_tick():
+def test_a_run_for_a_new_command_that_would_not_fit_waits_one_tick_too():
     plugin = SlowPlugin(100.0)
     inputs = TickInputs(lambda: Time(len(plugin.runs)), time_left=lambda: 0)  # no time left
     task = PluginTask(plugin, inputs)
@@ -188,4 +188,5 @@ def test_a_run_for_a_new_command_is_never_moved_to_a_later_tick():
     assert task(MS, 0.001) is True  # ...then runs
     plugin.command_listener()  # a command arrives
     assert task(2 * MS, 0.001) is False  # too soon after the last run (a quarter period)
-    assert task(4 * MS, 0.001) is True and task.command_runs == 1 and task.deferred == 1
+    assert task(4 * MS, 0.001) is False and task.deferred == 2  # would pass the deadline
+    assert task(5 * MS, 0.001) is True and task.command_runs == 1  # the next tick, surely
