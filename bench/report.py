@@ -294,7 +294,7 @@ ROWS: tuple[Row, ...] = (
     Row(
         'cpu.load.host',
         'cpu',
-        '  host: plugin threads + IMU reader',
+        '  host: outbox + IMU reader (its plugins run in the loop)',
         'robot',
         _get('load', 'groups', 'host'),
         None,
@@ -303,7 +303,7 @@ ROWS: tuple[Row, ...] = (
     Row(
         'cpu.load.bridge',
         'cpu',
-        '  bridge: scheduler + receive + publisher',
+        '  bridge: the loop (plugins included) + publisher',
         'robot',
         _get('load', 'groups', 'bridge'),
         None,

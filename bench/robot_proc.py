@@ -1,8 +1,9 @@
 """Child process of the bench: the whole standard robot in one process, instrumented.
 
 Exactly what ``bringup --robot standard --sim`` runs (can_bridge + rm_robot on one
-EventsExecutor spun by the main thread, the 1 kHz CAN scheduler, receive, publisher and
-plugin threads, rm_sim's physics thread), plus measuring hooks that cost nothing until a
+EventsExecutor spun by the main thread, the 1 kHz loop running the plugins, the edge's
+publisher and reader threads; rm_sim in a process of its own, or in this one for the split
+robot's bridge), plus measuring hooks that cost nothing until a
 phase uses them. The parent (:mod:`bench.robot`) drives it with one command per stdin line
 and reads one ``@@BENCH {json}`` line per command from stdout:
 
@@ -360,7 +361,7 @@ class Robot:
         targets: list[tuple[Any, str]] = []
         # one method per thread, called once per wake-up of that thread
         if self.hw is not None:
-            targets += [(self.hw.scheduler, 'tick'), (self.bridge, 'publish_states')]
+            targets += [(self.hw.scheduler, 'tick'), (self.bridge, '_states_heard')]
             if self.bridge.sim_world is not None:  # rm_sim in this process (split layout)
                 targets += [(self.bridge.sim_world, '_tick')]
         if self.host is not None:

@@ -79,3 +79,26 @@ def _targets():
         return importlib.import_module('bench.loop_targets').TARGETS
     finally:
         sys.path.remove(str(ROOT))
+
+
+def test_profile_mode_profiles_every_busy_thread_of_the_robot(tmp_path):
+    proc = start_process(
+        [
+            sys.executable,
+            str(ROOT / 'bench' / 'run.py'),
+            '--profile',
+            '1',
+            '--out',
+            str(tmp_path),
+            '--domain-id',
+            os.environ['ROS_DOMAIN_ID'],
+        ],
+        cwd=ROOT,
+    )
+    stdout, stderr = proc.communicate(timeout=TIMEOUT)
+    assert proc.returncode == 0, stdout[-3000:] + stderr[-3000:]
+    profiled = {line.split(':')[0] for line in stdout.splitlines() if 'CPU (profiled)' in line}
+    # the loop, the edge's publishers and the IMU reader (named after its port)
+    assert {'can-scheduler', 'can_bridge-publish', 'rm_robot-publish'} <= profiled, stdout
+    assert any(name.startswith('hipnuc ') for name in profiled), stdout
+    assert list(tmp_path.glob('logs-*/profile_can-scheduler.prof'))

@@ -103,10 +103,10 @@ class Outbox:
         self._paced = False
         # Also hands each message to the in-process subscribers of its topic
         # (``loopback(topic, data, msg_type)``: the serialised snapshot, or the message
-        # itself if handed over), so nothing
-        # inside the robot waits on DDS: from the outbox thread, before publishing it,
-        # or, with ``loopback_at_put`` (lockstep: the same tick on every run), at once.
-        self.loopback: Callable[[str, bytes, type], object] | None = None
+        # itself if handed over), so nothing inside the robot waits on DDS: from the
+        # outbox thread, before publishing it, or at once with ``loopback_at_put``
+        # (lockstep: the same tick on every run) or for a message handed over.
+        self.loopback: Callable[[str, Any, type], object] | None = None
         self.loopback_at_put = False
         # whether the loopback has subscribers on a topic (unknown: assume so)
         self.listens: Callable[[str], bool] = _always
