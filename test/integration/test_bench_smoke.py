@@ -31,22 +31,19 @@ def _rows():
     return module.ROWS, module.SECTIONS
 
 
-def test_when_run_quick_expect_every_row_in_the_table_and_the_json(tmp_path):
-    rows, sections = _rows()
-    proc = start_process(
-        [
-            sys.executable,
-            str(ROOT / 'bench' / 'run.py'),
-            '--quick',
-            '--out',
-            str(tmp_path),
-            '--domain-id',
-            os.environ['ROS_DOMAIN_ID'],
-        ],
-        cwd=ROOT,
-    )
+def _run_bench(out, *args):
+    """Run bench/run.py with args in this session's ROS domain; return its stdout."""
+    command = [sys.executable, str(ROOT / 'bench' / 'run.py'), *args, '--out', str(out)]
+    command += ['--domain-id', os.environ['ROS_DOMAIN_ID']]
+    proc = start_process(command, cwd=ROOT)
     stdout, stderr = proc.communicate(timeout=TIMEOUT)
     assert proc.returncode == 0, stdout[-3000:] + stderr[-3000:]
+    return stdout
+
+
+def test_when_run_quick_expect_every_row_in_the_table_and_the_json(tmp_path):
+    rows, sections = _rows()
+    stdout = _run_bench(tmp_path, '--quick')
     for title in sections.values():
         assert title in stdout
     table_lines = [line for line in stdout.splitlines() if line.startswith('| ')]
@@ -82,21 +79,7 @@ def _targets():
 
 
 def test_profile_mode_profiles_every_busy_thread_of_the_robot(tmp_path):
-    proc = start_process(
-        [
-            sys.executable,
-            str(ROOT / 'bench' / 'run.py'),
-            '--profile',
-            '1',
-            '--out',
-            str(tmp_path),
-            '--domain-id',
-            os.environ['ROS_DOMAIN_ID'],
-        ],
-        cwd=ROOT,
-    )
-    stdout, stderr = proc.communicate(timeout=TIMEOUT)
-    assert proc.returncode == 0, stdout[-3000:] + stderr[-3000:]
+    stdout = _run_bench(tmp_path, '--profile', '1')
     profiled = {line.split(':')[0] for line in stdout.splitlines() if 'CPU (profiled)' in line}
     # the loop, the edge's publishers and the IMU reader (named after its port)
     assert {'can-scheduler', 'can_bridge-publish', 'rm_robot-publish'} <= profiled, stdout
