@@ -23,15 +23,13 @@ No rclpy here: the message is read through its attributes.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Container, Sequence
-from typing import NamedTuple, Protocol
+from typing import Protocol
 
 from rm_base.bridge.errors import ActuatorCmdRejectedError, Rejection
-from rm_base.hardware import Mode
+from rm_base.joints import InvalidTargetError, JointTarget, check_target
 
 _FIELDS = ('mode', 'position', 'velocity', 'effort', 'kp', 'kd')
-_VALUES = ('position', 'velocity', 'effort', 'kp', 'kd')
 
 
 class ActuatorCmdLike(Protocol):
@@ -44,28 +42,6 @@ class ActuatorCmdLike(Protocol):
     effort: Sequence[float]
     kp: Sequence[float]
     kd: Sequence[float]
-
-
-class JointTarget(NamedTuple):
-    """One validated joint target, output shaft, SI.
-
-    Attributes:
-        name: joint name.
-        mode: :class:`rm_base.hardware.Mode`.
-        position: [rad].
-        velocity: [rad/s].
-        effort: [N·m].
-        kp: [N·m/rad].
-        kd: [N·m·s/rad].
-    """
-
-    name: str
-    mode: Mode
-    position: float
-    velocity: float
-    effort: float
-    kp: float
-    kd: float
 
 
 def check_stamp(msg: object, now_ns: int, timeout_s: float) -> int:
@@ -97,7 +73,9 @@ def check_stamp(msg: object, now_ns: int, timeout_s: float) -> int:
     return max(0, age_ns)
 
 
-def parse_actuator_cmd(msg: ActuatorCmdLike, joints: Container[str]) -> list[JointTarget]:
+def parse_actuator_cmd(
+    msg: ActuatorCmdLike, joints: Container[str]
+) -> list[tuple[str, JointTarget]]:
     """Validate a whole ActuatorCmd and return its targets.
 
     Args:
@@ -105,7 +83,7 @@ def parse_actuator_cmd(msg: ActuatorCmdLike, joints: Container[str]) -> list[Joi
         joints: names of the joints this bridge drives.
 
     Returns:
-        One target per entry, in message order (empty for an empty message).
+        (joint, target) per entry, in message order (empty for an empty message).
 
     Raises:
         ActuatorCmdRejectedError: the message is not well-formed (see the module
@@ -129,24 +107,14 @@ def parse_actuator_cmd(msg: ActuatorCmdLike, joints: Container[str]) -> list[Joi
             Rejection.UNKNOWN_JOINT, f'unknown joint(s) {unknown} (not driven by this bridge)'
         )
     targets = []
+    mode, position, velocity, effort, kp, kd = (columns[field] for field in _FIELDS)
     for i, name in enumerate(names):
-        raw_mode = columns['mode'][i]
         try:
-            mode = Mode(raw_mode)
-        except ValueError:
-            raise ActuatorCmdRejectedError(
-                Rejection.UNKNOWN_MODE, f'{name}: unknown mode {raw_mode!r} (MODE_OFF..MODE_MIT)'
-            ) from None
-        values = []
-        for field in _VALUES:
-            value = float(columns[field][i])
-            if not math.isfinite(value):
-                raise ActuatorCmdRejectedError(Rejection.NON_FINITE, f'{name}: {field} is {value}')
-            values.append(value)
-        position, velocity, effort, kp, kd = values
-        if kp < 0.0 or kd < 0.0:
-            raise ActuatorCmdRejectedError(
-                Rejection.NEGATIVE_GAIN, f'{name}: MIT gains must be >= 0, got kp={kp}, kd={kd}'
+            target = check_target(
+                mode[i], position=position[i], velocity=velocity[i], effort=effort[i],
+                kp=kp[i], kd=kd[i],
             )
-        targets.append(JointTarget(name, mode, position, velocity, effort, kp, kd))
+        except InvalidTargetError as err:
+            raise ActuatorCmdRejectedError(Rejection(err.problem.value), f'{name}: {err}') from None
+        targets.append((name, target))
     return targets

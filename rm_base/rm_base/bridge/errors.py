@@ -35,7 +35,6 @@ class Rejection(enum.Enum):
     NON_FINITE = 'non_finite'  # NaN or inf in any value
     NEGATIVE_GAIN = 'negative_gain'  # kp or kd < 0
     STALE = 'stale'  # header stamp older than the command timeout (or as far in the future)
-    HARDWARE = 'hardware'  # refused by the hardware layer (should not happen)
 
 
 class ActuatorCmdRejectedError(InputRejectedError):

@@ -43,7 +43,7 @@ def _columns(states: Sequence[JointState]) -> _Columns:
         empty = array.array('d')
         return _Columns((), empty, empty, empty, empty, (), array.array('B'), array.array('B'),
                         empty)
-    names, position, velocity, effort, temperature, online, error_code, mode, command = zip(
+    names, position, velocity, effort, temperature, online, error_code, mode, command, _ = zip(
         *states, strict=True
     )
     return _Columns(

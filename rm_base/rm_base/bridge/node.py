@@ -17,7 +17,7 @@ from sensor_msgs.msg import JointState
 
 from rm_base.bridge.commands import check_stamp, parse_actuator_cmd
 from rm_base.bridge.diagnostics import CommandStats, DiagnosticsReporter
-from rm_base.bridge.errors import ActuatorCmdRejectedError, BridgeConfigError, Rejection
+from rm_base.bridge.errors import ActuatorCmdRejectedError, BridgeConfigError
 from rm_base.bridge.frames import FrameTap
 from rm_base.bridge.messages import can_frame_msg, state_msgs, time_msg
 from rm_base.bridge.params import (
@@ -29,7 +29,7 @@ from rm_base.bridge.params import (
 )
 from rm_base.bridge.sim_config import world_config
 from rm_base.bridge.sim_services import SimFaultServices
-from rm_base.hardware import CanHardware, CommandRejectedError
+from rm_base.hardware import CanHardware
 from rm_base.node_main import inbox_node
 from rm_base.plugin.inbox import Inbox
 from rm_base.plugin.params import PluginParams
@@ -349,22 +349,9 @@ class CanBridgeNode(Node):
         try:
             age_ns = check_stamp(msg, self.get_clock().now().nanoseconds,
                                  self._command_timeout_s)
-            targets = parse_actuator_cmd(msg, self._joints)
-            for t in targets:
-                try:
-                    self.hardware.set_command(
-                        t.name,
-                        t.mode,
-                        position=t.position,
-                        velocity=t.velocity,
-                        effort=t.effort,
-                        kp=t.kp,
-                        kd=t.kd,
-                        age_ns=age_ns,
-                    )
-                except CommandRejectedError as err:
-                    # parse_actuator_cmd checks every rule set_command has; not reached
-                    raise ActuatorCmdRejectedError(Rejection.HARDWARE, str(err)) from err
+            # checked whole here (every joint is this bridge's): applied without a second look
+            for name, target in parse_actuator_cmd(msg, self._joints):
+                self.hardware.set_target(name, target, age_ns=age_ns)
         except ActuatorCmdRejectedError as err:
             with self._stats_lock:
                 count = self._rejected.get(err.reason.value, 0) + 1

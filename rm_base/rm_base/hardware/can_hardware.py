@@ -41,6 +41,7 @@ from rm_base.hardware.groups import build_dji_groups
 from rm_base.hardware.power_stage import PowerLimitStage
 from rm_base.hardware.protocols.mit import SystemCommand
 from rm_base.hardware.scheduler import Scheduler
+from rm_base.joints import JointTarget
 
 _log = logging.getLogger(__name__)
 
@@ -255,11 +256,7 @@ class CanHardware:
             CommandRejectedError: unknown joint, mode, NaN/inf field or negative gains;
                 nothing reaches a motor and the previous target stays in force.
         """
-        actuator = self.actuators.get(name)
-        if actuator is None:
-            self._unknown_joint_commands += 1
-            raise CommandRejectedError(f'unknown joint {name!r}; joints: {self.joint_names}')
-        actuator.set_command(
+        self._actuator(name).set_command(
             mode,
             (self._clock_ns() if now_ns is None else now_ns) - age_ns,
             position=position,
@@ -268,6 +265,28 @@ class CanHardware:
             kp=kp,
             kd=kd,
         )
+
+    def set_target(
+        self, name: str, target: JointTarget, *, now_ns: int | None = None, age_ns: int = 0
+    ) -> None:
+        """Set one joint's target, validated where it entered (``rm_base.joints``).
+
+        The in-process path of the plugins and of the bridge's /actuator_cmd: the target
+        is not checked again. Arguments as :meth:`set_command`.
+
+        Raises:
+            CommandRejectedError: unknown joint; nothing changes.
+        """
+        self._actuator(name).set_target(
+            target, (self._clock_ns() if now_ns is None else now_ns) - age_ns
+        )
+
+    def _actuator(self, name: str) -> Actuator:
+        actuator = self.actuators.get(name)
+        if actuator is None:
+            self._unknown_joint_commands += 1
+            raise CommandRejectedError(f'unknown joint {name!r}; joints: {self.joint_names}')
+        return actuator
 
     def add_power_limit(
         self, group: str, joints: Sequence[str], model: ChassisPowerModel

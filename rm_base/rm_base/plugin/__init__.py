@@ -4,6 +4,7 @@ A plugin author needs ``PluginBase`` and the helpers it hands out (``PluginParam
 ``CommandInput``, ``JointTarget``, the joint-state view); the host needs ``PluginLoader``.
 """
 
+from rm_base.joints import JointState, JointTarget, Mode
 from rm_base.plugin.base import STATE_QOS, PluginBase
 from rm_base.plugin.commands import CommandInput, CommandStatus, LatestMessage, LogThrottle
 from rm_base.plugin.errors import (
@@ -16,13 +17,7 @@ from rm_base.plugin.errors import (
     TargetRejectedError,
     TransitionError,
 )
-from rm_base.plugin.joints import (
-    ActuatorMode,
-    JointState,
-    JointStateView,
-    JointTarget,
-    build_actuator_cmd,
-)
+from rm_base.plugin.joints import JointStateView, build_actuator_cmd
 from rm_base.plugin.loader import BASE_CLASS_TYPE, PluginDescription, PluginLoader
 from rm_base.plugin.node_io import ACTUATOR_CMD_TOPIC, ACTUATOR_STATES_TOPIC
 from rm_base.plugin.params import REQUIRED, PluginParams
@@ -34,7 +29,6 @@ __all__ = [
     'BASE_CLASS_TYPE',
     'REQUIRED',
     'STATE_QOS',
-    'ActuatorMode',
     'CommandInput',
     'CommandStatus',
     'DefaultState',
@@ -44,6 +38,7 @@ __all__ = [
     'JointTarget',
     'LatestMessage',
     'LogThrottle',
+    'Mode',
     'ParameterError',
     'PluginBase',
     'PluginConfigError',

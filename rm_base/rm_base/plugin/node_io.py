@@ -31,16 +31,10 @@ from typing import Any, Protocol
 from rclpy.qos import qos_profile_sensor_data
 from rclpy.serialization import deserialize_message
 
+from rm_base.joints import JointState, JointTarget
 from rm_base.plugin.errors import JointClaimError, TargetRejectedError
 from rm_base.plugin.inbox import Inbox
-from rm_base.plugin.joints import (
-    ActuatorMode,
-    JointState,
-    JointStateView,
-    JointTarget,
-    build_actuator_cmd,
-    check_targets,
-)
+from rm_base.plugin.joints import JointStateView, build_actuator_cmd, check_targets
 from rm_base.plugin.outbox import Outbox
 from rm_msgs.msg import ActuatorCmd, ActuatorState
 
@@ -58,11 +52,11 @@ ACTUATOR_CMD_QOS_DEPTH = 10
 class JointBackend(Protocol):
     """The part of the CAN hardware layer that local joint I/O uses (CanHardware)."""
 
-    def set_command(self, name: str, mode: int, **values: float) -> None:
-        """Set one joint's target (output shaft, SI)."""
+    def set_target(self, name: str, target: JointTarget) -> None:
+        """Set one joint's target, already checked (output shaft, SI)."""
 
-    def states(self) -> list[Any]:
-        """Every joint's state: named tuples with ``name`` and ActuatorState fields."""
+    def states(self) -> list[JointState]:
+        """Every joint's state."""
 
     def add_power_limit(self, group: str, joints: Sequence[str], model: Any) -> Any:
         """Run one power limit over joints at the loop rate; return its stage."""
@@ -266,17 +260,14 @@ class LocalJointIO(NodeIO):
     def __init__(self, node: Any, hardware: JointBackend) -> None:
         super().__init__(node, JointStateView(node.get_logger()))
         self._hardware = hardware
-        self._modes = {int(m): m for m in ActuatorMode}
         self._power_limits: list[str] = []
 
     def send(self, targets: Mapping[str, JointTarget], now: Any) -> None:
-        """Set targets on the actuators (the hardware clock stamps them)."""
-        set_command = self._hardware.set_command
-        for joint, mode, p, v, e, kp, kd in check_targets(targets):
+        """Set targets on the actuators (checked here, once; the hardware clock stamps them)."""
+        set_target = self._hardware.set_target
+        for joint, target in check_targets(targets):
             try:
-                set_command(
-                    joint, mode, position=p, velocity=v, effort=e, kp=kp, kd=kd
-                )
+                set_target(joint, target)
             except Exception as err:  # an unknown joint: checked targets are otherwise valid
                 raise TargetRejectedError(f'joint {joint!r}: {err}') from err
 
@@ -298,16 +289,8 @@ class LocalJointIO(NodeIO):
         Args:
             stamp_ns: the tick's time on the plugins' clock [ns], the states' stamp.
         """
-        modes = self._modes
         self.joint_states.replace(
-            {
-                s.name: JointState(
-                    s.position, s.velocity, s.effort, s.temperature, s.online,
-                    s.error_code, modes.get(int(s.mode), ActuatorMode.OFF), s.command,
-                    stamp_ns,
-                )
-                for s in self._hardware.states()
-            }
+            {s.name: s._replace(stamp_ns=stamp_ns) for s in self._hardware.states()}
         )
 
 

@@ -185,7 +185,7 @@ def test_over_temperature_ends_with_zero_current_on_the_wire(rig):
 def test_nan_command_is_rejected_and_never_reaches_the_wire(rig):
     hw, peer, _ = rig
     fed(hw, peer)
-    with pytest.raises(CommandRejectedError, match='effort is nan'):
+    with pytest.raises(CommandRejectedError, match='effort is not a finite number: nan'):
         hw.set_command('wheel', MODE_EFFORT, effort=math.nan)
     hw.tick()
     assert slots(frames(peer, 3)[0x200]) == (0, 0, 0, 0)

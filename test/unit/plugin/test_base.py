@@ -10,10 +10,10 @@ from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
 from rclpy.time import Time
 from rm_base.plugin import (
-    ActuatorMode,
     DefaultState,
     JointClaimError,
     JointTarget,
+    Mode,
     ParameterError,
     PluginBase,
     PluginInitError,
@@ -134,7 +134,7 @@ def test_enable_resets_and_forgets_commands_received_before(plugin, sent):
     plugin.run(at(T0 + 1 * MS))
     assert plugin.state is Wheel.PASSIVE
     assert plugin.reason == 'no command on /wheel_cmd yet'
-    assert [modes(m) for m in sent] == [{'wheel': ActuatorMode.OFF}]
+    assert [modes(m) for m in sent] == [{'wheel': Mode.OFF}]
 
 
 def test_with_a_fresh_command_update_runs_and_sends_targets(plugin, sent):
@@ -182,11 +182,11 @@ def test_when_command_times_out_expect_safe_state_reason_reset_and_zero_output(p
     assert plugin.state is Wheel.PASSIVE
     assert plugin.reason == 'no command on /wheel_cmd for 0.150 s (timeout 0.100 s)'
     assert plugin.integral == 0.0  # on_reset ran when the command was lost
-    assert modes(sent[-1]) == {'wheel': ActuatorMode.OFF}
+    assert modes(sent[-1]) == {'wheel': Mode.OFF}
     # Still lost on the next tick: zero output again, no further reset.
     resets = plugin.events.count('reset')
     plugin.run(at(T0 + 160 * MS))
-    assert modes(sent[-1]) == {'wheel': ActuatorMode.OFF}
+    assert modes(sent[-1]) == {'wheel': Mode.OFF}
     assert plugin.events.count('reset') == resets
 
 
@@ -208,7 +208,7 @@ def test_disable_commands_zero_output_before_anything_else(plugin, sent):
     published_before_hook = []
     plugin.on_disable = lambda: published_before_hook.append(len(sent))
     plugin.disable('operator')
-    assert modes(sent[-1]) == {'wheel': ActuatorMode.OFF}
+    assert modes(sent[-1]) == {'wheel': Mode.OFF}
     assert published_before_hook == [len(sent)]
     assert not plugin.enabled
     assert plugin.state is Wheel.PASSIVE
@@ -218,7 +218,7 @@ def test_disable_commands_zero_output_before_anything_else(plugin, sent):
 
 def test_disable_when_already_disabled_still_zeroes_output(plugin, sent):
     plugin.disable()
-    assert [modes(m) for m in sent] == [{'wheel': ActuatorMode.OFF}]
+    assert [modes(m) for m in sent] == [{'wheel': Mode.OFF}]
 
 
 def test_when_update_raises_expect_no_exception_zero_output_and_safe_state(plugin, sent):
@@ -232,7 +232,7 @@ def test_when_update_raises_expect_no_exception_zero_output_and_safe_state(plugi
     plugin.update = broken
     plugin.run(at(T0 + 1 * MS))
     assert plugin.error_count == 1
-    assert modes(sent[-1]) == {'wheel': ActuatorMode.OFF}
+    assert modes(sent[-1]) == {'wheel': Mode.OFF}
     assert plugin.state is Wheel.PASSIVE
     assert plugin.reason == 'run failed: ZeroDivisionError: wheel radius is 0'
 
@@ -244,7 +244,7 @@ def test_when_a_target_is_nan_expect_nothing_published_but_zero_output(plugin, s
     assert sent
     assert all(list(m.mode) == [ActuatorCmd.MODE_OFF] for m in sent)
     assert plugin.error_count == 1
-    assert 'velocity of joint' in plugin.reason
+    assert "joint 'wheel': velocity is not a finite number" in plugin.reason
 
 
 def test_send_rejects_joints_the_plugin_did_not_claim(plugin, sent):

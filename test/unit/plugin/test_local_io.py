@@ -3,9 +3,8 @@
 import math
 
 import pytest
-from rm_base.hardware.actuators.base import JointState as HwState
+from rm_base.joints import JointState, JointTarget, Mode
 from rm_base.plugin.errors import TargetRejectedError
-from rm_base.plugin.joints import ActuatorMode, JointTarget
 from rm_base.plugin.node_io import LocalJointIO
 
 
@@ -21,13 +20,13 @@ class FakeHardware:
     def remove_power_limit(self, group):
         del self.power_limits[group]
 
-    def set_command(self, name, mode, **values):
+    def set_target(self, name, target):
         if name not in ('wheel_l', 'wheel_r'):
             raise KeyError(name)
-        self.commands.append((name, mode, values))
+        self.commands.append((name, target))
 
     def states(self):
-        return [HwState('wheel_l', 1.0, 2.0, 0.5, math.nan, True, 0, 2, 0.4)]
+        return [JointState('wheel_l', 1.0, 2.0, 0.5, math.nan, True, 0, 2, 0.4, 77)]
 
 
 class FakeNode:
@@ -40,16 +39,16 @@ def test_targets_go_to_the_actuators_as_validated_values():
     io = LocalJointIO(FakeNode(), hw)
     io.send({'wheel_l': JointTarget.with_velocity(3.0), 'wheel_r': JointTarget.off()}, now=None)
     assert hw.commands == [
-        ('wheel_l', 2, {'position': 0.0, 'velocity': 3.0, 'effort': 0.0, 'kp': 0.0, 'kd': 0.0}),
-        ('wheel_r', 0, {'position': 0.0, 'velocity': 0.0, 'effort': 0.0, 'kp': 0.0, 'kd': 0.0}),
+        ('wheel_l', JointTarget(Mode.VELOCITY, 0.0, 3.0, 0.0, 0.0, 0.0)),
+        ('wheel_r', JointTarget(Mode.OFF, 0.0, 0.0, 0.0, 0.0, 0.0)),
     ]
 
 
 @pytest.mark.parametrize(
     ('target', 'message'),
     [
-        (JointTarget.with_velocity(math.nan), 'velocity of joint .wheel_r. is not a finite'),
-        (JointTarget.with_mit(0.0, 0.0, 0.0, -1.0, 0.0), 'MIT gains of joint .wheel_r.'),
+        (JointTarget.with_velocity(math.nan), 'joint .wheel_r.: velocity is not a finite'),
+        (JointTarget.with_mit(0.0, 0.0, 0.0, -1.0, 0.0), 'joint .wheel_r.: MIT gains must be >= 0'),
     ],
 )
 def test_when_one_target_is_bad_expect_nothing_set(target, message):
@@ -64,8 +63,9 @@ def test_the_view_holds_every_joint_stamped_with_the_tick():
     io = LocalJointIO(FakeNode(), FakeHardware())
     io.refresh(123)
     state = io.joint_states.get('wheel_l')
+    # stamped on the plugins' clock at the tick, not the hardware's
     assert (state.position, state.velocity, state.command, state.stamp_ns) == (1.0, 2.0, 0.4, 123)
-    assert state.mode is ActuatorMode.VELOCITY and state.online
+    assert state.mode == Mode.VELOCITY and state.online
 
 
 def test_a_power_limit_runs_in_the_hardware_until_released():

@@ -5,18 +5,11 @@ family means adding one class here.
 """
 
 from rm_base.hardware.actuators.base import (
-    MODE_EFFORT,
-    MODE_MIT,
-    MODE_OFF,
-    MODE_POSITION,
-    MODE_VELOCITY,
     Actuator,
     Defaults,
     Feedback,
     HoldReason,
     JointCommand,
-    JointState,
-    Mode,
 )
 from rm_base.hardware.actuators.dji import (
     M2006,
@@ -35,6 +28,15 @@ from rm_base.hardware.actuators.mit import (
     MitActuator,
 )
 from rm_base.hardware.actuators.piper import PiperJoint
+from rm_base.joints import (
+    MODE_EFFORT,
+    MODE_MIT,
+    MODE_OFF,
+    MODE_POSITION,
+    MODE_VELOCITY,
+    JointState,
+    Mode,
+)
 
 #: Joint ``type`` -> actuator class.
 ACTUATOR_TYPES: dict[str, type[Actuator]] = {

@@ -38,26 +38,10 @@ import can
 from rm_base.control import Pid
 from rm_base.hardware.config import JointConfig, SafetyConfig
 from rm_base.hardware.errors import CommandRejectedError, HardwareConfigError, ProtocolError
+from rm_base.joints import InvalidTargetError, JointState, JointTarget, Mode, check_target
 
 _log = logging.getLogger(__name__)
 _TAU = 2.0 * math.pi
-
-
-class Mode(enum.IntEnum):
-    """Joint control modes; values are those of rm_msgs/ActuatorCmd.MODE_*."""
-
-    OFF = 0  # no output: zero current, the joint is limp
-    EFFORT = 1  # effort [N·m] as given
-    VELOCITY = 2  # velocity [rad/s], PID at the scheduler rate
-    POSITION = 3  # position [rad], cascade position -> velocity (+ velocity feed-forward)
-    MIT = 4  # tau = kp*(position - q) + kd*(velocity - dq) + effort
-
-
-MODE_OFF = Mode.OFF
-MODE_EFFORT = Mode.EFFORT
-MODE_VELOCITY = Mode.VELOCITY
-MODE_POSITION = Mode.POSITION
-MODE_MIT = Mode.MIT
 
 
 class HoldReason(enum.Enum):
@@ -100,32 +84,6 @@ class JointCommand(NamedTuple):
     kp: float
     kd: float
     stamp_ns: int
-
-
-class JointState(NamedTuple):
-    """One joint's state, fields as rm_msgs/ActuatorState (output shaft, SI).
-
-    Attributes:
-        name: joint name.
-        position: [rad], continuous (multi-turn).
-        velocity: [rad/s].
-        effort: [N·m] measured.
-        temperature: [°C]; NaN where the device reports none (C610).
-        online: feedback seen within the feedback timeout.
-        error_code: device error code, 0 = none.
-        mode: mode actually applied (MODE_OFF while held safe).
-        command: effort actually commanded this tick [N·m], after every clamp.
-    """
-
-    name: str
-    position: float
-    velocity: float
-    effort: float
-    temperature: float
-    online: bool
-    error_code: int
-    mode: int
-    command: float
 
 
 class Feedback(NamedTuple):
@@ -405,21 +363,23 @@ class Actuator:
                 counted and logged.
         """
         try:
-            m = Mode(mode)
-        except ValueError:
-            raise self._rejection(f'unknown mode {mode!r}') from None
-        values = (position, velocity, effort, kp, kd)
-        for field, value in zip(
-            ('position', 'velocity', 'effort', 'kp', 'kd'), values, strict=True
-        ):
-            if isinstance(value, bool) or not isinstance(value, int | float):
-                raise self._rejection(f'{field} must be a number, got {value!r}')
-            if not math.isfinite(value):
-                raise self._rejection(f'{field} is {value!r}')
-        if kp < 0.0 or kd < 0.0:
-            raise self._rejection(f'MIT gains must be >= 0, got kp={kp}, kd={kd}')
+            target = check_target(
+                mode, position=position, velocity=velocity, effort=effort, kp=kp, kd=kd
+            )
+        except InvalidTargetError as err:
+            raise self._rejection(str(err)) from None
+        self.set_target(target, now_ns)
+
+    def set_target(self, target: JointTarget, now_ns: int) -> None:
+        """Accept a target validated where it entered (``rm_base.joints.check_target``).
+
+        Args:
+            target: the joint's target.
+            now_ns: clock time [ns], for the command timeout.
+        """
         self._command = JointCommand(
-            m, float(position), float(velocity), float(effort), float(kp), float(kd), now_ns
+            target.mode, target.position, target.velocity, target.effort, target.kp,
+            target.kd, now_ns,
         )
         self.commands_accepted += 1
 
@@ -618,6 +578,7 @@ class Actuator:
                 0,
                 int(self._applied_mode),
                 self._effort_out,
+                0,
             )
         return JointState(
             self.name,
@@ -629,6 +590,7 @@ class Actuator:
             fb.error_code,
             int(self._applied_mode),
             self._effort_out,
+            fb.stamp_ns,
         )
 
     def diagnostics(self) -> dict[str, Any]:

@@ -40,13 +40,13 @@ from rm_base.hardware.actuators.base import (
     Defaults,
     Feedback,
     JointCommand,
-    Mode,
     Unwrapper,
 )
 from rm_base.hardware.config import JointConfig, SafetyConfig
 from rm_base.hardware.errors import HardwareConfigError
 from rm_base.hardware.protocols import cheetah, damiao, mit
 from rm_base.hardware.protocols.mit import MitCommand, MitLimits, SystemCommand
+from rm_base.joints import Mode
 
 #: Minimum time between automatic ENABLE frames [ns].
 ENABLE_RETRY_NS = 100_000_000

@@ -17,12 +17,13 @@ from __future__ import annotations
 
 import can
 
-from rm_base.hardware.actuators.base import Actuator, Defaults, Feedback, JointCommand, Mode
+from rm_base.hardware.actuators.base import Actuator, Defaults, Feedback, JointCommand
 from rm_base.hardware.actuators.mit import fit_mit_target, limits_from_config
 from rm_base.hardware.config import JointConfig, SafetyConfig
 from rm_base.hardware.errors import HardwareConfigError
 from rm_base.hardware.protocols import piper
 from rm_base.hardware.protocols.mit import MitCommand
+from rm_base.joints import Mode
 
 _ZERO = MitCommand(0.0, 0.0, 0.0, 0.0, 0.0)
 
