@@ -49,12 +49,6 @@ _SHARED_OPTIONS = {
 }
 
 
-def _family(sim_type: str) -> str:
-    if sim_type in ('m3508', 'm2006', 'gm6020'):
-        return 'dji'
-    return 'cheetah' if sim_type == 'cheetah' else 'damiao'
-
-
 def _damiao_type(joint: JointConfig) -> tuple[str, dict[str, Any]]:
     model = str(joint.options.get('model', '')).upper()
     # The heavier models share the DM8009's size class, the others the DM4310's.
@@ -89,7 +83,14 @@ def motor_config(joint: JointConfig, overrides: Mapping[str, Any] | None = None)
         )
     config: dict[str, Any] = {'type': sim_type, 'id': joint.id, 'name': joint.name, **extra}
     final_type = str(overrides.get('type', sim_type))
-    for key in _SHARED_OPTIONS[_family(final_type)]:
+    try:
+        family = MotorType(final_type).family
+    except ValueError:
+        raise BridgeConfigError(
+            f'joints.{joint.name}.sim.type {final_type!r} is not a simulated motor; known: '
+            f'{", ".join(t.value for t in MotorType)}'
+        ) from None
+    for key in _SHARED_OPTIONS[family]:
         if key in joint.options:
             value = joint.options[key]
             config[key] = dict(value) if isinstance(value, Mapping) else value

@@ -737,14 +737,6 @@ _FAMILY_KEYS = {
 }
 
 
-def _family(motor_type: MotorType) -> str:
-    if motor_type in (MotorType.M3508, MotorType.M2006, MotorType.GM6020):
-        return 'dji'
-    if motor_type is MotorType.CHEETAH:
-        return 'cheetah'
-    return 'damiao'
-
-
 def _number(cfg: Mapping[str, Any], key: str, default: float | None, name: str) -> float | None:
     value = cfg.get(key, default)
     if value is None:
@@ -808,7 +800,7 @@ def device_from_config(config: Mapping[str, Any], *, seed: int = 0) -> SimDevice
     name = config.get('name', f'{motor_type.value}_{motor_id}')
     if not isinstance(name, str) or not name:
         raise SimConfigError(f'motor name must be a non-empty string, got {name!r}')
-    family = _family(motor_type)
+    family = motor_type.family
     allowed = _COMMON_KEYS | _PARAM_KEYS | _FAMILY_KEYS[family]
     unknown = sorted(set(config) - allowed)
     if unknown:

@@ -49,6 +49,13 @@ class MotorType(Enum):
     DM8009 = 'dm8009'
     CHEETAH = 'cheetah'
 
+    @property
+    def family(self) -> str:
+        """The protocol family: 'dji', 'damiao' or 'cheetah'."""
+        if self in (MotorType.M3508, MotorType.M2006, MotorType.GM6020):
+            return 'dji'
+        return 'cheetah' if self is MotorType.CHEETAH else 'damiao'
+
 
 class DriveMode(Enum):
     """How the driver sets the winding current."""

@@ -82,6 +82,11 @@ def test_when_a_type_is_unknown_expect_the_hardware_message_not_the_simulators()
         motor_config(joint('m3509'))
 
 
+def test_when_a_sim_type_override_is_no_simulated_motor_expect_error_naming_it():
+    with pytest.raises(BridgeConfigError, match=r"joints\.j\.sim\.type 'm3590' is not a simulated"):
+        motor_config(joint('m3508'), {'type': 'm3590'})
+
+
 def hardware(**buses):
     joints = {}
     for bus, motors in buses.items():

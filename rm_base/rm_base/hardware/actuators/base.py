@@ -28,6 +28,7 @@ rejected, counted, and the previous (safe) target stays in force.
 
 from __future__ import annotations
 
+import abc
 import enum
 import logging
 import math
@@ -164,7 +165,7 @@ def _clamp(x: float, limit: float) -> float:
     return limit if x > limit else -limit if x < -limit else x
 
 
-class Actuator:
+class Actuator(abc.ABC):
     """Base of every motor family; see the module docstring for the hooks.
 
     Thread model: :meth:`handle_frame` runs on the bus receive thread and replaces the
@@ -261,21 +262,24 @@ class Actuator:
         self.last_rejection: str | None = None
 
     # --- hooks ---
+    @abc.abstractmethod
     def _feedback_ids(self) -> tuple[int, ...]:
-        raise NotImplementedError
+        """Arbitration ids whose frames may be this actuator's."""
 
     def _match(self, msg: can.Message) -> bool:
         return True
 
+    @abc.abstractmethod
     def _decode(self, msg: can.Message) -> tuple[float, float, float, float | None, int]:
-        raise NotImplementedError
+        """Angle [rad], velocity [rad/s], torque [N·m], temperature [°C] or None, error code."""
 
+    @abc.abstractmethod
     def _set_output(self, effort: float, command: JointCommand, feedback: Feedback) -> float:
         """Compute the device command for ``effort`` [N·m]; return the effort really applied."""
-        raise NotImplementedError
 
+    @abc.abstractmethod
     def _set_zero_output(self) -> None:
-        raise NotImplementedError
+        """Set the device command for no output."""
 
     def _pack(self) -> can.Message | None:
         return None
@@ -283,7 +287,7 @@ class Actuator:
     def _is_fault(self, error_code: int) -> bool:
         return error_code != 0
 
-    def _after_update(self, now_ns: int) -> None:
+    def _after_update(self, now_ns: int) -> None:  # noqa: B027 (optional hook)
         """Called at the end of every update (e.g. to schedule an enable frame)."""
 
     # --- feedback (receive thread) ---
