@@ -148,7 +148,7 @@ class Robot:
 
         # as the executables do: the process's threads below the loop's priority
         if self.bridge is not None:
-            raise_edge_priority(self.bridge.settings.edge_priority)
+            raise_edge_priority(self.bridge.edge_priority)
         else:
             raise_edge_priority(self.host.edge_priority)
         self.hw = self.bridge.hardware if self.bridge is not None else None

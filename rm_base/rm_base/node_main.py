@@ -1,12 +1,11 @@
 """Start-up, spin loop and inbox node shared by the executables (can_bridge, rm_robot, ...).
 
-``inbox_node`` makes the never-spun node a control loop takes subscriptions from.
+``run_node`` is a one-node executable's whole life (can_bridge, rm_robot)::
 
-if not init_ros('rm_robot', args):
-return 1
-node = ...                           # build the node(s) before the try
-spin_until_shutdown(executor, node.context)
-# then: zero output, destroy, rclpy.try_shutdown()
+    def main(args=None):
+        return run_node('rm_robot', args, RobotHost, make_executor)
+
+``inbox_node`` makes the never-spun node a control loop takes subscriptions from.
 """
 
 from __future__ import annotations
@@ -14,7 +13,8 @@ from __future__ import annotations
 import signal
 import sys
 import threading
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from typing import Any
 
 import rclpy
 from rclpy.context import Context
@@ -22,6 +22,8 @@ from rclpy.executors import Executor, ExternalShutdownException
 from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
+from rm_base.errors import ConfigError
+from rm_base.realtime import raise_edge_priority
 from rm_base.ros_env import init_error_line, params_file_error, prepare_ros_process
 
 
@@ -109,3 +111,49 @@ def spin_until_shutdown(
     finally:
         for signum, handler in previous.items():
             signal.signal(signum, handler)
+
+
+def run_node(
+    name: str,
+    args: Sequence[str] | None,
+    make_node: Callable[[], Any],
+    make_executor: Callable[[Any], Executor],
+    *,
+    config_errors: tuple[type[BaseException], ...] = (ConfigError,),
+) -> int:
+    """Run one node until SIGINT/SIGTERM; return the exit status (1 on a config error).
+
+    A configuration error is one line the operator can act on, not a traceback. The
+    node's other threads go below its loop's priority (``node.edge_priority``,
+    docs/ARCHITECTURE.md "Real-time priority"). On the way out the node's ``shutdown()``
+    (zero output on the wire or on /actuator_cmd) runs while the context still works.
+
+    Args:
+        name: node name (for the error line).
+        args: command-line arguments (``sys.argv`` if None).
+        make_node: builds the node once rclpy is initialised.
+        make_executor: the executor for the node's ROS callbacks.
+        config_errors: exceptions of ``make_node`` that are configuration errors.
+    """
+    if not init_ros(name, args):
+        return 1
+    try:
+        node = make_node()
+    except config_errors as err:
+        print(f'[{name}] configuration error: {" ".join(str(err).split())}', file=sys.stderr)
+        rclpy.try_shutdown()
+        return 1
+    except KeyboardInterrupt:
+        rclpy.try_shutdown()
+        return 0
+    executor = make_executor(node)
+    executor.add_node(node)
+    raise_edge_priority(node.edge_priority)
+    try:
+        spin_until_shutdown(executor, node.context)
+    finally:
+        node.shutdown()
+        executor.shutdown()
+        node.destroy_node()
+        rclpy.try_shutdown()
+    return 0

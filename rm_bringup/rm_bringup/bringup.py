@@ -188,7 +188,7 @@ def _run(args: argparse.Namespace, files: list[pathlib.Path]) -> int:
     executor = EventsExecutor()
     executor.add_node(bridge)
     executor.add_node(host)
-    raise_edge_priority(bridge.settings.edge_priority)
+    raise_edge_priority(bridge.edge_priority)
     printer = None if args.no_status else _StatusPrinter(StatusView(host))
     deadline = None if args.duration is None else time.monotonic() + args.duration
     mode = 'on rm_sim' if args.sim else 'on its CAN buses'

@@ -138,7 +138,7 @@ class Robot:
         self.executor = EventsExecutor(context=self.context)
         self.executor.add_node(self.bridge)
         self.executor.add_node(self.node)
-        raise_edge_priority(self.bridge.settings.edge_priority)  # as can_bridge's main does
+        raise_edge_priority(self.bridge.edge_priority)  # as can_bridge's main does
         self._stop = threading.Event()
         self._spinner = threading.Thread(target=self._spin, name='soak-spin', daemon=True)
         self._spinner.start()

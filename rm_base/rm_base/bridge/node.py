@@ -494,6 +494,11 @@ class CanBridgeNode(Node):
                 next_diag = max(next_diag, now + state_period)
 
     # --- life cycle ---------------------------------------------------------------------------
+    @property
+    def edge_priority(self) -> int:
+        """SCHED_FIFO priority for the process's threads other than the loop (0: normal)."""
+        return self.settings.edge_priority
+
     def shutdown(self) -> None:
         """Stop publishing, send zero output (DISABLE to MIT motors), close. Idempotent."""
         if self._shut_down:

@@ -4,14 +4,11 @@ from __future__ import annotations
 
 import sys
 
-import rclpy
 from rclpy.executors import Executor, SingleThreadedExecutor
 from rclpy.experimental import EventsExecutor
 
-from rm_base.errors import ConfigError
 from rm_base.host.node import NODE_NAME, ExecutorKind, RobotHost
-from rm_base.node_main import init_ros, spin_until_shutdown
-from rm_base.realtime import raise_edge_priority
+from rm_base.node_main import run_node
 
 
 def make_executor(node: RobotHost) -> Executor:
@@ -29,31 +26,7 @@ def make_executor(node: RobotHost) -> Executor:
 
 def main(args: list[str] | None = None) -> int:
     """Run rm_robot until SIGINT/SIGTERM; return the exit status (1 on a config error)."""
-    if not init_ros(NODE_NAME, args):
-        return 1
-    try:
-        node = RobotHost()
-    except ConfigError as err:
-        # One line the operator can act on, not a traceback.
-        print(f'[{NODE_NAME}] configuration error: {err}', file=sys.stderr)
-        rclpy.try_shutdown()
-        return 1
-    except KeyboardInterrupt:
-        rclpy.try_shutdown()
-        return 0
-
-    executor = make_executor(node)
-    executor.add_node(node)
-    raise_edge_priority(node.edge_priority)
-    try:
-        spin_until_shutdown(executor, node.context)
-    finally:
-        # Every plugin off (zero output on /actuator_cmd) while the context still works.
-        node.shutdown()
-        executor.shutdown()
-        node.destroy_node()
-        rclpy.try_shutdown()
-    return 0
+    return run_node(NODE_NAME, args, RobotHost, make_executor)
 
 
 if __name__ == '__main__':
