@@ -99,7 +99,7 @@ class SimBus(can.BusABC):
                 arriving frames are dropped and counted in :attr:`rx_overflows`.
             preserve_timestamps: keep the timestamp of sent messages instead of stamping
                 them with the simulation's clock.
-            motors: motor dicts (see :func:`rm_base.sim.devices.device_from_config`) to
+            motors: motor dicts (see :func:`rm_base.sim.device_config.device_from_config`) to
                 put on the channel; motors already there with the same config are kept.
             world: a :class:`SimWorld`, or a world config (dict or YAML/JSON path) to build
                 one from when the channel does not exist yet.

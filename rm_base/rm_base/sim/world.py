@@ -36,7 +36,8 @@ from typing import Any, Protocol
 import can
 
 from rm_base.sim.body import RobotBody, body_from_config
-from rm_base.sim.devices import Frame, SimDevice, check_channel, device_from_config
+from rm_base.sim.device_config import check_channel, device_from_config
+from rm_base.sim.devices import Frame, SimDevice
 from rm_base.sim.errors import SimConfigError, SimLookupError, SimStateError
 from rm_base.sim.faults import Fault, FaultKind
 from rm_base.sim.imu import SimImu, imu_from_config
@@ -441,7 +442,7 @@ class SimWorld:
             body: {...}                 # see rm_base.sim.body.body_from_config
             imus: [{path: '/tmp/rm_sim_${ROS_DOMAIN_ID}/imu', mount: gimbal, rate_hz: 100}]
 
-        Motor dicts: see :func:`rm_base.sim.devices.device_from_config`; IMU dicts:
+        Motor dicts: see :func:`rm_base.sim.device_config.device_from_config`; IMU dicts:
         :func:`rm_base.sim.imu.imu_from_config`.
 
         Raises:
@@ -502,7 +503,7 @@ class SimWorld:
             return channel
 
     def add_motor(self, channel: str, config: Mapping[str, Any]) -> SimDevice:
-        """Add one motor (see :func:`~rm_base.sim.devices.device_from_config`) to a channel.
+        """Add one motor (see :func:`~rm_base.sim.device_config.device_from_config`) to a channel.
 
         Adding a motor whose name already exists with an identical config is a no-op that
         returns the existing motor (so several buses can pass the same motor list).

@@ -1,0 +1,351 @@
+"""Simulated MIT-protocol motors on a CAN bus: Damiao and the MIT Cheetah.
+
+* Damiao (DM4310, DM8009): answers each command frame with one feedback frame, but only
+  while enabled; system frames (enable, disable, set zero, clear error) are always
+  answered. MIT law computed on the motor; POS_VEL and VEL modes with internal loops.
+  Over-temperature and (optional) command timeout latch an error code until cleared.
+* MIT Cheetah (Ben Katz firmware): like Damiao but with its own reply (6 or 7 bytes to
+  the master id, no error nibble, no temperature) and no clear-error frame.
+"""
+
+from __future__ import annotations
+
+from abc import abstractmethod
+
+from rm_base.hardware.protocols import cheetah, damiao, mit
+from rm_base.sim.devices import NS_PER_S, Frame, SimDevice, require_finite
+from rm_base.sim.errors import SimConfigError
+from rm_base.sim.motor import DriveMode, MotorModel, MotorType
+
+
+class _MitDevice(SimDevice):
+    """Shared behaviour of motors that run the MIT law themselves and reply on command."""
+
+    def __init__(
+        self,
+        name: str,
+        motor_type: MotorType,
+        motor_id: int,
+        model: MotorModel,
+        limits: mit.MitLimits,
+        *,
+        master_id: int,
+        enabled: bool = False,
+        seed: int = 0,
+        overtemp_c: float | None = None,
+    ):
+        super().__init__(name, motor_type, motor_id, model, seed=seed, overtemp_c=overtemp_c)
+        self.limits = limits
+        self.master_id = master_id
+        self.enabled = enabled
+        #: Output angle [rad] at which the reported position is 0 (set-zero frame).
+        self.zero_offset = 0.0
+        self.command: mit.MitCommand = mit.MitCommand(0.0, 0.0, 0.0, 0.0, 0.0)
+        self._last_command_ns: int | None = None
+
+    @property
+    def transmit_ids(self) -> frozenset[int]:
+        """The master id the replies go to."""
+        return frozenset({self.master_id})
+
+    @property
+    def position(self) -> float:
+        """Output position relative to the zero set on the motor [rad]."""
+        return self.model.angle - self.zero_offset
+
+    def _apply_mit(self, cmd: mit.MitCommand) -> None:
+        self.model.command_impedance(
+            cmd.position,
+            cmd.velocity,
+            max(0.0, cmd.kp),
+            max(0.0, cmd.kd),
+            cmd.torque,
+            position_offset=self.zero_offset,
+        )
+
+    def _limp(self) -> None:
+        self.model.command_current(0.0)
+
+    def _enable(self) -> None:
+        # A stale command from before the enable is not replayed: start limp.
+        self.command = mit.MitCommand(0.0, 0.0, 0.0, 0.0, 0.0)
+        self.enabled = True
+        self._limp()
+
+    def _disable(self) -> None:
+        self.enabled = False
+        self._limp()
+
+    def _set_zero(self) -> None:
+        self.zero_offset = self.model.angle
+        if self.enabled:
+            self._apply_mit(self.command)
+
+    def _periodic(self, now_ns: int) -> list[Frame]:
+        return []  # these motors only speak when spoken to
+
+    @abstractmethod
+    def _reply(self) -> Frame:
+        """The feedback frame sent in answer to a command."""
+
+
+class DamiaoDevice(_MitDevice):
+    """A Damiao motor (DM4310, DM8009, ...) in MIT, POS_VEL or VEL mode.
+
+    Attributes:
+        mode: the motor's control mode (CTRL_MODE register).
+        error: latched error state, or None.
+        command_timeout_ns: the TIMEOUT register: enabled and no command for this long ->
+            COMMUNICATION_LOST; None disables it (the factory default).
+        vel_kp: internal velocity loop gain [N·m·s/rad] (POS_VEL, VEL).
+        vel_ki: internal velocity loop integral gain [N·m/rad].
+        pos_kp: internal position loop gain [1/s] (POS_VEL).
+    """
+
+    family = 'damiao'
+
+    def __init__(
+        self,
+        name: str,
+        motor_type: MotorType,
+        motor_id: int,
+        model: MotorModel,
+        limits: mit.MitLimits,
+        *,
+        master_id: int,
+        mode: damiao.DmMode = damiao.DmMode.MIT,
+        enabled: bool = False,
+        command_timeout: float | None = None,
+        vel_kp: float | None = None,
+        vel_ki: float | None = None,
+        pos_kp: float = 20.0,
+        seed: int = 0,
+        overtemp_c: float | None = 120.0,
+    ):
+        """Create the device; see :func:`device_from_config` for the parameters."""
+        super().__init__(
+            name,
+            motor_type,
+            motor_id,
+            model,
+            limits,
+            master_id=master_id,
+            enabled=enabled,
+            seed=seed,
+            overtemp_c=overtemp_c,
+        )
+        if mode not in (damiao.DmMode.MIT, damiao.DmMode.POS_VEL, damiao.DmMode.VEL):
+            raise SimConfigError(f'{name}: Damiao mode {mode.name} is not simulated')
+        self.mode = mode
+        self.command_id = damiao.command_id(motor_id, mode)
+        self.error: damiao.DmState | None = None
+        self.command_timeout_ns = (
+            None if not command_timeout else round(command_timeout * NS_PER_S)
+        )
+        # Internal loops: about 100 rad/s velocity bandwidth on the configured inertia.
+        bandwidth = 100.0
+        self.vel_kp = model.params.output_inertia * bandwidth if vel_kp is None else vel_kp
+        self.vel_ki = self.vel_kp * bandwidth / 4.0 if vel_ki is None else vel_ki
+        self.pos_kp = pos_kp
+        self._target_position = 0.0
+        self._target_velocity = 0.0
+        self._velocity_limit = 0.0
+        self._integral = 0.0
+        # System frames are accepted on the bare id and on id + mode offset (docs/PROTOCOLS.md
+        # §2.2: the official SDKs disagree).
+        self._listen = frozenset({motor_id, self.command_id})
+
+    @property
+    def listen_ids(self) -> frozenset[int]:
+        """The bare id and the mode's command id."""
+        return self._listen
+
+    @property
+    def state(self) -> damiao.DmState:
+        """The state nibble the motor reports."""
+        if self.error is not None:
+            return self.error
+        return damiao.DmState.ENABLED if self.enabled else damiao.DmState.DISABLED
+
+    def _on_frame(self, arbitration_id: int, data: bytes, now_ns: int) -> list[Frame] | None:
+        system = mit.parse_system_frame(data) if len(data) == mit.FRAME_LENGTH else None
+        if system is not None:
+            self._system(system)
+            return [self._reply()]
+        if arbitration_id != self.command_id:
+            return None  # a control frame on the bare id of a non-MIT motor
+        if self.mode is damiao.DmMode.MIT:
+            command = mit.unpack_mit_command(data, self.limits)
+        elif self.mode is damiao.DmMode.POS_VEL:
+            position, velocity_limit = damiao.unpack_pos_vel(data)
+            require_finite((position, velocity_limit))
+        else:
+            velocity = damiao.unpack_vel(data)
+            require_finite((velocity,))
+        if not self.enabled:
+            return None
+        self._last_command_ns = now_ns
+        if self.mode is damiao.DmMode.MIT:
+            self.command = command
+            if self.error is None:
+                self._apply_mit(command)
+        elif self.mode is damiao.DmMode.POS_VEL:
+            self._target_position = position
+            self._velocity_limit = abs(velocity_limit)
+        else:
+            self._target_velocity = velocity
+        return [self._reply()]
+
+    def _system(self, command: mit.SystemCommand) -> None:
+        if command is mit.SystemCommand.ENABLE:
+            if self.error is None:
+                self._enable()
+                self._integral = 0.0
+                self._target_position = self.position
+                self._target_velocity = 0.0
+                self._velocity_limit = 0.0
+        elif command is mit.SystemCommand.DISABLE:
+            self._disable()
+        elif command is mit.SystemCommand.SET_ZERO:
+            self._target_position -= self.model.angle - self.zero_offset
+            self._set_zero()
+        elif command is mit.SystemCommand.CLEAR_ERROR and self.error is not None:
+            if not self._error_condition():
+                self.error = None
+                self._disable()
+
+    def _error_condition(self) -> damiao.DmState | None:
+        if self.overheated:
+            return damiao.DmState.COIL_OVER_TEMPERATURE
+        return None
+
+    def _control(self, now_ns: int, dt: float) -> None:
+        if self.error is None and self.enabled:
+            self.error = self._error_condition()
+            timeout = self.command_timeout_ns
+            last = self._last_command_ns
+            if self.error is None and timeout is not None and last is not None:
+                if now_ns - last > timeout:
+                    self.error = damiao.DmState.COMMUNICATION_LOST
+                    self.stats.timeouts += 1
+        if self.error is not None or not self.enabled:
+            self._limp()
+            return
+        if self.mode is damiao.DmMode.MIT:
+            return  # the MIT law set by the last command stays in force
+        if self.mode is damiao.DmMode.POS_VEL:
+            error = self._target_position - self.position
+            limit = self._velocity_limit
+            target = max(-limit, min(limit, self.pos_kp * error))
+        else:
+            target = self._target_velocity
+        # PI velocity loop; the P part is implicit in the physics (kd), the I part explicit
+        # and clamped to the torque range against wind-up.
+        t_max = self.limits.t_max
+        self._integral += self.vel_ki * (target - self.model.velocity) * dt
+        self._integral = max(-t_max, min(t_max, self._integral))
+        self.model.command_impedance(0.0, target, 0.0, self.vel_kp, self._integral)
+
+    def _reply(self) -> Frame:
+        m = self.model
+        p_max = self.limits.p_max
+        # The reported position wraps within ±PMAX (it is a 16-bit field over that range).
+        position = (self.position + p_max) % (2.0 * p_max) - p_max
+        ambient = m.params.ambient_temperature
+        # No separate model of the driver board: its MOSFETs run halfway between ambient
+        # and the winding.
+        t_mos = ambient + 0.5 * (m.temperature - ambient)
+        data = damiao.encode_feedback(
+            self.motor_id & damiao.MAX_MOTOR_ID,
+            int(self.state),
+            position=position,
+            velocity=m.velocity,
+            torque=m.torque,
+            t_mos=max(0, min(255, round(t_mos))),
+            t_rotor=max(0, min(255, round(m.temperature))),
+            limits=self.limits,
+        )
+        return (self.master_id, data)
+
+
+class CheetahDevice(_MitDevice):
+    """A motor running Ben Katz's MIT Cheetah firmware.
+
+    Attributes:
+        reply_voltage: send the 7-byte reply with bus voltage (STM32 firmware) instead of
+            the 6-byte one (mbed firmware).
+    """
+
+    family = 'cheetah'
+
+    def __init__(
+        self,
+        name: str,
+        motor_type: MotorType,
+        motor_id: int,
+        model: MotorModel,
+        limits: mit.MitLimits,
+        *,
+        master_id: int = cheetah.DEFAULT_MASTER_ID,
+        enabled: bool = False,
+        reply_voltage: bool = False,
+        seed: int = 0,
+        overtemp_c: float | None = None,
+    ):
+        """Create the device; see :func:`device_from_config` for the parameters."""
+        super().__init__(
+            name,
+            motor_type,
+            motor_id,
+            model,
+            limits,
+            master_id=master_id,
+            enabled=enabled,
+            seed=seed,
+            overtemp_c=overtemp_c,
+        )
+        self.reply_voltage = reply_voltage
+        self._listen = frozenset({motor_id})
+
+    @property
+    def listen_ids(self) -> frozenset[int]:
+        """The motor's CAN id."""
+        return self._listen
+
+    def _on_frame(self, arbitration_id: int, data: bytes, now_ns: int) -> list[Frame] | None:
+        system = mit.parse_system_frame(data)
+        # The firmware knows only FC/FD/FE; anything else (FF..FB too) is an MIT command.
+        if system in cheetah.CHEETAH_SYSTEM_COMMANDS:
+            if system is mit.SystemCommand.ENABLE:
+                self._enable()
+            elif system is mit.SystemCommand.DISABLE:
+                self._disable()
+            else:
+                self._set_zero()
+            return [self._reply()]
+        command = mit.unpack_mit_command(data, self.limits)
+        if not self.enabled:
+            return None
+        self._last_command_ns = now_ns
+        self.command = command
+        if not self.overheated:
+            self._apply_mit(command)
+        return [self._reply()]
+
+    def _control(self, now_ns: int, dt: float) -> None:
+        if not self.enabled or self.overheated:
+            self._limp()
+        elif self.model.mode is DriveMode.CURRENT:
+            self._apply_mit(self.command)  # back from an over-temperature cut-out
+
+    def _reply(self) -> Frame:
+        m = self.model
+        data = cheetah.encode_reply(
+            self.motor_id & 0xFF,
+            position=self.position,
+            velocity=m.velocity,
+            torque=m.torque,
+            bus_voltage=m.params.supply_voltage if self.reply_voltage else None,
+            limits=self.limits,
+        )
+        return (self.master_id, data)
