@@ -14,15 +14,45 @@ with a reason instead of silently doing nothing.
 from __future__ import annotations
 
 import math
+import weakref
 from collections.abc import Callable, Sequence
 from enum import Enum
-from typing import Any, TypeVar
+from typing import Any, NamedTuple, TypeVar
 
 from rcl_interfaces.msg import ParameterDescriptor
 
 from rm_base.plugin.errors import ParameterError
 
 E = TypeVar('E', bound=Enum)
+
+
+class DeclaredParameter(NamedTuple):
+    """One parameter as declared (for the generated reference, docs/PARAMETERS.md).
+
+    Attributes:
+        key: full name (``chassis.wheel_radius``).
+        type_name: ``double``, ``integer[]``...
+        unit: SI unit, '' if none.
+        default: the default, None if required.
+        constraint: bounds, choices, length; '' if none.
+        description: what it is.
+    """
+
+    key: str
+    type_name: str
+    unit: str
+    default: Any
+    constraint: str
+    description: str
+
+
+# Every declaration through PluginParams, per node, in declaration order.
+_DECLARED: weakref.WeakKeyDictionary[Any, list[DeclaredParameter]] = weakref.WeakKeyDictionary()
+
+
+def declared_parameters(node: Any) -> list[DeclaredParameter]:
+    """The parameters declared on node through PluginParams, in declaration order."""
+    return list(_DECLARED.get(node, ()))
 
 
 class _Required:
@@ -338,6 +368,11 @@ class PluginParams:
             constraints.append(constraint)
         if required:
             constraints.append('required')
+        _DECLARED.setdefault(self._node, []).append(
+            DeclaredParameter(
+                key, type_name, unit, None if required else default, constraint, description
+            )
+        )
         descriptor = ParameterDescriptor(
             name=key,
             description=f'{description} [{unit}]' if unit else description,

@@ -1,0 +1,23 @@
+"""docs/PARAMETERS.md is what the code declares (rm_bringup.param_reference)."""
+
+import pathlib
+
+import pytest
+from rm_bringup.param_reference import collect, render
+
+pytestmark = pytest.mark.ros
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+
+
+def test_the_committed_parameter_reference_is_current():
+    declared = collect()
+    keys = {p.key for p in declared['rm_robot']}
+    # the host's own keys and every plugin of the standard robot, required ones marked
+    assert {'plugins', 'loop_rate', 'chassis.wheel_radius', 'gimbal.yaw_joint'} <= keys
+    assert any(p.default is None for p in declared['rm_robot'])
+    assert 'scheduler.rate_hz' in {p.key for p in declared['can_bridge']}
+    committed = (ROOT / 'docs' / 'PARAMETERS.md').read_text()
+    assert render(declared) == committed, (
+        'docs/PARAMETERS.md is stale: python -m rm_bringup.param_reference > docs/PARAMETERS.md'
+    )
