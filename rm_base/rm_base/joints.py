@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import enum
 import math
+import numbers
 from dataclasses import dataclass
 from typing import NamedTuple
 
@@ -166,7 +167,8 @@ _FIELDS = ('position', 'velocity', 'effort', 'kp', 'kd')
 
 
 def _number(field: str, value: object) -> float:
-    if isinstance(value, bool) or not isinstance(value, int | float):
+    # any real number (numpy scalars too), but not a bool
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise InvalidTargetError(
             TargetProblem.NON_FINITE, f'{field} must be a number, got {value!r}'
         )

@@ -2,6 +2,7 @@
 
 import math
 
+import numpy as np
 import pytest
 from rm_base.joints import (
     InvalidTargetError,
@@ -37,6 +38,11 @@ def test_an_invalid_target_is_refused_with_what_is_wrong(mode, fields, problem):
     with pytest.raises(InvalidTargetError) as info:
         check_target(mode, **fields)
     assert info.value.problem is problem
+
+
+def test_numpy_scalars_are_numbers():
+    target = check_target(Mode.VELOCITY, velocity=np.float32(1.5))
+    assert target.velocity == 1.5 and type(target.velocity) is float
 
 
 def test_a_target_built_elsewhere_is_checked_field_by_field():
