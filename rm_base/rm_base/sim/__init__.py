@@ -6,6 +6,7 @@
 
 from rm_base.sim.body import Joint, Mount, RobotBody, body_from_config
 from rm_base.sim.bus import DEFAULT_RX_QUEUE_SIZE, SimBus
+from rm_base.sim.channel import ChannelStats, SimChannel, channel_names, find_channel
 from rm_base.sim.device_config import check_channel, device_from_config
 from rm_base.sim.devices import DeviceStats, SimDevice
 from rm_base.sim.dji_device import DjiDevice
@@ -22,15 +23,7 @@ from rm_base.sim.motor import (
     MotorType,
     motor_params,
 )
-from rm_base.sim.world import (
-    ChannelStats,
-    SimChannel,
-    SimWorld,
-    Timing,
-    channel_names,
-    find_channel,
-    load_config,
-)
+from rm_base.sim.world import SimWorld, Timing, load_config
 
 __all__ = [
     'DEFAULT_RX_QUEUE_SIZE',

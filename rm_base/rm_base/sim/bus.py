@@ -33,8 +33,9 @@ from typing import Any
 import can
 from can.typechecking import AutoDetectedConfig, CanFilters
 
+from rm_base.sim.channel import SimChannel, channel_names, find_channel
 from rm_base.sim.errors import SimConfigError
-from rm_base.sim.world import SimChannel, SimWorld, Timing, channel_names, find_channel, load_config
+from rm_base.sim.world import SimWorld, Timing, load_config
 
 LOG = logging.getLogger(__name__)
 

@@ -26,8 +26,9 @@ from pathlib import Path
 import can
 
 from rm_base.sim import wire
+from rm_base.sim.channel import SimChannel
 from rm_base.sim.errors import SimError, SimLookupError
-from rm_base.sim.world import SimChannel, SimWorld
+from rm_base.sim.world import SimWorld
 
 _log = logging.getLogger(__name__)
 
