@@ -1,17 +1,21 @@
 """ROS helpers for tests: isolated environment, private contexts, waiting on conditions.
 
 Every ROS process a test starts runs with localhost-only discovery and the session's own
-ROS_DOMAIN_ID (set by test/conftest.py before anything imports rclpy), so parallel runs
-on one machine never cross-talk and no DDS traffic leaves the machine.
+ROS_DOMAIN_ID (set by test/conftest.py before anything imports rclpy, claimed with a lock
+file so that no two test sessions on one machine share it), so parallel runs never
+cross-talk and no DDS traffic leaves the machine.
 """
 
 from __future__ import annotations
 
+import fcntl
 import os
 import subprocess
+import tempfile
 import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
+from typing import Any
 
 TEST_ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -19,10 +23,40 @@ TEST_ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 _USER_DOMAIN = 42
 
 
+_DOMAINS = 101  # ids 1..101: the range ROS 2 recommends, ephemeral ports stay clear
+# Test sessions on one machine claim their domain with a lock file here (any clone).
+_CLAIMS = os.path.join(tempfile.gettempdir(), 'rm_ros2_test_domains')
+# The claim of this process: held open (locked) until the process ends.
+_CLAIMED: list[Any] = []
+
+
 def pick_domain_id(seed: int) -> int:
     """Return a ROS domain id in 1..101 derived from seed, never the interactive default."""
-    domain = 1 + seed % 101
+    domain = 1 + seed % _DOMAINS
     return domain + 1 if domain == _USER_DOMAIN else domain
+
+
+def claim_domain_id(seed: int) -> int:
+    """Return a domain id no other test session on this machine holds, and hold it.
+
+    Starts at ``pick_domain_id(seed)`` and takes the first id whose lock file under
+    /tmp it can lock (``fcntl.flock``; the kernel drops the lock when the process ends,
+    however it ends). Two sessions with colliding seeds (1 in 101 for two pids) would
+    otherwise share DDS topics and the simulator's IMU terminal.
+    """
+    os.makedirs(_CLAIMS, exist_ok=True)
+    first = pick_domain_id(seed)
+    for step in range(_DOMAINS):
+        domain = pick_domain_id(first - 1 + step)
+        claim = open(os.path.join(_CLAIMS, f'{domain}.lock'), 'a')
+        try:
+            fcntl.flock(claim, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            claim.close()
+            continue
+        _CLAIMED.append(claim)
+        return domain
+    raise RuntimeError(f'all {_DOMAINS} ROS domains are held by other test sessions')
 
 
 def isolate_ros_environment(environ: dict[str, str] | os._Environ) -> int:
@@ -32,7 +66,7 @@ def isolate_ros_environment(environ: dict[str, str] | os._Environ) -> int:
     processes it starts agree.
     """
     environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
-    domain = int(environ.get('RM_TEST_DOMAIN_ID') or pick_domain_id(os.getpid()))
+    domain = int(environ.get('RM_TEST_DOMAIN_ID') or claim_domain_id(os.getpid()))
     environ['RM_TEST_DOMAIN_ID'] = str(domain)
     environ['ROS_DOMAIN_ID'] = str(domain)
     return domain
