@@ -25,8 +25,9 @@ limit, so a gentle acceleration request never lengthens a stop. No ROS here.
 
 from __future__ import annotations
 
+import enum
 import math
-from collections.abc import Hashable, Sequence
+from collections.abc import Sequence
 from typing import NamedTuple
 
 from rm_base.control import (
@@ -42,6 +43,36 @@ from rm_base.geometry import Twist2D, WheelKinematics, desaturate_speeds, world_
 _MAX_UPDATE_DT = 0.05
 """Longest dt [s] the ramps and PIDs integrate in one step; a stalled tick (CPU steal) must
 not let a ramp jump or a PID integral lurch."""
+
+
+class FrameKind(enum.Enum):
+    """What a translation command is relative to."""
+
+    BASE_LINK = 'base_link'  # the chassis itself (RAW)
+    GIMBAL = 'gimbal'  # the gimbal's heading
+    HELD = 'held'  # a heading in odom held since the mode was entered
+
+
+class CommandFrame(NamedTuple):
+    """The frame a translation command is given in.
+
+    Attributes:
+        kind: chassis, gimbal, or a held heading.
+        heading: the held heading in odom [rad] (HELD only): another heading is another
+            frame, so the ramps are re-expressed in it.
+    """
+
+    kind: FrameKind
+    heading: float | None = None
+
+
+BASE_LINK_FRAME = CommandFrame(FrameKind.BASE_LINK)
+GIMBAL_FRAME = CommandFrame(FrameKind.GIMBAL)
+
+
+def held_frame(heading: float) -> CommandFrame:
+    """The frame of a heading [rad] held in odom."""
+    return CommandFrame(FrameKind.HELD, heading)
 
 
 class MotionOutput(NamedTuple):
@@ -95,7 +126,7 @@ class MotionPlanner:
         self._accel: tuple[float | None, ...] = (None, None, None)
         self._linear = RampLimiter(self._defaults[:2])
         self._angular = RampLimiter(self._defaults[2:])
-        self._frame: Hashable = None
+        self._frame: CommandFrame | None = None
         self._chassis_linear = (0.0, 0.0)
 
     @property
@@ -120,7 +151,7 @@ class MotionPlanner:
     def update(
         self,
         mode: ChassisMotionMode,
-        frame: Hashable,
+        frame: CommandFrame,
         command: Sequence[float],
         dt: float,
         *,
@@ -133,8 +164,8 @@ class MotionPlanner:
 
         Args:
             mode: the motion mode.
-            frame: any hashable naming the frame the command is in (a change re-expresses
-                the ramp state); RAW should use one of its own.
+            frame: the frame the command is in (a change re-expresses the ramp state);
+                BASE_LINK_FRAME in RAW.
             command: (vx [m/s], vy [m/s], wz [rad/s]) in that frame; wz is used in RAW only.
             dt: time since the previous step [s], finite and > 0 (capped at 50 ms).
             accel: per-axis acceleration override (vx, vy [m/s²], wz [rad/s²]), None for

@@ -73,7 +73,13 @@ from rm_plugins.chassis.commands import (
     parse_vel_cmd,
 )
 from rm_plugins.chassis.config import ChassisConfig, ImuMount, read_config
-from rm_plugins.chassis.motion import MotionPlanner
+from rm_plugins.chassis.motion import (
+    BASE_LINK_FRAME,
+    GIMBAL_FRAME,
+    CommandFrame,
+    MotionPlanner,
+    held_frame,
+)
 from rm_plugins.chassis.odometry import Odometry
 from rm_plugins.chassis.wheels import SpeedPredictor, WheelSpeedController
 
@@ -396,12 +402,12 @@ class StandChassis(PluginBase):
         mode = _MOTION_MODES[request.mode]
         if mode is ChassisMotionMode.RAW:
             self._held_heading = None
-            frame: Any = 'base_link'
+            frame: CommandFrame = BASE_LINK_FRAME
             phi = phi_rate = gimbal_rate = 0.0
         elif request.source is FollowSource.GIMBAL:
             self._held_heading = None
             joint = decision.yaw_joint
-            frame = 'gimbal'
+            frame = GIMBAL_FRAME
             # The angle now, not when it was measured: in GYRO it changes at the spin rate,
             # and the feedback is up to a publish period (plus transport) old.
             age_s = min(_MAX_EXTRAPOLATION_S, max(0.0, (now_ns - joint.stamp_ns) / _NS_PER_S))
@@ -412,7 +418,7 @@ class StandChassis(PluginBase):
             yaw = self._odometry.pose.yaw
             if self._held_heading is None:
                 self._held_heading = yaw  # the robot's heading now is the one to follow
-            frame = ('held', self._held_heading)
+            frame = held_frame(self._held_heading)
             phi = wrap_to_pi(self._held_heading - yaw)
             phi_rate = -self._odometry.twist.wz
             gimbal_rate = 0.0

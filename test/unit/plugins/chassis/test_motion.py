@@ -14,6 +14,7 @@ from rm_base.control import (
 )
 from rm_base.geometry import Twist2D, WheelKinematics, mecanum_wheels
 from rm_plugins.chassis import MotionPlanner
+from rm_plugins.chassis.motion import BASE_LINK_FRAME, GIMBAL_FRAME
 
 RAW = ChassisMotionMode.RAW
 FOLLOW = ChassisMotionMode.FOLLOW
@@ -36,7 +37,7 @@ def planner(max_wheel_speed=100.0):
     return MotionPlanner(KINEMATICS, MODES, LINEAR, ANGULAR, max_wheel_speed)
 
 
-def run(p, mode, command, steps, frame='base_link', **kwargs):
+def run(p, mode, command, steps, frame=BASE_LINK_FRAME, **kwargs):
     out = None
     for _ in range(steps):
         out = p.update(mode, frame, command, DT, **kwargs)
@@ -89,14 +90,14 @@ def test_when_switching_frames_expect_the_chassis_velocity_kept():
     # Gimbal turned 90° left: "forward" there is chassis +y. The first step re-expresses
     # the ramp state, 1 m/s along chassis x = -1 m/s along gimbal y, then ramps towards
     # the new command (0.01 s at 2 m/s^2 launch: 0.02 m/s each axis).
-    out = p.update(FOLLOW, 'gimbal', (0.0, 0.0, 0.0), DT, yaw_joint=math.pi / 2)
+    out = p.update(FOLLOW, GIMBAL_FRAME, (0.0, 0.0, 0.0), DT, yaw_joint=math.pi / 2)
     assert out.twist.vx == pytest.approx(1.0 - 8.0 * DT)  # braking at 8 m/s^2
     assert out.twist.vy == pytest.approx(0.0, abs=1e-9)
 
 
 def test_when_following_a_gimbal_turned_left_expect_a_left_turn_and_gimbal_frame_motion():
     p = planner()
-    out = run(p, FOLLOW, (1.0, 0.0, 0.0), 100, frame='gimbal', yaw_joint=0.3)
+    out = run(p, FOLLOW, (1.0, 0.0, 0.0), 100, frame=GIMBAL_FRAME, yaw_joint=0.3)
     # PID: wz = kp * phi = 1.5 rad/s (left, towards the gimbal), reached at 10 rad/s^2.
     assert out.twist.wz == pytest.approx(1.5)
     # Forward in the gimbal frame is 0.3 rad left of chassis x (no look-ahead: the yaw
@@ -105,26 +106,26 @@ def test_when_following_a_gimbal_turned_left_expect_a_left_turn_and_gimbal_frame
     assert heading == pytest.approx(0.3)
     # With the joint closing at -1.5 rad/s the translation is turned by the angle phi has
     # on average over the coming step: -1.5 * (latency 0 + dt / 2) = -0.0075 rad.
-    out = p.update(FOLLOW, 'gimbal', (1.0, 0.0, 0.0), DT, yaw_joint=0.3, yaw_joint_rate=-1.5)
+    out = p.update(FOLLOW, GIMBAL_FRAME, (1.0, 0.0, 0.0), DT, yaw_joint=0.3, yaw_joint_rate=-1.5)
     assert math.atan2(out.twist.vy, out.twist.vx) == pytest.approx(0.3 - 0.0075)
 
 
 def test_when_gyro_expect_the_spin_up_on_the_angular_ramp():
     p = planner()
-    out = run(p, GYRO, (0.0, 0.0, 0.0), 30, frame='gimbal')
+    out = run(p, GYRO, (0.0, 0.0, 0.0), 30, frame=GIMBAL_FRAME)
     assert out.twist.wz == pytest.approx(3.0)  # 10 rad/s^2 for 0.3 s
-    out = run(p, GYRO, (0.0, 0.0, 0.0), 100, frame='gimbal')
+    out = run(p, GYRO, (0.0, 0.0, 0.0), 100, frame=GIMBAL_FRAME)
     assert out.twist.wz == pytest.approx(6.0)
 
 
 def test_when_reset_from_a_rolling_chassis_expect_the_ramps_to_start_there():
     p = planner()
     p.reset(Twist2D(1.0, 0.0, 2.0))
-    out = p.update(RAW, 'base_link', (1.0, 0.0, 2.0), DT)
+    out = p.update(RAW, BASE_LINK_FRAME, (1.0, 0.0, 2.0), DT)
     assert out.twist == pytest.approx((1.0, 0.0, 2.0))
 
 
 def test_when_the_command_is_nan_expect_rejected():
     p = planner()
     with pytest.raises(ValueError, match='finite'):
-        p.update(RAW, 'base_link', (math.nan, 0.0, 0.0), DT)
+        p.update(RAW, BASE_LINK_FRAME, (math.nan, 0.0, 0.0), DT)
