@@ -187,8 +187,7 @@ def _measure_phases(
     tap = bridge.request('tap_on ' + ' '.join(PROBES), 10.0)
     duration = plan.steps * (plan.hold_s + plan.rest_s + 0.01) + plan.settle_s
     steps = commander.request(
-        f'steps {plan.steps} {plan.hold_s} {plan.rest_s} {plan.command_rate_hz} '
-        f'{plan.settle_s}',
+        f'steps {plan.steps} {plan.hold_s} {plan.rest_s} {plan.command_rate_hz} {plan.settle_s}',
         duration + 60.0,
     )
     frames = bridge.request('tap_off', 30.0)
@@ -214,7 +213,10 @@ def run_once(plan: RobotPlan, log_dir: Path, tag: str) -> dict[str, Any]:
         commander.wait(60.0)
 
         _measure_phases(
-            plan, result, commander, robot,
+            plan,
+            result,
+            commander,
+            robot,
             lambda phase, seconds: robot.request(f'measure {phase} {seconds}', seconds + 30.0),
             log_dir / f'canary_{tag}.log',
         )
@@ -224,21 +226,58 @@ def run_once(plan: RobotPlan, log_dir: Path, tag: str) -> dict[str, Any]:
     return result
 
 
+def _profile_streaming(
+    plan: RobotPlan, robots: dict[str, Child], commander: Child, log_dir: Path, seconds: float
+) -> dict[str, Any]:
+    """Stream the load pattern, then profile every robot process in the same window.
+
+    robots: role -> process, can_bridge's first; role '' for the one-process robot.
+    """
+    for child in robots.values():
+        child.wait(90.0)
+        child.request('ready 30', 40.0)
+    commander.wait(60.0)
+    commander.request(f'stream {plan.command_rate_hz}', 30.0)
+    next(iter(robots.values())).request('wait_active 20 ' + ' '.join(ACTIVE_JOINTS), 30.0)
+    time.sleep(1.0)
+    for role, child in robots.items():
+        (log_dir / role).mkdir(exist_ok=True)
+        child.send(f'profile {seconds} {log_dir / role}')
+    out: dict[str, Any] = {}
+    for role, child in robots.items():
+        profiles = child.wait(seconds + 60.0)['profiles']
+        out.update({f'{role}/{name}' if role else name: data for name, data in profiles.items()})
+    return out
+
+
 def profile(plan: RobotPlan, log_dir: Path, seconds: float) -> dict[str, Any]:
     """Profile every robot thread for ``seconds`` while the load pattern streams."""
     robot = Child('bench.robot_proc', _robot_args(plan), log_dir / 'robot_profile.log')
     commander = Child('bench.commander', [], log_dir / 'commander_profile.log')
     try:
-        robot.wait(90.0)
-        robot.request('ready 30', 40.0)
-        commander.wait(60.0)
-        commander.request(f'stream {plan.command_rate_hz}', 30.0)
-        robot.request('wait_active 20 ' + ' '.join(ACTIVE_JOINTS), 30.0)
-        time.sleep(1.0)
-        return robot.request(f'profile {seconds} {log_dir}', seconds + 60.0)['profiles']
+        return _profile_streaming(plan, {'': robot}, commander, log_dir, seconds)
     finally:
         commander.close()
         robot.close()
+
+
+def profile_split(plan: RobotPlan, log_dir: Path, seconds: float) -> dict[str, Any]:
+    """Profile both processes of the split robot (as ``run_split`` lays it out)."""
+    imu_dir = tempfile.mkdtemp(prefix='rm_bench_imu_')
+    common = ['--imu-dir', imu_dir, *_robot_args(plan)]
+    robots = {
+        role: Child(
+            'bench.robot_proc', ['--role', role, *common], log_dir / f'split_{role}_profile.log'
+        )
+        for role in ('bridge', 'host')
+    }
+    commander = Child('bench.commander', [], log_dir / 'split_commander_profile.log')
+    try:
+        return _profile_streaming(plan, robots, commander, log_dir, seconds)
+    finally:
+        for child in (commander, robots['host'], robots['bridge']):
+            child.close()
+        shutil.rmtree(imu_dir, ignore_errors=True)
 
 
 def _merge(bridge: dict[str, Any], host: dict[str, Any]) -> dict[str, Any]:
@@ -302,7 +341,10 @@ def run_split(plan: RobotPlan, log_dir: Path, tag: str) -> dict[str, Any]:
         commander.wait(60.0)
 
         _measure_phases(
-            plan, result, commander, bridge,
+            plan,
+            result,
+            commander,
+            bridge,
             lambda phase, seconds: _merge(*_measure_both(bridge, host, phase, seconds)),
             log_dir / f'split_canary_{tag}.log',
         )

@@ -62,7 +62,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         '--profile',
         type=float,
         metavar='SECONDS',
-        help='only profile every robot thread under load (cProfile) and print the hot spots',
+        help='only profile every robot thread under load (cProfile) and print the hot spots; '
+        'with --only split, both processes of the split robot',
     )
     return parser.parse_args(argv)
 
@@ -103,7 +104,8 @@ def main(argv: list[str] | None = None) -> int:
     log_dir = args.out / f'logs-{stamp}'
     log_dir.mkdir(parents=True, exist_ok=True)
     if args.profile:
-        return print_profile(robot.profile(robot_plan, log_dir, args.profile), log_dir)
+        profile = robot.profile_split if only == ['split'] else robot.profile
+        return print_profile(profile(robot_plan, log_dir, args.profile), log_dir)
     facts = machine_facts()
     load_start = os.getloadavg()
     whole = Window()
@@ -201,7 +203,7 @@ def print_profile(profiles: dict[str, Any], log_dir: Path) -> int:
                 f'  {row["tottime_s"]:8.4f} s own {row["cumtime_s"]:8.4f} s cum '
                 f'{row["ncalls"]:>8} calls  {row["function"]}'
             )
-    print(f'\nfull profiles: {log_dir}/profile_*.txt')
+    print(f'\nfull profiles: {log_dir}/**/profile_*.txt')
     return 0
 
 

@@ -85,3 +85,11 @@ def test_profile_mode_profiles_every_busy_thread_of_the_robot(tmp_path):
     assert {'can-scheduler', 'can_bridge-publish', 'rm_robot-publish'} <= profiled, stdout
     assert any(name.startswith('hipnuc ') for name in profiled), stdout
     assert list(tmp_path.glob('logs-*/profile_can-scheduler.prof'))
+
+
+def test_profile_mode_with_only_split_profiles_both_processes(tmp_path):
+    stdout = _run_bench(tmp_path, '--only', 'split', '--profile', '1')
+    profiled = {line.split(':')[0] for line in stdout.splitlines() if 'CPU (profiled)' in line}
+    # each process's loop: the bridge's CAN loop and rm_robot's own plugin loop
+    assert {'bridge/can-scheduler', 'host/rm_robot-loop'} <= profiled, stdout
+    assert list(tmp_path.glob('logs-*/host/profile_rm_robot-loop.prof'))

@@ -23,6 +23,7 @@ from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from rclpy.experimental import EventsExecutor
 from rclpy.parameter import Parameter
 from rm_base.bridge import CanBridgeNode
+from rm_base.bridge import node as bridge_node
 from rm_base.errors import ConfigError
 from rm_base.hardware import MODE_OFF, MODE_VELOCITY
 from rm_base.hardware.protocols import dji
@@ -252,7 +253,15 @@ def test_actuator_states_carry_every_field(make_rig):
     assert names == ['wheel']
 
 
-def test_states_nobody_subscribes_are_not_built_and_the_next_subscriber_gets_them(make_rig):
+def test_states_nobody_subscribes_are_not_built_and_the_next_subscriber_gets_them(
+    make_rig, monkeypatch
+):
+    built = []
+    for builder in ('actuator_state_msg', 'state_msgs'):
+        original = getattr(bridge_node, builder)
+        monkeypatch.setattr(
+            bridge_node, builder, lambda *a, b=builder, f=original: built.append(b) or f(*a)
+        )
     rig = make_rig()
     for sub in list(rig.driver.subscriptions):
         if sub.topic_name in ('/joint_states', '/actuator_states'):
@@ -263,8 +272,10 @@ def test_states_nobody_subscribes_are_not_built_and_the_next_subscriber_gets_the
     assert wait_until(lambda: rig.bridge.states_unheard > unheard + 10, WAIT)
     got = []
     rig.driver.create_subscription(JointState, 'joint_states', got.append, 10)
+    built.clear()
     assert wait_until(lambda: len(got) >= 3, WAIT)
     assert list(got[-1].name) == ['wheel']
+    assert built == []  # /actuator_states has still nobody: only JointState is built
 
 
 def test_diagnostics_report_joints_bus_scheduler_and_commands(make_rig):

@@ -19,7 +19,13 @@ from rm_base.bridge.commands import check_stamp, parse_actuator_cmd
 from rm_base.bridge.diagnostics import CommandStats, DiagnosticsReporter
 from rm_base.bridge.errors import ActuatorCmdRejectedError, BridgeConfigError
 from rm_base.bridge.frames import FrameTap
-from rm_base.bridge.messages import can_frame_msg, state_msgs, time_msg
+from rm_base.bridge.messages import (
+    actuator_state_msg,
+    can_frame_msg,
+    joint_state_msg,
+    state_msgs,
+    time_msg,
+)
 from rm_base.bridge.params import (
     BridgeSettings,
     is_ros_own,
@@ -415,11 +421,15 @@ class CanBridgeNode(Node):
             self.states_unheard += 1
             return
         states = self.hardware.states()
-        joint_states, actuator_states = state_msgs(states, self.get_clock().now().to_msg())
-        if joints:
+        stamp = self.get_clock().now().to_msg()
+        if joints and actuators:
+            joint_states, actuator_states = state_msgs(states, stamp)
             self._joint_states_pub.publish(joint_states)
-        if actuators:
             self._actuator_states_pub.publish(actuator_states)
+        elif joints:
+            self._joint_states_pub.publish(joint_state_msg(states, stamp))
+        else:  # rm_robot in a process of its own hears only /actuator_states
+            self._actuator_states_pub.publish(actuator_state_msg(states, stamp))
 
     def _states_heard(self) -> bool:
         return (
