@@ -49,12 +49,13 @@ from collections.abc import Iterable, Mapping
 from typing import Any
 
 import can
-from rm_base.hardware import ACTUATOR_TYPES, HardwareConfig, Mode
+from rm_base.hardware import HardwareConfig, Mode
 from rm_base.hardware.actuators import Actuator, DjiActuator, MitActuator
 from rm_base.hardware.actuators.dji import Gm6020Voltage
 from rm_base.hardware.actuators.mit import Cheetah
 from rm_base.hardware.errors import ProtocolError
 from rm_base.hardware.protocols import cheetah, damiao, dji, mit
+from rm_base.motors import actuator_class
 
 _NS_PER_S = 1_000_000_000
 _NEVER = -math.inf
@@ -254,7 +255,7 @@ class WireChecker:
         self._mit_frames: dict[tuple[str, int], _Joint] = {}
         self._feedback: dict[tuple[str, int], list[_Joint]] = {}
         for jc in config.joints:
-            actuator = ACTUATOR_TYPES[jc.type](jc, safety)
+            actuator = actuator_class(jc.type)(jc, safety)
             joint = _Joint(actuator, safety.temperature_hysteresis_c, feedback_window_s)
             self.joints[jc.name] = joint
             if isinstance(actuator, DjiActuator):
@@ -693,4 +694,4 @@ def max_efforts(config: Mapping[str, Any] | HardwareConfig) -> dict[str, float]:
     """joint -> resolved max_effort [N·m] (type defaults filled in) of a hardware config."""
     if not isinstance(config, HardwareConfig):
         config = HardwareConfig.from_dict(config)
-    return {jc.name: ACTUATOR_TYPES[jc.type](jc, config.safety).max_effort for jc in config.joints}
+    return {jc.name: actuator_class(jc.type)(jc, config.safety).max_effort for jc in config.joints}

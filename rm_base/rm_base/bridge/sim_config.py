@@ -24,36 +24,14 @@ from typing import Any
 
 from rm_base.bridge.errors import BridgeConfigError
 from rm_base.bridge.params import SimSettings
-from rm_base.hardware import ACTUATOR_TYPES
 from rm_base.hardware.config import HardwareConfig, JointConfig
-from rm_base.sim import MOTOR_DEFAULTS, MotorType
-
-#: Hardware joint type -> (simulated motor type, extra device keys).
-_SIM_TYPES: dict[str, tuple[str, dict[str, Any]]] = {
-    'm3508': ('m3508', {}),
-    'm2006': ('m2006', {}),
-    'gm6020': ('gm6020', {'control': 'voltage'}),
-    'gm6020_current': ('gm6020', {'control': 'current'}),
-    'dm4310': ('dm4310', {}),
-    'dm4340': ('dm4310', {'model': 'DM4340'}),
-    'dm8009': ('dm8009', {}),
-    'dm10010l': ('dm8009', {'model': 'DM10010L'}),
-    'cheetah': ('cheetah', {}),
-}
-
-#: Joint options that describe the device's protocol; the simulated device gets them too.
-_SHARED_OPTIONS = {
-    'dji': ('raw_limit', 'si_per_raw', 'feedback_amps_per_raw'),
-    'damiao': ('master_id', 'limits', 'model'),
-    'cheetah': ('master_id', 'limits'),
-}
+from rm_base.motors import UnknownTypeError, families, family_of, sim_family, sim_types
 
 
-def _damiao_type(joint: JointConfig) -> tuple[str, dict[str, Any]]:
-    model = str(joint.options.get('model', '')).upper()
-    # The heavier models share the DM8009's size class, the others the DM4310's.
-    sim_type = 'dm8009' if model.startswith(('DM8', 'DM10', 'DM6')) else 'dm4310'
-    return sim_type, {}
+def _simulated_joint_types() -> list[str]:
+    return sorted(
+        t for f in families().values() if f.sim is not None for t in f.sim.joint_types
+    )
 
 
 def motor_config(joint: JointConfig, overrides: Mapping[str, Any] | None = None) -> dict[str, Any]:
@@ -64,33 +42,31 @@ def motor_config(joint: JointConfig, overrides: Mapping[str, Any] | None = None)
             ``sim.type``.
     """
     overrides = dict(overrides or {})
-    if joint.type not in ACTUATOR_TYPES:
+    try:
+        family = family_of(joint.type)
+    except UnknownTypeError as err:
         # the hardware layer's own message, before the simulator's would hide a typo
-        raise BridgeConfigError(
-            f'joints.{joint.name}.type {joint.type!r} is unknown; known: '
-            f'{", ".join(sorted(ACTUATOR_TYPES))}'
-        )
-    if joint.type == 'damiao':
-        sim_type, extra = _damiao_type(joint)
-    elif joint.type in _SIM_TYPES:
-        sim_type, extra = _SIM_TYPES[joint.type]
+        raise BridgeConfigError(f'joints.{joint.name}.{err}') from None
+    found = family.sim.simulated_type(joint) if family.sim is not None else None
+    if found is not None:
+        sim_type, extra = found
     elif 'type' in overrides:
         sim_type, extra = str(overrides['type']), {}
     else:
         raise BridgeConfigError(
             f'joints.{joint.name}.type {joint.type!r} has no simulated motor; simulated '
-            f'types: {", ".join(sorted(_SIM_TYPES))} (or set joints.{joint.name}.sim.type)'
+            f'types: {", ".join(_simulated_joint_types())} (or set joints.{joint.name}.sim.type)'
         )
     config: dict[str, Any] = {'type': sim_type, 'id': joint.id, 'name': joint.name, **extra}
     final_type = str(overrides.get('type', sim_type))
     try:
-        family = MotorType(final_type).family
-    except ValueError:
+        sim = sim_family(final_type)
+    except UnknownTypeError:
         raise BridgeConfigError(
             f'joints.{joint.name}.sim.type {final_type!r} is not a simulated motor; known: '
-            f'{", ".join(t.value for t in MotorType)}'
+            f'{", ".join(sim_types())}'
         ) from None
-    for key in _SHARED_OPTIONS[family]:
+    for key in sim.shared_options:
         if key in joint.options:
             value = joint.options[key]
             config[key] = dict(value) if isinstance(value, Mapping) else value
@@ -115,11 +91,10 @@ def regeared(sim_type: str, gear_ratio: float) -> dict[str, float]:
         BridgeConfigError: unknown simulated type.
     """
     try:
-        base = MOTOR_DEFAULTS[MotorType(sim_type)]
-    except ValueError:
-        known = ', '.join(sorted(t.value for t in MotorType))
+        base = sim_family(sim_type).models[sim_type]
+    except UnknownTypeError:
         raise BridgeConfigError(
-            f'unknown simulated motor type {sim_type!r}; known: {known}'
+            f'unknown simulated motor type {sim_type!r}; known: {", ".join(sim_types())}'
         ) from None
     k = gear_ratio / base.gear_ratio
     return {

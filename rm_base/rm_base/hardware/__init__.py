@@ -5,7 +5,6 @@ turns a config dict into running buses and motors behind :class:`CanHardware`.
 """
 
 from rm_base.hardware.actuators import (
-    ACTUATOR_TYPES,
     MODE_EFFORT,
     MODE_MIT,
     MODE_OFF,
@@ -36,7 +35,6 @@ from rm_base.hardware.scheduler import Scheduler, Stage
 from rm_base.hardware.timing import DurationHistogram, DurationSummary, PeriodStats
 
 __all__ = [
-    'ACTUATOR_TYPES',
     'MODE_EFFORT',
     'MODE_MIT',
     'MODE_OFF',

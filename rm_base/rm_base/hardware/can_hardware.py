@@ -26,22 +26,15 @@ from typing import Any
 import can
 
 from rm_base.control import ChassisPowerModel
-from rm_base.hardware.actuators import (
-    ACTUATOR_TYPES,
-    Actuator,
-    DjiActuator,
-    JointState,
-    MitActuator,
-)
-from rm_base.hardware.actuators.mit import Damiao
+from rm_base.hardware.actuators import Actuator, JointState, MitActuator
 from rm_base.hardware.bus import BusFactory, ManagedBus
 from rm_base.hardware.config import HardwareConfig
 from rm_base.hardware.errors import CommandRejectedError, HardwareConfigError
-from rm_base.hardware.groups import build_dji_groups
 from rm_base.hardware.power_stage import PowerLimitStage
 from rm_base.hardware.protocols.mit import SystemCommand
 from rm_base.hardware.scheduler import Scheduler
 from rm_base.joints import JointTarget
+from rm_base.motors import GroupBuilder, UnknownTypeError, actuator_class, family_of
 
 _log = logging.getLogger(__name__)
 
@@ -84,17 +77,22 @@ class CanHardware:
             b.name: ManagedBus(b, clock_ns=clock_ns, bus_factory=bus_factory) for b in config.buses
         }
         self.actuators: dict[str, Actuator] = {}
+        # families whose motors share command frames pack them through their groups
+        grouped: dict[str, tuple[GroupBuilder, list[Actuator]]] = {}
+        own_frames: list[Actuator] = []
         for joint in config.joints:
-            cls = ACTUATOR_TYPES.get(joint.type)
-            if cls is None:
-                raise HardwareConfigError(
-                    f'joints.{joint.name}.type {joint.type!r} is unknown; known: '
-                    f'{", ".join(sorted(ACTUATOR_TYPES))}'
-                )
-            self.actuators[joint.name] = cls(joint, config.safety)
+            try:
+                family = family_of(joint.type)
+            except UnknownTypeError as err:
+                raise HardwareConfigError(f'joints.{joint.name}.{err}') from None
+            actuator = actuator_class(joint.type)(joint, config.safety)
+            self.actuators[joint.name] = actuator
+            if family.build_groups is None:
+                own_frames.append(actuator)
+            else:
+                grouped.setdefault(family.name, (family.build_groups, []))[1].append(actuator)
         actuators = list(self.actuators.values())
-        self.groups = build_dji_groups(a for a in actuators if isinstance(a, DjiActuator))
-        own_frames = [a for a in actuators if not isinstance(a, DjiActuator)]
+        self.groups = [g for build, members in grouped.values() for g in build(members)]
         self._check_ids(own_frames)
         for a in actuators:
             bus = self.buses[a.bus_name]
@@ -131,7 +129,7 @@ class CanHardware:
         sent: dict[tuple[str, int], str] = {
             (g.bus_name, g.arbitration_id): g.name for g in self.groups
         }
-        damiao_replies: dict[tuple[str, int, int], str] = {}
+        replies: dict[tuple[str, str], str] = {}
         for a in own_frames:
             key = (a.bus_name, a.command_id)
             if key in sent:
@@ -139,14 +137,15 @@ class CanHardware:
                     f'{a.name} and {sent[key]} both send frame 0x{a.command_id:03X} on {a.bus_name}'
                 )
             sent[key] = a.name
-            if isinstance(a, Damiao):
-                reply = (a.bus_name, a.master_id, a.motor_id & 0x0F)
-                if reply in damiao_replies:
+            key = a.reply_key()
+            if key is not None:
+                reply = (a.bus_name, key)
+                if reply in replies:
                     raise HardwareConfigError(
-                        f'{a.name} and {damiao_replies[reply]} reply on 0x{a.master_id:03X} '
-                        f'with the same id nibble on {a.bus_name}'
+                        f'{a.name} and {replies[reply]} both reply with {key} on '
+                        f'{a.bus_name}: their feedback cannot be told apart'
                     )
-                damiao_replies[reply] = a.name
+                replies[reply] = a.name
 
     def _send_outgoing(self) -> None:
         for name, frames in self._outgoing.items():

@@ -22,7 +22,7 @@ The schema, with units (every key optional unless marked *required*)::
       },
       'joints': {                      # *required*: name -> joint (or a list with 'name')
         'yaw': {
-          'type': 'gm6020',            # *required*: see rm_base.hardware.ACTUATOR_TYPES
+          'type': 'gm6020',            # *required*: see rm_base.motors.joint_types()
           'bus': 'can0',               # *required*
           'id': 1,                     # *required*: ESC / motor / joint id
           'direction': 1,              # +1 or -1: sign between motor and joint

@@ -58,7 +58,8 @@ class SimDevice(ABC):
 
     Attributes:
         name: unique name in the world (``'wheel_fl'``).
-        motor_type: the motor model.
+        motor_type: the simulated motor type (``'m3508'``...; a MotorType for the
+            built-in families).
         motor_id: the id set on the device (ESC id / CAN id).
         model: the physics.
         stats: frame counters.
@@ -66,12 +67,13 @@ class SimDevice(ABC):
             None for no cut-out.
     """
 
-    family: ClassVar[str]
+    #: Several devices take their commands from one frame (DJI groups, a slot each).
+    shares_command_frames: ClassVar[bool] = False
 
     def __init__(
         self,
         name: str,
-        motor_type: MotorType,
+        motor_type: MotorType | str,
         motor_id: int,
         model: MotorModel,
         *,

@@ -23,7 +23,7 @@ class DjiDevice(SimDevice):
         command_raw: the last raw value taken from the motor's slot.
     """
 
-    family = 'dji'
+    shares_command_frames = True
 
     def __init__(
         self,

@@ -102,8 +102,6 @@ class DamiaoDevice(_MitDevice):
         pos_kp: internal position loop gain [1/s] (POS_VEL).
     """
 
-    family = 'damiao'
-
     def __init__(
         self,
         name: str,
@@ -275,8 +273,6 @@ class CheetahDevice(_MitDevice):
         reply_voltage: send the 7-byte reply with bus voltage (STM32 firmware) instead of
             the 6-byte one (mbed firmware).
     """
-
-    family = 'cheetah'
 
     def __init__(
         self,

@@ -40,7 +40,11 @@ DJI_ENCODER_COUNTS = 8192
 
 
 class MotorType(Enum):
-    """Motor models the simulator knows; the value is the config name."""
+    """The built-in simulated motor models; the value is the config name.
+
+    Their physics are in MOTOR_DEFAULTS; their families (rm_base.motors) say how each one
+    talks on the bus.
+    """
 
     M3508 = 'm3508'
     M2006 = 'm2006'
@@ -48,13 +52,6 @@ class MotorType(Enum):
     DM4310 = 'dm4310'
     DM8009 = 'dm8009'
     CHEETAH = 'cheetah'
-
-    @property
-    def family(self) -> str:
-        """The protocol family: 'dji', 'damiao' or 'cheetah'."""
-        if self in (MotorType.M3508, MotorType.M2006, MotorType.GM6020):
-            return 'dji'
-        return 'cheetah' if self is MotorType.CHEETAH else 'damiao'
 
 
 class DriveMode(Enum):

@@ -2,8 +2,10 @@
 
 import itertools
 import os
+import time
 
 from rm_base.hardware.config import JointConfig
+from rm_base.sim.bus import SimBus
 
 MS = 1_000_000  # ns
 T0 = 1_000 * MS
@@ -32,3 +34,21 @@ def unique_channel() -> str:
 
 def joint(name='j', type='m3508', bus='can0', id=1, **extra):
     return JointConfig.from_dict(name, {'type': type, 'bus': bus, 'id': id, **extra})
+
+
+def sim_factory(interface, channel, ignore_config=True, **kwargs):
+    assert interface == 'rm_sim'
+    kwargs.pop('bitrate', None)
+    return SimBus(channel=channel, **kwargs)
+
+
+def wait_fresh(hw, now_ns, timeout_s=10.0):
+    """Busy-wait (briefly) until every joint has feedback stamped at now_ns."""
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        if all(
+            a.feedback is not None and a.feedback.stamp_ns >= now_ns for a in hw.actuators.values()
+        ):
+            return
+        time.sleep(0.0002)
+    raise AssertionError(f'no fresh feedback: {hw.states()}')

@@ -5,9 +5,10 @@ import random
 
 import can
 import pytest
-from rm_base.hardware.actuators import ACTUATOR_TYPES, HoldReason, Mode
+from rm_base.hardware.actuators import HoldReason, Mode
 from rm_base.hardware.errors import HardwareConfigError
 from rm_base.hardware.protocols import dji
+from rm_base.motors import actuator_class
 
 from .helpers import MS, T0, joint
 
@@ -16,7 +17,7 @@ M3508_GEAR = 3591 / 187
 
 def make(type_='m3508', **extra):
     cfg = joint(type=type_, **extra)
-    return ACTUATOR_TYPES[cfg.type](cfg)
+    return actuator_class(cfg.type)(cfg)
 
 
 def feed(actuator, now_ns, ticks=0, rpm=0, current=0, temperature=30):

@@ -4,11 +4,12 @@ import math
 
 import can
 import pytest
-from rm_base.hardware.actuators import ACTUATOR_TYPES, Mode
+from rm_base.hardware.actuators import Mode
 from rm_base.hardware.actuators.mit import fit_mit_target
 from rm_base.hardware.errors import HardwareConfigError, ValueRangeError
 from rm_base.hardware.protocols import cheetah, damiao, mit, piper
 from rm_base.hardware.protocols.mit import MitCommand, SystemCommand
+from rm_base.motors import actuator_class
 
 from .helpers import MS, T0, joint
 
@@ -17,7 +18,7 @@ DM4310 = damiao.dm_limits('DM4310')
 
 def make(type_='dm4310', **extra):
     cfg = joint(type=type_, **extra)
-    return ACTUATOR_TYPES[cfg.type](cfg)
+    return actuator_class(cfg.type)(cfg)
 
 
 def dm_frame(

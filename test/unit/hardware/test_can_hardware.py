@@ -323,7 +323,7 @@ def test_started_hardware_runs_at_its_rate_and_shuts_down_with_zero(channel):
         ({'wheel': {'type': 'm3508', 'bus': 'can0', 'id': 5}}, 'share command frame 0x1FF'),
         (
             {'arm2': {'type': 'dm8009', 'bus': 'can0', 'id': 0x13, 'master_id': 0x13}},
-            'same id nibble',
+            'both reply with master id 0x013 and id nibble 3 on can0',
         ),
         ({'arm2': {'type': 'dm8009', 'bus': 'can0', 'id': 3}}, 'both send frame 0x003'),
         (

@@ -1,16 +1,16 @@
 """DJI command groups: one shared frame per tick, built from the motors' raw targets."""
 
 import pytest
-from rm_base.hardware.actuators import ACTUATOR_TYPES
 from rm_base.hardware.errors import HardwareConfigError
 from rm_base.hardware.groups import DjiCommandGroup, build_dji_groups
+from rm_base.motors import actuator_class
 
 from .helpers import joint
 
 
 def motor(name, type_, id_, bus='can0'):
     cfg = joint(name=name, type=type_, id=id_, bus=bus)
-    return ACTUATOR_TYPES[type_](cfg)
+    return actuator_class(type_)(cfg)
 
 
 def test_group_packs_the_members_raw_targets_into_one_frame():

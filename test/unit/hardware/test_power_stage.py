@@ -4,8 +4,9 @@ import math
 
 import pytest
 from rm_base.control import ChassisPowerModel, estimate_power
-from rm_base.hardware.actuators import ACTUATOR_TYPES, Mode
+from rm_base.hardware.actuators import Mode
 from rm_base.hardware.power_stage import PowerLimitStage
+from rm_base.motors import actuator_class
 
 from .helpers import MS, T0, joint
 from .test_actuators_dji import feed
@@ -19,7 +20,7 @@ def wheels(effort=2.0):
     """Four M3508 in effort mode at effort [N*m], at rest, updated once."""
     out = []
     for i in range(1, 5):
-        actuator = ACTUATOR_TYPES['m3508'](joint(name=f'w{i}', type='m3508', id=i))
+        actuator = actuator_class('m3508')(joint(name=f'w{i}', type='m3508', id=i))
         feed(actuator, T0)
         actuator.set_command(Mode.EFFORT, T0, effort=effort)
         actuator.update(T0, 0.001)

@@ -4,10 +4,11 @@ import math
 
 import can
 import pytest
-from rm_base.hardware.actuators import ACTUATOR_TYPES, HoldReason, Mode
+from rm_base.hardware.actuators import HoldReason, Mode
 from rm_base.hardware.config import SafetyConfig
 from rm_base.hardware.errors import CommandRejectedError
 from rm_base.hardware.protocols import dji
+from rm_base.motors import actuator_class
 
 from .helpers import MS, T0, joint
 
@@ -16,7 +17,7 @@ ONE_NM_RAW = 2731  # 1 N·m / 0.3 N·m/A * 16384/20 (M3508)
 
 def make(safety=None, **extra):
     cfg = joint(**extra)
-    return ACTUATOR_TYPES[cfg.type](cfg, safety)
+    return actuator_class(cfg.type)(cfg, safety)
 
 
 def feed(a, now_ns, temperature=30):

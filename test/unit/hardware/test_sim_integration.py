@@ -5,32 +5,11 @@ The same bus config works with ``can.Bus(interface='rm_sim')`` once rm_base is i
 not depend on the installed entry points, and the world is stepped by the test.
 """
 
-import time
-
 import pytest
 from rm_base.hardware import MODE_EFFORT, MODE_MIT, CanHardware
-from rm_base.sim.bus import SimBus
 from rm_base.sim.world import SimWorld
 
-from .helpers import FakeClock
-
-
-def sim_factory(interface, channel, ignore_config=True, **kwargs):
-    assert interface == 'rm_sim'
-    kwargs.pop('bitrate', None)
-    return SimBus(channel=channel, **kwargs)
-
-
-def wait_fresh(hw, now_ns, timeout_s=10.0):
-    """Busy-wait (briefly) until every joint has feedback stamped at now_ns."""
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        if all(
-            a.feedback is not None and a.feedback.stamp_ns >= now_ns for a in hw.actuators.values()
-        ):
-            return
-        time.sleep(0.0002)
-    raise AssertionError(f'no fresh feedback: {hw.states()}')
+from .helpers import FakeClock, sim_factory, wait_fresh
 
 
 @pytest.fixture

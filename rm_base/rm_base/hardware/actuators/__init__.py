@@ -1,7 +1,7 @@
-"""Actuators: one class per motor family on the shared :class:`Actuator` base.
+"""Actuators: one class per joint type on the shared :class:`Actuator` base.
 
-:data:`ACTUATOR_TYPES` maps the ``type`` of a joint config to its class; adding a motor
-family means adding one class here.
+The joint ``type`` of a robot config finds its class through the motor family registry
+(:func:`rm_base.motors.actuator_class`), which also lists the families' own classes.
 """
 
 from rm_base.hardware.actuators.base import (
@@ -38,26 +38,7 @@ from rm_base.joints import (
     Mode,
 )
 
-#: Joint ``type`` -> actuator class.
-ACTUATOR_TYPES: dict[str, type[Actuator]] = {
-    cls.type_name: cls
-    for cls in (
-        M3508,
-        M2006,
-        Gm6020Voltage,
-        Gm6020Current,
-        Damiao,
-        Dm4310,
-        Dm4340,
-        Dm8009,
-        Dm10010L,
-        Cheetah,
-        PiperJoint,
-    )
-}
-
 __all__ = [
-    'ACTUATOR_TYPES',
     'M2006',
     'M3508',
     'MODE_EFFORT',

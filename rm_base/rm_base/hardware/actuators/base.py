@@ -295,6 +295,14 @@ class Actuator(abc.ABC):
         """Arbitration ids to route to :meth:`handle_frame`."""
         return self._feedback_ids()
 
+    def reply_key(self) -> str | None:
+        """What sets this joint's replies apart where several share a frame id, in words.
+
+        Two joints of one bus with the same key could not be told apart (the hardware
+        refuses such a config). None: the joint's feedback id is its own.
+        """
+        return None
+
     def handle_frame(self, msg: can.Message, now_ns: int) -> bool:
         """Decode a frame if it is this actuator's and store the joint-side SI values.
 

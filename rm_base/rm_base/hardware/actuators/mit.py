@@ -277,6 +277,11 @@ class Damiao(MitActuator):
     def _default_master_id(motor_id: int) -> int:
         return min(motor_id + 0x10, 0x7FF)
 
+    def reply_key(self) -> str:
+        """Damiao motors reply on their master id with the low nibble of their id."""
+        return f'master id 0x{self.master_id:03X} and id nibble {self.motor_id & 0x0F}'
+
+
     def _match(self, msg: can.Message) -> bool:
         data = msg.data
         return len(data) > 0 and (data[0] & 0x0F) == (self.motor_id & 0x0F)
