@@ -26,7 +26,7 @@ from rm_base.bridge import CanBridgeNode
 from rm_base.bridge import node as bridge_node
 from rm_base.errors import ConfigError
 from rm_base.hardware import MODE_OFF, MODE_VELOCITY
-from rm_base.hardware.protocols import dji
+from rm_base.motors.dji import protocol as dji
 from rm_base.sim import Fault, SimBus, Timing, find_channel
 from sensor_msgs.msg import JointState
 from std_srvs.srv import SetBool

@@ -13,7 +13,9 @@ import rclpy
 from ament_index_python.packages import get_package_prefix
 from rclpy.experimental import EventsExecutor
 from rm_base.hardware import MODE_MIT, MODE_VELOCITY
-from rm_base.hardware.protocols import damiao, dji, mit
+from rm_base.hardware.protocols import mit
+from rm_base.motors.damiao import protocol as damiao
+from rm_base.motors.dji import protocol as dji
 from sensor_msgs.msg import JointState
 from support.ros import start_process, stop_process, wait_until
 

@@ -19,7 +19,11 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from rm_base.errors import InputRejectedError
 from rm_base.hardware.errors import ProtocolError
-from rm_base.hardware.protocols import cheetah, damiao, dbus, dji, hipnuc, mit, piper
+from rm_base.hardware.protocols import dbus, hipnuc, mit
+from rm_base.motors.cheetah import protocol as cheetah
+from rm_base.motors.damiao import protocol as damiao
+from rm_base.motors.dji import protocol as dji
+from rm_base.motors.piper import protocol as piper
 from rm_plugins.imu.conversion import Mounting, reading_from_sample
 
 DM4310 = damiao.dm_limits('DM4310')

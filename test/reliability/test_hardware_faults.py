@@ -20,8 +20,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from rm_base.hardware import MODE_MIT, MODE_VELOCITY, HoldReason
-from rm_base.hardware.protocols import damiao, dji
 from rm_base.hardware.protocols.mit import SystemCommand
+from rm_base.motors.damiao import protocol as damiao
+from rm_base.motors.dji import protocol as dji
 from rm_base.sim import Fault, FaultKind
 
 from reliability.rigs import LockstepRig

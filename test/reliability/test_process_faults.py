@@ -34,7 +34,7 @@ from ament_index_python.packages import get_package_prefix
 from geometry_msgs.msg import Twist
 from rclpy.experimental import EventsExecutor
 from rclpy.qos import qos_profile_sensor_data
-from rm_base.hardware.protocols import dji
+from rm_base.motors.dji import protocol as dji
 from support.ros import start_process, stop_process, wait_until
 
 from rm_msgs.msg import ActuatorState, ChassisCmd, ChassisState

@@ -9,7 +9,9 @@ from types import SimpleNamespace
 
 import can
 import pytest
-from rm_base.hardware.protocols import damiao, dji, mit
+from rm_base.hardware.protocols import mit
+from rm_base.motors.damiao import protocol as damiao
+from rm_base.motors.dji import protocol as dji
 
 from reliability.wire import WireChecker, check_actuator_states, max_efforts
 

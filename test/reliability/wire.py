@@ -50,12 +50,15 @@ from typing import Any
 
 import can
 from rm_base.hardware import HardwareConfig, Mode
-from rm_base.hardware.actuators import Actuator, DjiActuator, MitActuator
-from rm_base.hardware.actuators.dji import Gm6020Voltage
-from rm_base.hardware.actuators.mit import Cheetah
+from rm_base.hardware.actuators import Actuator, MitActuator
 from rm_base.hardware.errors import ProtocolError
-from rm_base.hardware.protocols import cheetah, damiao, dji, mit
+from rm_base.hardware.protocols import mit
 from rm_base.motors import actuator_class
+from rm_base.motors.cheetah import protocol as cheetah
+from rm_base.motors.cheetah.actuator import Cheetah
+from rm_base.motors.damiao import protocol as damiao
+from rm_base.motors.dji import protocol as dji
+from rm_base.motors.dji.actuator import DjiActuator, Gm6020Voltage
 
 _NS_PER_S = 1_000_000_000
 _NEVER = -math.inf

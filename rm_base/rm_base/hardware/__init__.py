@@ -1,7 +1,8 @@
-"""The CAN hardware layer: device protocols, buses, actuators, command groups, scheduler.
+"""The CAN hardware layer: buses, the actuator base, the scheduler, CanHardware.
 
-No rclpy here. ``rm_base.hardware.protocols`` is the pure bytes <-> values layer; the rest
-turns a config dict into running buses and motors behind :class:`CanHardware`.
+No rclpy here. ``rm_base.hardware.protocols`` is the pure bytes <-> values layer of what
+is not one motor family's; the families (``rm_base.motors``) bring their own protocol and
+joint types. CanHardware turns a config dict into running buses and motors.
 """
 
 from rm_base.hardware.actuators import (
@@ -29,7 +30,6 @@ from rm_base.hardware.errors import (
     ProtocolError,
     ValueRangeError,
 )
-from rm_base.hardware.groups import DjiCommandGroup
 from rm_base.hardware.power_stage import PowerLimitStage
 from rm_base.hardware.scheduler import Scheduler, Stage
 from rm_base.hardware.timing import DurationHistogram, DurationSummary, PeriodStats
@@ -48,7 +48,6 @@ __all__ = [
     'CanHardware',
     'ChecksumError',
     'CommandRejectedError',
-    'DjiCommandGroup',
     'DurationHistogram',
     'DurationSummary',
     'FrameLengthError',

@@ -1,8 +1,9 @@
 """The motor families the robot can drive, found in one table and through entry points.
 
-The built-in families live in ``rm_base.motors.<family>``, each module exposing ``FAMILY``
-(a :class:`~rm_base.motors.family.MotorFamily`). A package of its own adds a family
-without touching rm_base by declaring an entry point, as python-can's interfaces do::
+The built-in families live in ``rm_base/motors/<family>/``, each ``family`` module exposing
+``FAMILY`` (a :class:`~rm_base.motors.family.MotorFamily`). A package of its own adds a
+family without touching rm_base by declaring an entry point, as python-can's interfaces
+do::
 
     entry_points={'rm_base.motor_families': ['acme = acme_motors.family:FAMILY']}
 
@@ -24,10 +25,10 @@ ENTRY_POINT_GROUP = 'rm_base.motor_families'
 
 #: Built-in families: name -> module holding ``FAMILY``.
 BUILT_IN = {
-    'dji': 'rm_base.motors.dji',
-    'damiao': 'rm_base.motors.damiao',
-    'cheetah': 'rm_base.motors.cheetah',
-    'piper': 'rm_base.motors.piper',
+    'dji': 'rm_base.motors.dji.family',
+    'damiao': 'rm_base.motors.damiao.family',
+    'cheetah': 'rm_base.motors.cheetah.family',
+    'piper': 'rm_base.motors.piper.family',
 }
 
 

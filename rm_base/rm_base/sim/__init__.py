@@ -9,11 +9,10 @@ from rm_base.sim.bus import DEFAULT_RX_QUEUE_SIZE, SimBus
 from rm_base.sim.channel import ChannelStats, SimChannel, channel_names, find_channel
 from rm_base.sim.device_config import check_channel, device_from_config
 from rm_base.sim.devices import DeviceStats, SimDevice
-from rm_base.sim.dji_device import DjiDevice
 from rm_base.sim.errors import SimConfigError, SimError, SimLookupError, SimStateError
 from rm_base.sim.faults import Fault, FaultKind
 from rm_base.sim.imu import SimImu, expand_path, imu_from_config
-from rm_base.sim.mit_devices import CheetahDevice, DamiaoDevice
+from rm_base.sim.mit_device import MitDevice
 from rm_base.sim.motor import (
     DJI_ENCODER_COUNTS,
     MOTOR_DEFAULTS,
@@ -30,14 +29,12 @@ __all__ = [
     'DJI_ENCODER_COUNTS',
     'MOTOR_DEFAULTS',
     'ChannelStats',
-    'CheetahDevice',
-    'DamiaoDevice',
     'DeviceStats',
-    'DjiDevice',
     'DriveMode',
     'Fault',
     'FaultKind',
     'Joint',
+    'MitDevice',
     'MotorModel',
     'MotorParams',
     'MotorType',

@@ -37,7 +37,7 @@ def device_from_config(config: Mapping[str, Any], *, seed: int = 0) -> SimDevice
       120 °C for Damiao (which then reports COIL_OVER_TEMPERATURE).
     * DJI: ``feedback_rate_hz`` (1000), ``command_timeout`` [s] (0.1; 0 or None = never),
       ``control`` (GM6020: ``'voltage'`` (default) or ``'current'``), and the
-      UNVERIFIED scales of :func:`rm_base.hardware.protocols.dji.make_dji_spec`:
+      UNVERIFIED scales of :func:`rm_base.motors.dji.protocol.make_dji_spec`:
       ``raw_limit``, ``si_per_raw``, ``feedback_amps_per_raw``.
     * Damiao: ``model`` (default from the type, e.g. ``'DM4310'``), ``master_id``
       (default id + 0x10), ``mode`` (``'mit'`` default, ``'pos_vel'``, ``'vel'``),

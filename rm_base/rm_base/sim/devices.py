@@ -1,10 +1,9 @@
 """Simulated motor drivers on a CAN bus: the shared device base.
 
 Each device owns a :class:`~rm_base.sim.motor.MotorModel` and behaves on the bus like the
-real driver, using the device side of :mod:`rm_base.hardware.protocols` for every byte;
-one module per family: :mod:`rm_base.sim.dji_device` (C620 + M3508, C610 + M2006,
-GM6020), :mod:`rm_base.sim.mit_devices` (Damiao DM4310/DM8009, MIT Cheetah), built from
-config dicts by :mod:`rm_base.sim.device_config`.
+real driver, using the device side of its family's protocol for every byte; the devices
+are in the family folders (``rm_base.motors.<family>.sim_device``), built from config
+dicts by :mod:`rm_base.sim.device_config` through the family registry.
 
 Frames a device cannot use (wrong length, remote/extended/FD frames, a control frame for
 another mode, undecodable values) are ignored and counted in :attr:`SimDevice.stats`.

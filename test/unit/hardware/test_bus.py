@@ -9,9 +9,8 @@ import pytest
 from rm_base.hardware.bus import BusState, ManagedBus, frame_bits
 from rm_base.hardware.config import BusConfig
 from rm_base.hardware.errors import BusError, HardwareConfigError
+from support.hardware import FakeClock
 from support.ros import wait_until
-
-from .helpers import FakeClock
 
 TIMEOUT = 10.0  # [s] generous: condition waits only
 

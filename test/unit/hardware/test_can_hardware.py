@@ -13,8 +13,10 @@ from rm_base.hardware import (
     HardwareConfigError,
     HoldReason,
 )
-from rm_base.hardware.protocols import damiao, dji, mit
+from rm_base.hardware.protocols import mit
 from rm_base.hardware.protocols.mit import MitCommand, SystemCommand
+from rm_base.motors.damiao import protocol as damiao
+from rm_base.motors.dji import protocol as dji
 from support.ros import wait_until
 
 TIMEOUT = 10.0  # [s], condition waits only

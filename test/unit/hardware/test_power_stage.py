@@ -7,9 +7,8 @@ from rm_base.control import ChassisPowerModel, estimate_power
 from rm_base.hardware.actuators import Mode
 from rm_base.hardware.power_stage import PowerLimitStage
 from rm_base.motors import actuator_class
-
-from .helpers import MS, T0, joint
-from .test_actuators_dji import feed
+from support.hardware import MS, T0, joint
+from support.hardware import feed_dji as feed
 
 # k1 = 3 W/(N*m)^2 copper loss, no speed losses, 2 W static: at standstill four wheels
 # at 2 N*m draw 4 * 3 * 4 + 2 = 50 W.

@@ -7,10 +7,9 @@ import pytest
 from rm_base.hardware.actuators import HoldReason, Mode
 from rm_base.hardware.config import SafetyConfig
 from rm_base.hardware.errors import CommandRejectedError
-from rm_base.hardware.protocols import dji
 from rm_base.motors import actuator_class
-
-from .helpers import MS, T0, joint
+from rm_base.motors.dji import protocol as dji
+from support.hardware import MS, T0, joint
 
 ONE_NM_RAW = 2731  # 1 N·m / 0.3 N·m/A * 16384/20 (M3508)
 

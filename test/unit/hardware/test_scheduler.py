@@ -7,9 +7,8 @@ import pytest
 from rm_base.hardware.errors import HardwareConfigError
 from rm_base.hardware.scheduler import Scheduler
 from rm_base.hardware.timing import HISTOGRAM_EDGES_US
+from support.hardware import MS, T0
 from support.ros import wait_until
-
-from .helpers import MS, T0
 
 
 class Recorder:

@@ -8,8 +8,7 @@ not depend on the installed entry points, and the world is stepped by the test.
 import pytest
 from rm_base.hardware import MODE_EFFORT, MODE_MIT, CanHardware
 from rm_base.sim.world import SimWorld
-
-from .helpers import FakeClock, sim_factory, wait_fresh
+from support.hardware import FakeClock, sim_factory, wait_fresh
 
 
 @pytest.fixture

@@ -5,7 +5,10 @@ import math
 
 import can
 import pytest
-from rm_base.hardware.protocols import cheetah, damiao, dji, mit
+from rm_base.hardware.protocols import mit
+from rm_base.motors.cheetah import protocol as cheetah
+from rm_base.motors.damiao import protocol as damiao
+from rm_base.motors.dji import protocol as dji
 from rm_base.sim import DriveMode, Fault, SimConfigError, SimWorld
 
 from .helpers import drain, send, unique_channel

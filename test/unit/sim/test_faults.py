@@ -1,7 +1,7 @@
 """Fault injection into simulated motors: offline, jam, over-temperature, garbage, clear."""
 
 import pytest
-from rm_base.hardware.protocols import dji
+from rm_base.motors.dji import protocol as dji
 from rm_base.sim import Fault, FaultKind, SimBus, SimConfigError, SimLookupError, SimWorld
 
 from .helpers import drain, send, unique_channel

@@ -10,7 +10,7 @@ import can
 import pytest
 from hypothesis import given
 from hypothesis import strategies as st
-from rm_base.hardware.protocols import dji
+from rm_base.motors.dji import protocol as dji
 from rm_base.sim import SimWorld, wire
 from rm_base.sim.server import SimServer
 from rm_base.sim.socket_bus import SimSocketBus

@@ -5,7 +5,7 @@ import time
 
 import can
 import pytest
-from rm_base.hardware.protocols import dji
+from rm_base.motors.dji import protocol as dji
 from rm_base.sim import (
     SimBus,
     SimConfigError,

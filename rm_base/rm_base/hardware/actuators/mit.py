@@ -1,4 +1,4 @@
-"""MIT-mode motors: Damiao (DM4310, DM8009, ...) and the MIT Cheetah firmware.
+"""MIT-mode motors: the base of the Damiao and MIT Cheetah families (rm_base/motors/).
 
 Each motor has its own command frame (id = motor id). ``MODE_MIT`` is passed through
 natively (the motor closes ``kp``/``kd`` itself at its own rate); the other modes send a
@@ -14,7 +14,7 @@ the estimate equals the limit. Should the shifted target lie outside the frame's
 
 Family options (``joints.<name>.<key>``):
 
-* ``model`` (Damiao): a key of :data:`rm_base.hardware.protocols.damiao.DM_MODEL_LIMITS`;
+* ``model`` (Damiao): see rm_base/motors/damiao/actuator.py;
 * ``limits``: overrides of the MIT ranges (``p_max``, ``v_max``, ``t_max``, ``kp_max``,
   ``kd_max``...) — they must equal the motor's registers (Damiao RID 21–23);
 * ``master_id``: CAN id the motor replies on (Damiao MST_ID register: default id + 0x10,
@@ -30,21 +30,19 @@ with motion at 1 kHz) and is unwrapped into a continuous position.
 
 from __future__ import annotations
 
-import math
 from typing import Any, ClassVar
 
 import can
 
 from rm_base.hardware.actuators.base import (
     Actuator,
-    Defaults,
     Feedback,
     JointCommand,
     Unwrapper,
 )
 from rm_base.hardware.config import JointConfig, SafetyConfig
 from rm_base.hardware.errors import HardwareConfigError
-from rm_base.hardware.protocols import cheetah, damiao, mit
+from rm_base.hardware.protocols import mit
 from rm_base.hardware.protocols.mit import MitCommand, MitLimits, SystemCommand
 from rm_base.joints import Mode
 
@@ -241,116 +239,3 @@ class MitActuator(Actuator):
     def mit_fields(self) -> MitCommand:
         """The MIT command (motor side) packed at the next tick."""
         return self._fields
-
-
-class Damiao(MitActuator):
-    """A Damiao motor in MIT mode (register CTRL_MODE = 1)."""
-
-    type_name = 'damiao'
-    default_model: ClassVar[str | None] = None
-    option_keys = MitActuator.option_keys | {'model'}
-
-    def __init__(self, config: JointConfig, safety: SafetyConfig | None = None) -> None:
-        """Build the actuator; see the module docstring for the options.
-
-        Raises:
-            HardwareConfigError: unknown model, invalid id or option.
-        """
-        model = config.options.get('model', self.default_model)
-        if not isinstance(model, str):
-            raise HardwareConfigError(
-                f'joints.{config.name}.model is required for type {self.type_name!r} '
-                f'(one of {", ".join(damiao.DM_MODEL_LIMITS)})'
-            )
-        try:
-            base = damiao.dm_limits(model)
-        except HardwareConfigError as err:
-            raise HardwareConfigError(f'joints.{config.name}.model: {err}') from err
-        limits = limits_from_config(config.name, base, config.options.get('limits'))
-        # the motor reports its own output shaft; torque is reported, so no Kt is needed
-        self.defaults = Defaults(1.0, None, limits.t_max, limits.v_max, 80.0)
-        self.model = model.upper()
-        self._device_state = damiao.DmState.DISABLED
-        super().__init__(config, limits, safety)
-
-    @staticmethod
-    def _default_master_id(motor_id: int) -> int:
-        return min(motor_id + 0x10, 0x7FF)
-
-    def reply_key(self) -> str:
-        """Damiao motors reply on their master id with the low nibble of their id."""
-        return f'master id 0x{self.master_id:03X} and id nibble {self.motor_id & 0x0F}'
-
-
-    def _match(self, msg: can.Message) -> bool:
-        data = msg.data
-        return len(data) > 0 and (data[0] & 0x0F) == (self.motor_id & 0x0F)
-
-    def _decode(self, msg: can.Message) -> tuple[float, float, float, float | None, int]:
-        fb = damiao.decode_feedback(msg.data, self.limits)
-        self._device_state = fb.state
-        position = self._position_unwrapper.update(fb.position)
-        error = fb.state if fb.state in damiao.FAULT_STATES else 0
-        return position, fb.velocity, fb.torque, float(max(fb.t_mos, fb.t_rotor)), error
-
-    def _reports_disabled(self) -> bool:
-        return self._device_state == damiao.DmState.DISABLED
-
-
-class Dm4310(Damiao):
-    """DM4310 (24 V): P ±12.5 rad, V ±30 rad/s, T ±10 N·m."""
-
-    type_name = 'dm4310'
-    default_model = 'DM4310'
-
-
-class Dm4340(Damiao):
-    """DM4340: ranges conflict between DM's SDKs — set ``limits`` from the motor."""
-
-    type_name = 'dm4340'
-    default_model = 'DM4340'
-
-
-class Dm8009(Damiao):
-    """DM8009: P ±12.5 rad, V ±45 rad/s, T ±54 N·m."""
-
-    type_name = 'dm8009'
-    default_model = 'DM8009'
-
-
-class Dm10010L(Damiao):
-    """DM10010L: P ±12.5 rad, V ±25 rad/s, T ±200 N·m."""
-
-    type_name = 'dm10010l'
-    default_model = 'DM10010L'
-
-
-class Cheetah(MitActuator):
-    """A motor running Ben Katz's MIT Cheetah firmware (no temperatures, no clear-error)."""
-
-    type_name = 'cheetah'
-    max_motor_id = 0xFF  # the reply carries the id in one byte
-
-    def __init__(self, config: JointConfig, safety: SafetyConfig | None = None) -> None:
-        """Build the actuator; see the module docstring for the options.
-
-        Raises:
-            HardwareConfigError: invalid id or option.
-        """
-        limits = limits_from_config(
-            config.name, cheetah.CHEETAH_DEFAULT_LIMITS, config.options.get('limits')
-        )
-        self.defaults = Defaults(1.0, None, limits.t_max, limits.v_max, math.inf)
-        super().__init__(config, limits, safety)
-
-    def _match(self, msg: can.Message) -> bool:
-        data = msg.data
-        return len(data) > 0 and data[0] == self.motor_id
-
-    def _decode(self, msg: can.Message) -> tuple[float, float, float, float | None, int]:
-        reply = cheetah.decode_reply(msg.data, self.limits)
-        position = self._position_unwrapper.update(reply.position)
-        return position, reply.velocity, reply.torque, None, 0
-
-    def _system_data(self, command: SystemCommand) -> bytes:
-        return cheetah.cheetah_system_frame(command)

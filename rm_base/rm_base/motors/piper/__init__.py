@@ -1,8 +1,5 @@
-"""AgileX Piper arm joints driven in MIT mode (no simulated model)."""
+"""AgileX Piper arm joints driven by per-joint MIT frames (no simulated model).
 
-from __future__ import annotations
-
-from rm_base.hardware.actuators.piper import PiperJoint
-from rm_base.motors.family import MotorFamily
-
-FAMILY = MotorFamily(name='piper', actuators=(PiperJoint,))
+``protocol`` (bytes <-> values), ``actuator`` (the joint type), ``family`` (the registry
+record).
+"""

@@ -8,7 +8,7 @@ C620's value is not documented).
 
 from __future__ import annotations
 
-from rm_base.hardware.protocols import dji
+from rm_base.motors.dji import protocol as dji
 from rm_base.sim._schedule import RateSchedule
 from rm_base.sim.devices import NS_PER_S, Frame, SimDevice
 from rm_base.sim.motor import MotorModel, MotorType
@@ -18,7 +18,7 @@ class DjiDevice(SimDevice):
     """A DJI motor with its ESC: C620 + M3508, C610 + M2006, or GM6020 (voltage/current).
 
     Attributes:
-        spec: ids, limits and scales (from :func:`rm_base.hardware.protocols.dji.make_dji_spec`).
+        spec: ids, limits and scales (from :func:`rm_base.motors.dji.protocol.make_dji_spec`).
         command_timeout_ns: no command for this long -> zero current; None never.
         command_raw: the last raw value taken from the motor's slot.
     """

@@ -1,10 +1,12 @@
-"""Shared helpers of the hardware-layer tests (imported as a plain module)."""
+"""Shared helpers of the hardware and motor family tests."""
 
 import itertools
 import os
 import time
 
+import can
 from rm_base.hardware.config import JointConfig
+from rm_base.motors.dji import protocol as dji
 from rm_base.sim.bus import SimBus
 
 MS = 1_000_000  # ns
@@ -52,3 +54,13 @@ def wait_fresh(hw, now_ns, timeout_s=10.0):
             return
         time.sleep(0.0002)
     raise AssertionError(f'no fresh feedback: {hw.states()}')
+
+
+def feed_dji(actuator, now_ns, ticks=0, rpm=0, current=0, temperature=30):
+    """Hand a DJI actuator one feedback frame with these raw values."""
+    msg = can.Message(
+        arbitration_id=actuator.feedback_id,
+        data=dji.encode_feedback(ticks, rpm, current, temperature),
+        is_extended_id=False,
+    )
+    assert actuator.handle_frame(msg, now_ns)

@@ -1,6 +1,6 @@
 """DJI motors: M3508 (C620), M2006 (C610), GM6020 in voltage and in current mode.
 
-The motors only hold their raw command; a :class:`rm_base.hardware.groups.DjiCommandGroup`
+The motors only hold their raw command; a :class:`rm_base.motors.dji.groups.DjiCommandGroup`
 packs the shared frame (0x200, 0x1FF, 0x2FF, 0x1FE, 0x2FE). The rotor encoder is single
 turn, so the joint position starts within half an output turn of zero and is unwrapped
 from there.
@@ -27,7 +27,7 @@ from rm_base.geometry.encoder import EncoderUnwrapper
 from rm_base.hardware.actuators.base import Actuator, Defaults, Feedback, JointCommand
 from rm_base.hardware.config import JointConfig, SafetyConfig
 from rm_base.hardware.errors import HardwareConfigError, ValueRangeError
-from rm_base.hardware.protocols import dji
+from rm_base.motors.dji import protocol as dji
 
 _RPM_TO_RAD_S = dji.RAD_PER_S_PER_RPM
 #: Feedback faster than this times the type's no-load speed is implausible.

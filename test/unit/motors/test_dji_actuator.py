@@ -7,10 +7,10 @@ import can
 import pytest
 from rm_base.hardware.actuators import HoldReason, Mode
 from rm_base.hardware.errors import HardwareConfigError
-from rm_base.hardware.protocols import dji
 from rm_base.motors import actuator_class
-
-from .helpers import MS, T0, joint
+from rm_base.motors.dji import protocol as dji
+from support.hardware import MS, T0, joint
+from support.hardware import feed_dji as feed
 
 M3508_GEAR = 3591 / 187
 
@@ -18,15 +18,6 @@ M3508_GEAR = 3591 / 187
 def make(type_='m3508', **extra):
     cfg = joint(type=type_, **extra)
     return actuator_class(cfg.type)(cfg)
-
-
-def feed(actuator, now_ns, ticks=0, rpm=0, current=0, temperature=30):
-    msg = can.Message(
-        arbitration_id=actuator.feedback_id,
-        data=dji.encode_feedback(ticks, rpm, current, temperature),
-        is_extended_id=False,
-    )
-    assert actuator.handle_frame(msg, now_ns)
 
 
 # --- feedback -> SI ---

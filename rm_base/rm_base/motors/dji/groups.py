@@ -12,9 +12,9 @@ from collections.abc import Iterable
 
 import can
 
-from rm_base.hardware.actuators.dji import DjiActuator
 from rm_base.hardware.errors import HardwareConfigError
-from rm_base.hardware.protocols import dji
+from rm_base.motors.dji import protocol as dji
+from rm_base.motors.dji.actuator import DjiActuator
 
 
 class DjiCommandGroup:

@@ -7,11 +7,13 @@ import pytest
 from rm_base.hardware.actuators import Mode
 from rm_base.hardware.actuators.mit import fit_mit_target
 from rm_base.hardware.errors import HardwareConfigError, ValueRangeError
-from rm_base.hardware.protocols import cheetah, damiao, mit, piper
+from rm_base.hardware.protocols import mit
 from rm_base.hardware.protocols.mit import MitCommand, SystemCommand
 from rm_base.motors import actuator_class
-
-from .helpers import MS, T0, joint
+from rm_base.motors.cheetah import protocol as cheetah
+from rm_base.motors.damiao import protocol as damiao
+from rm_base.motors.piper import protocol as piper
+from support.hardware import MS, T0, joint
 
 DM4310 = damiao.dm_limits('DM4310')
 

@@ -2,10 +2,9 @@
 
 import pytest
 from rm_base.hardware.errors import HardwareConfigError
-from rm_base.hardware.groups import DjiCommandGroup, build_dji_groups
 from rm_base.motors import actuator_class
-
-from .helpers import joint
+from rm_base.motors.dji.groups import DjiCommandGroup, build_dji_groups
+from support.hardware import joint
 
 
 def motor(name, type_, id_, bus='can0'):

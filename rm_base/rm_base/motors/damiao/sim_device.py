@@ -1,95 +1,22 @@
-"""Simulated MIT-protocol motors on a CAN bus: Damiao and the MIT Cheetah.
+"""Simulated Damiao motor (DM4310, DM8009...).
 
-* Damiao (DM4310, DM8009): answers each command frame with one feedback frame, but only
-  while enabled; system frames (enable, disable, set zero, clear error) are always
-  answered. MIT law computed on the motor; POS_VEL and VEL modes with internal loops.
-  Over-temperature and (optional) command timeout latch an error code until cleared.
-* MIT Cheetah (Ben Katz firmware): like Damiao but with its own reply (6 or 7 bytes to
-  the master id, no error nibble, no temperature) and no clear-error frame.
+Answers each command frame with one feedback frame, but only while enabled; system frames
+(enable, disable, set zero, clear error) are always answered. MIT law computed on the
+motor; POS_VEL and VEL modes with internal loops. Over-temperature and (optional) command
+timeout latch an error code until cleared.
 """
 
 from __future__ import annotations
 
-from abc import abstractmethod
-
-from rm_base.hardware.protocols import cheetah, damiao, mit
-from rm_base.sim.devices import NS_PER_S, Frame, SimDevice, require_finite
+from rm_base.hardware.protocols import mit
+from rm_base.motors.damiao import protocol as damiao
+from rm_base.sim.devices import NS_PER_S, Frame, require_finite
 from rm_base.sim.errors import SimConfigError
-from rm_base.sim.motor import DriveMode, MotorModel, MotorType
+from rm_base.sim.mit_device import MitDevice
+from rm_base.sim.motor import MotorModel, MotorType
 
 
-class _MitDevice(SimDevice):
-    """Shared behaviour of motors that run the MIT law themselves and reply on command."""
-
-    def __init__(
-        self,
-        name: str,
-        motor_type: MotorType,
-        motor_id: int,
-        model: MotorModel,
-        limits: mit.MitLimits,
-        *,
-        master_id: int,
-        enabled: bool = False,
-        seed: int = 0,
-        overtemp_c: float | None = None,
-    ):
-        super().__init__(name, motor_type, motor_id, model, seed=seed, overtemp_c=overtemp_c)
-        self.limits = limits
-        self.master_id = master_id
-        self.enabled = enabled
-        #: Output angle [rad] at which the reported position is 0 (set-zero frame).
-        self.zero_offset = 0.0
-        self.command: mit.MitCommand = mit.MitCommand(0.0, 0.0, 0.0, 0.0, 0.0)
-        self._last_command_ns: int | None = None
-
-    @property
-    def transmit_ids(self) -> frozenset[int]:
-        """The master id the replies go to."""
-        return frozenset({self.master_id})
-
-    @property
-    def position(self) -> float:
-        """Output position relative to the zero set on the motor [rad]."""
-        return self.model.angle - self.zero_offset
-
-    def _apply_mit(self, cmd: mit.MitCommand) -> None:
-        self.model.command_impedance(
-            cmd.position,
-            cmd.velocity,
-            max(0.0, cmd.kp),
-            max(0.0, cmd.kd),
-            cmd.torque,
-            position_offset=self.zero_offset,
-        )
-
-    def _limp(self) -> None:
-        self.model.command_current(0.0)
-
-    def _enable(self) -> None:
-        # A stale command from before the enable is not replayed: start limp.
-        self.command = mit.MitCommand(0.0, 0.0, 0.0, 0.0, 0.0)
-        self.enabled = True
-        self._limp()
-
-    def _disable(self) -> None:
-        self.enabled = False
-        self._limp()
-
-    def _set_zero(self) -> None:
-        self.zero_offset = self.model.angle
-        if self.enabled:
-            self._apply_mit(self.command)
-
-    def _periodic(self, now_ns: int) -> list[Frame]:
-        return []  # these motors only speak when spoken to
-
-    @abstractmethod
-    def _reply(self) -> Frame:
-        """The feedback frame sent in answer to a command."""
-
-
-class DamiaoDevice(_MitDevice):
+class DamiaoDevice(MitDevice):
     """A Damiao motor (DM4310, DM8009, ...) in MIT, POS_VEL or VEL mode.
 
     Attributes:
@@ -261,87 +188,6 @@ class DamiaoDevice(_MitDevice):
             torque=m.torque,
             t_mos=max(0, min(255, round(t_mos))),
             t_rotor=max(0, min(255, round(m.temperature))),
-            limits=self.limits,
-        )
-        return (self.master_id, data)
-
-
-class CheetahDevice(_MitDevice):
-    """A motor running Ben Katz's MIT Cheetah firmware.
-
-    Attributes:
-        reply_voltage: send the 7-byte reply with bus voltage (STM32 firmware) instead of
-            the 6-byte one (mbed firmware).
-    """
-
-    def __init__(
-        self,
-        name: str,
-        motor_type: MotorType,
-        motor_id: int,
-        model: MotorModel,
-        limits: mit.MitLimits,
-        *,
-        master_id: int = cheetah.DEFAULT_MASTER_ID,
-        enabled: bool = False,
-        reply_voltage: bool = False,
-        seed: int = 0,
-        overtemp_c: float | None = None,
-    ):
-        """Create the device; see :func:`device_from_config` for the parameters."""
-        super().__init__(
-            name,
-            motor_type,
-            motor_id,
-            model,
-            limits,
-            master_id=master_id,
-            enabled=enabled,
-            seed=seed,
-            overtemp_c=overtemp_c,
-        )
-        self.reply_voltage = reply_voltage
-        self._listen = frozenset({motor_id})
-
-    @property
-    def listen_ids(self) -> frozenset[int]:
-        """The motor's CAN id."""
-        return self._listen
-
-    def _on_frame(self, arbitration_id: int, data: bytes, now_ns: int) -> list[Frame] | None:
-        system = mit.parse_system_frame(data)
-        # The firmware knows only FC/FD/FE; anything else (FF..FB too) is an MIT command.
-        if system in cheetah.CHEETAH_SYSTEM_COMMANDS:
-            if system is mit.SystemCommand.ENABLE:
-                self._enable()
-            elif system is mit.SystemCommand.DISABLE:
-                self._disable()
-            else:
-                self._set_zero()
-            return [self._reply()]
-        command = mit.unpack_mit_command(data, self.limits)
-        if not self.enabled:
-            return None
-        self._last_command_ns = now_ns
-        self.command = command
-        if not self.overheated:
-            self._apply_mit(command)
-        return [self._reply()]
-
-    def _control(self, now_ns: int, dt: float) -> None:
-        if not self.enabled or self.overheated:
-            self._limp()
-        elif self.model.mode is DriveMode.CURRENT:
-            self._apply_mit(self.command)  # back from an over-temperature cut-out
-
-    def _reply(self) -> Frame:
-        m = self.model
-        data = cheetah.encode_reply(
-            self.motor_id & 0xFF,
-            position=self.position,
-            velocity=m.velocity,
-            torque=m.torque,
-            bus_voltage=m.params.supply_voltage if self.reply_voltage else None,
             limits=self.limits,
         )
         return (self.master_id, data)

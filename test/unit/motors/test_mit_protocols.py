@@ -6,9 +6,11 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 from rm_base.hardware.errors import FrameLengthError, HardwareConfigError, ValueRangeError
-from rm_base.hardware.protocols import cheetah, damiao, mit
-from rm_base.hardware.protocols.damiao import DmMode
+from rm_base.hardware.protocols import mit
 from rm_base.hardware.protocols.mit import MitCommand, MitLimits, SystemCommand
+from rm_base.motors.cheetah import protocol as cheetah
+from rm_base.motors.damiao import protocol as damiao
+from rm_base.motors.damiao.protocol import DmMode
 
 
 def h(text):

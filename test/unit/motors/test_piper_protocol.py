@@ -6,8 +6,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 from rm_base.hardware.errors import ChecksumError, FrameLengthError, ValueRangeError
-from rm_base.hardware.protocols import piper
 from rm_base.hardware.protocols.mit import MitCommand
+from rm_base.motors.piper import protocol as piper
 
 
 def h(text):

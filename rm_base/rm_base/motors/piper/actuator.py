@@ -21,9 +21,9 @@ from rm_base.hardware.actuators.base import Actuator, Defaults, Feedback, JointC
 from rm_base.hardware.actuators.mit import fit_mit_target, limits_from_config
 from rm_base.hardware.config import JointConfig, SafetyConfig
 from rm_base.hardware.errors import HardwareConfigError
-from rm_base.hardware.protocols import piper
 from rm_base.hardware.protocols.mit import MitCommand
 from rm_base.joints import Mode
+from rm_base.motors.piper import protocol as piper
 
 _ZERO = MitCommand(0.0, 0.0, 0.0, 0.0, 0.0)
 

@@ -5,23 +5,24 @@ import textwrap
 import pytest
 from rm_base.bridge.sim_config import motor_config
 from rm_base.hardware import MODE_MIT, CanHardware
-from rm_base.hardware.actuators import M3508, Cheetah, Gm6020Voltage
 from rm_base.hardware.errors import HardwareConfigError
 from rm_base.motors import MotorFamily, MotorFamilyError, UnknownTypeError
+from rm_base.motors.cheetah.actuator import Cheetah
+from rm_base.motors.dji.actuator import M3508, Gm6020Voltage
 from rm_base.sim.errors import SimConfigError
 from rm_base.sim.world import SimWorld
+from support.hardware import FakeClock, joint, sim_factory, wait_fresh
 
 from rm_base import motors
-
-from .helpers import FakeClock, joint, sim_factory, wait_fresh
 
 # A motor family of its own package, as a team would ship it: an MIT-protocol joint type
 # and its simulated motor, registered through the rm_base.motor_families entry point.
 ACME_MODULE = """
-from rm_base.hardware.actuators import Cheetah
-from rm_base.hardware.protocols import cheetah
 from rm_base.motors import MotorFamily, SimFamily
-from rm_base.sim import MOTOR_DEFAULTS, CheetahDevice, MotorType
+from rm_base.motors.cheetah import protocol as cheetah
+from rm_base.motors.cheetah.actuator import Cheetah
+from rm_base.motors.cheetah.sim_device import CheetahDevice
+from rm_base.sim import MOTOR_DEFAULTS, MotorType
 
 
 class AcmeJoint(Cheetah):

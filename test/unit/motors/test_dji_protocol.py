@@ -6,8 +6,8 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 from rm_base.hardware.errors import FrameLengthError, HardwareConfigError, ValueRangeError
-from rm_base.hardware.protocols import dji
-from rm_base.hardware.protocols.dji import DjiKind
+from rm_base.motors.dji import protocol as dji
+from rm_base.motors.dji.protocol import DjiKind
 
 
 def h(text):
