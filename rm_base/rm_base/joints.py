@@ -135,7 +135,7 @@ def check_target(
     values = (position, velocity, effort, kp, kd)
     # Every tick of every plugin comes through here: the common case in one pass.
     if all(type(v) is float and math.isfinite(v) for v in values):
-        p, v, e, k, d = values  # type: ignore[misc]
+        p, v, e, k, d = values
     else:
         p, v, e, k, d = (
             _number(name, value) for name, value in zip(_FIELDS, values, strict=True)

@@ -77,7 +77,8 @@ def params_file_error(args: Sequence[str]) -> str | None:
             with open(path, encoding='utf-8') as stream:
                 for event in yaml.parse(stream):
                     if isinstance(event, yaml.AliasEvent):
-                        line = event.start_mark.line + 1
+                        mark = event.start_mark
+                        line = mark.line + 1 if mark is not None else 0
                         return (
                             f'{path}:{line}: YAML anchors and aliases are not supported in '
                             'ROS 2 parameter files; spell the values out'

@@ -36,7 +36,7 @@ class FastLogger:
     """
 
     def __init__(self, logger: Any) -> None:
-        self._logger = logger._logger if isinstance(logger, FastLogger) else logger
+        self._logger: Any = logger._logger if isinstance(logger, FastLogger) else logger
         self.name: str = logger.name
         self._filter_lock = threading.Lock()
         self._last: dict[tuple[Any, int], float] = {}  # caller -> last time it logged [s]

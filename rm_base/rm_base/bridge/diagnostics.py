@@ -167,7 +167,7 @@ class DiagnosticsReporter:
         load = stats.load_fraction
         if stats.state == 'up':
             level = WARN if load is not None and load > BUS_LOAD_WARN else OK
-            message = 'up' if level == OK else f'up, load {100 * load:.0f} %'
+            message = 'up' if load is None or level == OK else f'up, load {100 * load:.0f} %'
         elif stats.state == 'down':
             level, message = ERROR, f'down, reopening: {stats.last_error or "unknown error"}'
         else:

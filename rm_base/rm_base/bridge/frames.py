@@ -13,10 +13,12 @@ from __future__ import annotations
 import collections
 import threading
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Mapping
 from typing import Any, NamedTuple
 
 import can
+
+from rm_base.hardware.bus import BusFactory, CanBus
 
 #: Default queue length [frames]: about one second of two busy buses at 1 kHz.
 DEFAULT_MAX_FRAMES = 4096
@@ -41,7 +43,7 @@ class TappedFrame(NamedTuple):
 class _TappedBus:
     """Proxy of a python-can bus that reports every frame to the tap."""
 
-    def __init__(self, inner: can.BusABC, bus: str, tap: FrameTap) -> None:
+    def __init__(self, inner: CanBus, bus: str, tap: FrameTap) -> None:
         self._inner = inner
         self._bus = bus
         self._tap = tap
@@ -75,7 +77,7 @@ class FrameTap:
     def __init__(
         self,
         bus_names: Mapping[tuple[str, str], str],
-        inner_factory: Callable[..., can.BusABC] = can.Bus,
+        inner_factory: BusFactory = can.Bus,
         max_frames: int = DEFAULT_MAX_FRAMES,
     ) -> None:
         self._names = dict(bus_names)

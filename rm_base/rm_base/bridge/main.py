@@ -5,6 +5,7 @@ from __future__ import annotations
 import logging
 import sys
 
+from rclpy.executors import Executor
 from rclpy.experimental import EventsExecutor
 
 from rm_base.bridge.node import NODE_NAME, CanBridgeNode
@@ -15,7 +16,7 @@ from rm_base.realtime import shorten_gil_switch_interval
 from rm_base.ros_logging import forward_package_logging
 
 
-def _executor(node: CanBridgeNode) -> EventsExecutor:
+def _executor(node: CanBridgeNode) -> Executor:
     # Only the ROS callbacks (/actuator_cmd, the sim services, parameter services): the
     # 1 kHz loop is CanHardware's own thread, the states go out from the node's publisher
     # thread. EventsExecutor: about a quarter of the SingleThreadedExecutor's CPU per

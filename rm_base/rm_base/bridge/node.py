@@ -36,6 +36,7 @@ from rm_base.bridge.params import (
 from rm_base.bridge.sim_config import world_config
 from rm_base.bridge.sim_services import SimFaultServices
 from rm_base.hardware import CanHardware
+from rm_base.hardware.bus import BusFactory
 from rm_base.node_main import inbox_node
 from rm_base.plugin.inbox import Inbox
 from rm_base.plugin.params import PluginParams
@@ -138,14 +139,14 @@ class CanBridgeNode(Node):
                     f'simulated world (sim.*, joints.<joint>.sim.*): {err}'
                 ) from err
             hardware = with_sim_world(hardware, self.sim_world)
-        bus_factory: Callable[..., can.BusABC] = can.Bus
+        bus_factory: BusFactory = can.Bus
         if settings.publish_frames:
             names = {(b.interface, str(b.channel)): b.name for b in settings.hardware_config.buses}
             self._frame_tap = FrameTap(names, bus_factory)
             bus_factory = self._frame_tap.factory
         world = self.sim_world
         self.stepped = world is not None and world.timing is Timing.STEPPED
-        if self.stepped:
+        if world is not None and self.stepped:
             # Lockstep: the loop runs only in step(), on the world's clock, and takes the
             # feedback itself, so every tick is the same on every run.
             self.hardware = hw = CanHardware(
@@ -330,17 +331,22 @@ class CanBridgeNode(Node):
         )
         open_params = {
             name: plain(parameter.value)
-            for name, parameter in self.get_parameters_by_prefix('').items()
+            for name, parameter in self._parameters_under('').items()
             if name not in typed and not is_ros_own(name)
         }
         return settings_from_parameters(typed, open_params)
+
+    def _parameters_under(self, prefix: str) -> dict[str, Parameter]:
+        # rclpy 7.1.6 annotates the values as parameter values; they are Parameter objects
+        parameters: dict[str, Any] = self.get_parameters_by_prefix(prefix)
+        return parameters
 
     def _check_sim_group(self) -> None:
         # A params file with both `sim: true` and a `sim:` group (one YAML key twice) is
         # read by rcl as no `sim` at all and the `true` moved onto the group's first key.
         if self.has_parameter('sim'):
             return
-        for name, parameter in self.get_parameters_by_prefix('sim').items():
+        for name, parameter in self._parameters_under('sim').items():
             if isinstance(parameter.value, bool):
                 raise BridgeConfigError(
                     f"parameter 'sim.{name}' is {parameter.value} and 'sim' is missing: the "

@@ -65,6 +65,8 @@ def build_world(params: Mapping[str, Any]) -> tuple[SimWorld, Any]:
     typed['sim'] = True
     open_params = {k: v for k, v in params.items() if k not in TYPED}
     settings = settings_from_parameters(typed, open_params)
+    if settings.sim is None:
+        raise ConfigError('sim settings missing although sim is true')
     world = SimWorld.from_config(world_config(settings.hardware_config, settings.sim))
     return world, settings
 

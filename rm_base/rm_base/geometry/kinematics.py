@@ -48,10 +48,10 @@ counter-clockwise), so w_i = (-sin(alpha_i) vx + cos(alpha_i) vy + R wz) / r.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from numbers import Real
-from typing import NamedTuple
+from typing import Any, NamedTuple, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -181,7 +181,8 @@ class WheelKinematics:
         vector = np.asarray(twist, dtype=float)
         if vector.shape != (3,) or not np.all(np.isfinite(vector)):
             raise InputRejectedError(f'twist must be 3 finite values (vx, vy, wz), got {twist!r}')
-        return self._jacobian @ vector
+        wheel_speeds: NDArray[np.float64] = self._jacobian @ vector
+        return wheel_speeds
 
     def forward(self, wheel_speeds: ArrayLike) -> Twist2D:
         """Return the base twist that best explains the wheel speeds (least squares).
@@ -348,10 +349,10 @@ def desaturate_speeds(
     return scaled, max(map(abs, scaled)) / peak
 
 
-def _floats(values: Sequence[float]) -> tuple[float, ...] | None:
+def _floats(values: ArrayLike) -> tuple[float, ...] | None:
     """Return values as a tuple of floats, or None if one is not a finite number."""
     try:
-        floats = tuple(map(float, values))
+        floats = tuple(map(float, cast(Iterable[Any], values)))  # TypeError if no sequence
     except (TypeError, ValueError):
         return None
     for value in floats:

@@ -16,7 +16,8 @@ Quaternions from outside are checked like tf2 does: one whose squared norm is wi
 """
 
 import math
-from typing import NamedTuple
+from collections.abc import Iterable
+from typing import Any, NamedTuple, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -45,7 +46,7 @@ def normalize_quaternion(q: ArrayLike) -> Quaternion:
     """
     # Plain floats: called per IMU sample and per tick, where numpy's overhead dominates.
     try:
-        x, y, z, w = map(float, q)
+        x, y, z, w = map(float, cast(Iterable[Any], q))  # TypeError if q is no sequence
     except (TypeError, ValueError):
         finite = False
     else:

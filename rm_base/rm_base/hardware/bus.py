@@ -21,7 +21,7 @@ import logging
 import threading
 import time
 from collections.abc import Callable, Sequence
-from typing import Any
+from typing import Any, Protocol
 
 import can
 
@@ -33,7 +33,23 @@ _log = logging.getLogger(__name__)
 
 #: Handler of a received frame: ``handler(msg, now_ns) -> matched``.
 FrameHandler = Callable[[can.Message, int], bool]
-BusFactory = Callable[..., can.BusABC]
+
+
+class CanBus(Protocol):
+    """What the hardware layer uses of a bus: a ``can.BusABC``, or a proxy of one."""
+
+    def send(self, msg: can.Message, timeout: float | None = None) -> None:
+        """Send one frame (raises can.CanError)."""
+
+    def recv(self, timeout: float | None = None) -> can.Message | None:
+        """The next frame, or None after timeout [s]."""
+
+    def shutdown(self) -> None:
+        """Release the interface."""
+
+
+#: Builds a bus: ``factory(interface=..., channel=..., **options)`` (``can.Bus``).
+BusFactory = Callable[..., CanBus]
 
 # Nominal frame lengths without bit stuffing: SOF..EOF plus 3 bits of interframe space.
 _STD_FRAME_OVERHEAD_BITS = 47
@@ -160,7 +176,7 @@ class ManagedBus:
         self._frame_clock = frame_clock
         self._late = 0  # frames that waited > 1 ms for the receive thread
         self._factory = bus_factory
-        self._bus: can.BusABC | None = None
+        self._bus: CanBus | None = None
         self._state = BusState.NEW
         self._handlers: dict[int, tuple[FrameHandler, ...]] = {}
         self._reopen_listeners: list[Callable[[int], None]] = []

@@ -18,6 +18,7 @@ The simulator plugs in as ``interface: rm_sim`` in a bus config (``virtual`` wor
 
 from __future__ import annotations
 
+import functools
 import logging
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -32,7 +33,7 @@ from rm_base.hardware.config import HardwareConfig
 from rm_base.hardware.errors import CommandRejectedError, HardwareConfigError
 from rm_base.hardware.power_stage import PowerLimitStage
 from rm_base.hardware.protocols.mit import SystemCommand
-from rm_base.hardware.scheduler import Scheduler
+from rm_base.hardware.scheduler import Packer, Scheduler
 from rm_base.joints import JointTarget
 from rm_base.motors import GroupBuilder, UnknownTypeError, actuator_class, family_of
 
@@ -100,12 +101,14 @@ class CanHardware:
                 bus.add_handler(fid, a.handle_frame)
         for name, bus in self.buses.items():
             members = [a for a in actuators if a.bus_name == name]
-            bus.add_failure_listener(lambda now_ns, m=members: self._bus_down(m, now_ns))
-            bus.add_reopen_listener(lambda now_ns, m=members: self._bus_recovered(m, now_ns))
+            bus.add_failure_listener(functools.partial(self._bus_down, members))
+            bus.add_reopen_listener(functools.partial(self._bus_recovered, members))
         # A tick's frames are collected per bus and sent together (one driver call per bus
         # where the interface takes several frames at once).
         self._outgoing: dict[str, list[can.Message]] = {name: [] for name in self.buses}
-        packers = [(g, self._outgoing[g.bus_name].append) for g in self.groups]
+        packers: list[tuple[Packer, Callable[[can.Message], None]]] = [
+            (g, self._outgoing[g.bus_name].append) for g in self.groups
+        ]
         packers += [(a, self._outgoing[a.bus_name].append) for a in own_frames]
         self.scheduler = Scheduler(
             actuators,
@@ -137,12 +140,12 @@ class CanHardware:
                     f'{a.name} and {sent[key]} both send frame 0x{a.command_id:03X} on {a.bus_name}'
                 )
             sent[key] = a.name
-            key = a.reply_key()
-            if key is not None:
-                reply = (a.bus_name, key)
+            reply_key = a.reply_key()
+            if reply_key is not None:
+                reply = (a.bus_name, reply_key)
                 if reply in replies:
                     raise HardwareConfigError(
-                        f'{a.name} and {replies[reply]} both reply with {key} on '
+                        f'{a.name} and {replies[reply]} both reply with {reply_key} on '
                         f'{a.bus_name}: their feedback cannot be told apart'
                     )
                 replies[reply] = a.name

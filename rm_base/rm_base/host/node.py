@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import re
 from collections.abc import Callable
 from enum import Enum
@@ -18,7 +19,7 @@ from rm_base.plugin import PluginBase, PluginLoader, PluginParams
 from rm_base.plugin.errors import ParameterError
 from rm_base.plugin.inbox import STAGE_NAME as INBOX_STAGE
 from rm_base.plugin.inbox import Inbox
-from rm_base.plugin.node_io import DdsJointIO, node_io, use_local_io
+from rm_base.plugin.node_io import DdsJointIO, NodeIO, node_io, use_local_io
 from rm_base.plugin.outbox import Outbox
 from rm_base.realtime import EDGE_PRIORITY, LOOP_PRIORITY, shorten_gil_switch_interval
 from rm_base.ros_logging import FastLogger
@@ -101,6 +102,8 @@ class RobotHost(Node):
         self._tasks: dict[str, PluginTask] = {}
         self._shut_down = False
         self._outbox = Outbox(f'{NODE_NAME}-publish')
+        io: NodeIO
+        self.loop: Scheduler | None
         if hardware is not None:
             io = use_local_io(self, hardware)
             self.loop = hardware.scheduler
@@ -263,14 +266,15 @@ class RobotHost(Node):
             description='real-time (SCHED_FIFO) priority of the plugin loop thread when '
             'rm_robot runs as a process of its own; 0: normal scheduling',
         )
-        if self._own_loop:
-            self.loop = Scheduler(
+        loop = self.loop
+        if loop is None:  # rm_robot as a process of its own
+            loop = self.loop = Scheduler(
                 [], [], rate_hz=loop_rate, thread_name=f'{NODE_NAME}-loop',
                 priority=loop_priority,
             )
-            inputs.time_left = self.loop.time_left_ns
+            inputs.time_left = loop.time_left_ns
 
-        self._io.loop = self.loop
+        self._io.loop = loop
         start_enabled = {}
         for name in names:
             host_params = PluginParams(self, name)
@@ -283,22 +287,22 @@ class RobotHost(Node):
             plugin = loader.create(type_name, plugin=name)
             plugin.init(self, name, PluginParams(self, name, type_name))
             # one loop period apart: plugins of like rates do not all fall on one tick
-            phase_ns = len(self._tasks) * self.loop.period_ns
+            phase_ns = len(self._tasks) * loop.period_ns
             self._tasks[name] = PluginTask(plugin, inputs, phase_ns)
 
         for name, task in self._tasks.items():
             self.create_service(
                 SetBool,
                 f'~/{name}/enable',
-                lambda request, response, task=task: self._on_enable(task, request, response),
+                functools.partial(self._on_enable, task),
             )
         self.create_service(SetBool, '~/enable_all', self._on_enable_all)
         self.create_timer(state_period, self._on_state_timer)
 
         if self._inbox is not None:  # first: a command reaches its plugin in the same tick
-            self.loop.add_stage(self._inbox)
+            loop.add_stage(self._inbox)
         self._outbox.pace()  # publishes in the loop's idle time
-        self.loop.add_after_tick(self._outbox.wake)
+        loop.add_after_tick(self._outbox.wake)
         for name, task in self._tasks.items():
             plugin = task.plugin
             if start_enabled[name]:
@@ -308,9 +312,9 @@ class RobotHost(Node):
                 f'{"enabled" if plugin.enabled else "disabled"}'
                 + (f', joints: {", ".join(plugin.joints)}' if plugin.joints else '')
             )
-            self.loop.add_stage(task)
+            loop.add_stage(task)
         if self._own_loop:
-            self.loop.start()
+            loop.start()
 
     # -- callbacks (executor thread) ----------------------------------------------------
 

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
+
+import can
 
 if TYPE_CHECKING:
     from rm_base.hardware.actuators.base import Actuator
@@ -12,9 +14,24 @@ if TYPE_CHECKING:
     from rm_base.sim.devices import SimDevice
     from rm_base.sim.motor import MotorModel, MotorParams
 
-#: Builds the packers of a family's actuators that share command frames (DJI groups):
-#: (that family's actuators of the robot) -> objects with ``pack_command()``.
-GroupBuilder = Callable[[Sequence['Actuator']], list[Any]]
+class SharedFrame(Protocol):
+    """The owner of a command frame that several motors share (a DJI group)."""
+
+    bus_name: str
+    arbitration_id: int
+
+    @property
+    def name(self) -> str:
+        """Readable name for logs (``can0/0x200``)."""
+        ...
+
+    def pack_command(self) -> can.Message:
+        """The frame with every member's current command."""
+        ...
+
+
+#: Builds the shared frames of a family's actuators (those of the robot, that family's).
+GroupBuilder = Callable[[Sequence['Actuator']], Sequence[SharedFrame]]
 
 
 @dataclass(frozen=True)

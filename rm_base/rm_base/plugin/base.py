@@ -105,13 +105,13 @@ class PluginBase:
         self.node: Any = None
         self.name = ''
         self.type_name = ''
-        self.params: PluginParams | None = None
+        self._params: PluginParams | None = None
         self.logger: Any = None
         self.rate = 0.0
         self.command_timeout = 0.0
         self.error_count = 0
         self._io: NodeIO | None = None
-        self._machine: StateMachine | None = None
+        self._machine: StateMachine[Any] | None = None
         self._state_pub: Any = None
         self._inputs: list[CommandInput] = []
         # Called (from the executor thread) when a command input stores a new command and
@@ -145,7 +145,7 @@ class PluginBase:
         if self.node is not None:
             raise RuntimeError(f"plugin '{self.name}' is already initialised")
         params = params if params is not None else PluginParams(node, name, type(self).__name__)
-        self.node, self.name, self.params = node, name, params
+        self.node, self.name, self._params = node, name, params
         self.type_name = params.plugin_type
         self.logger = FastLogger(node.get_logger()).get_child(name)
         try:
@@ -169,7 +169,7 @@ class PluginBase:
                 self.State, safe, safe=safe, allowed=self.TRANSITIONS,
                 listener=self._on_transition, initial_reason='loaded',
             )
-            self._state_pub = self._io.create_publisher(PluginState, f'~/{name}/state', STATE_QOS)
+            self._state_pub = self._nio.create_publisher(PluginState, f'~/{name}/state', STATE_QOS)
             self.on_init()
         except PluginConfigError as err:
             if not err.plugin:  # raised by the plugin's own code: say whose it is
@@ -291,13 +291,13 @@ class PluginBase:
     def state(self) -> Enum:
         """The current state."""
         self._require_init()
-        return self._machine.state
+        return self._sm.state
 
     @property
     def reason(self) -> str:
         """Why the last transition happened."""
         self._require_init()
-        return self._machine.reason
+        return self._sm.reason
 
     @property
     def joints(self) -> tuple[str, ...]:
@@ -308,7 +308,7 @@ class PluginBase:
     def joint_states(self) -> JointStateView:
         """Latest state of every joint on /actuator_states (all joints, not only ours)."""
         self._require_init()
-        return self._io.joint_states
+        return self._nio.joint_states
 
     def transition(self, new_state: Enum, reason: str) -> bool:
         """Go to new_state (a member of State) for reason; log and publish on change.
@@ -320,12 +320,12 @@ class PluginBase:
             TransitionError: TRANSITIONS does not allow it.
         """
         self._require_init()
-        return self._machine.transition(new_state, reason)
+        return self._sm.transition(new_state, reason)
 
     def state_message(self) -> PluginState:
         """Return the current state as rm_msgs/PluginState."""
         self._require_init()
-        state, reason = self._machine.snapshot()
+        state, reason = self._sm.snapshot()
         msg = PluginState()
         msg.header.stamp = self.node.get_clock().now().to_msg()
         msg.plugin = self.name
@@ -366,7 +366,7 @@ class PluginBase:
             qos: subscription QoS; default best effort, depth 5 (matches any publisher).
         """
         self._require_init()
-        command = CommandInput(
+        command: CommandInput[Any] = CommandInput(
             self.node.resolve_topic_name(topic),
             self.command_timeout if timeout is None else timeout,
             self.logger,
@@ -401,7 +401,7 @@ class PluginBase:
         """
         self._require_init()
         qos = qos if qos is not None else qos_profile_sensor_data
-        self._io.subscribe(msg_type, self.node.resolve_topic_name(topic), callback, qos)
+        self._nio.subscribe(msg_type, self.node.resolve_topic_name(topic), callback, qos)
 
     def create_publisher(
         self, msg_type: type, topic: str, qos: Any, *, hand_over: bool = False
@@ -421,13 +421,13 @@ class PluginBase:
                 plugin may refill one message object.
         """
         self._require_init()
-        return self._io.create_publisher(msg_type, topic, qos, hand_over)
+        return self._nio.create_publisher(msg_type, topic, qos, hand_over)
 
     @property
     def in_loop(self) -> bool:
         """Whether a control loop runs this plugin (its after-tick callbacks get called)."""
         self._require_init()
-        return self._io.loop is not None
+        return self._nio.loop is not None
 
     @staticmethod
     def heard(publisher: Any) -> bool:
@@ -448,7 +448,7 @@ class PluginBase:
             False where no loop runs the plugins (then nothing will call it).
         """
         self._require_init()
-        return self._io.after_tick(callback)
+        return self._nio.after_tick(callback)
 
     def power_limit(self, joints: Iterable[str], model: Any) -> Any:
         """A power limit over some of our joints, run in the control loop, or None.
@@ -468,7 +468,7 @@ class PluginBase:
             raise TargetRejectedError(
                 f"plugin '{self.name}' does not drive joint(s) {', '.join(foreign)}"
             )
-        return self._io.power_limit(self.name, joints, model)
+        return self._nio.power_limit(self.name, joints, model)
 
     def claim_joints(self, joints: Iterable[str]) -> tuple[str, ...]:
         """Declare the joints this plugin drives (zero output turns them off).
@@ -479,7 +479,7 @@ class PluginBase:
             JointClaimError: a joint is already driven by another plugin.
         """
         self._require_init()
-        claimed = self._io.claim(self.name, joints)
+        claimed = self._nio.claim(self.name, joints)
         self._joints = tuple(dict.fromkeys(self._joints + claimed))
         return claimed
 
@@ -543,7 +543,7 @@ class PluginBase:
         now = self._tick_now
         if now is None:
             now = self.node.get_clock().now()
-        self._io.send(targets, now)
+        self._nio.send(targets, now)
 
     def _on_transition(self, change: Transition) -> None:
         if change.previous == change.current:
@@ -578,6 +578,25 @@ class PluginBase:
     def _require_init(self) -> None:
         if self._machine is None:
             raise RuntimeError(f'{type(self).__name__}: call init() first')
+
+    @property
+    def params(self) -> PluginParams:
+        """The plugin's parameters (``<name>.<key>``); from ``init`` on."""
+        if self._params is None:
+            raise RuntimeError(f'{type(self).__name__}: call init() first')
+        return self._params
+
+    @property
+    def _sm(self) -> StateMachine[Any]:
+        self._require_init()
+        assert self._machine is not None
+        return self._machine
+
+    @property
+    def _nio(self) -> NodeIO:
+        if self._io is None:
+            raise RuntimeError(f'{type(self).__name__}: call init() first')
+        return self._io
 
     def _where(self) -> str:
         return f"plugin '{self.name}'" + (f' ({self.type_name})' if self.type_name else '')

@@ -185,6 +185,8 @@ class Outbox:
                         _log.error('publishing %s failed: %r', edge.topic_name, err)
 
     def _hand_back(self, topic: str, data: Any, msg_type: type) -> None:
+        if self.loopback is None:
+            return
         try:
             self.loopback(topic, data, msg_type)
         except Exception as err:  # a subscriber's callback: the message is still published

@@ -247,6 +247,21 @@ class PluginParams:
             convert_item=lambda v: bounds.check(self._to_float(v)),
         )
 
+    def vector3(
+        self,
+        name: str,
+        default: tuple[float, float, float] | None = None,
+        *,
+        description: str,
+        unit: str = '',
+    ) -> tuple[float, float, float]:
+        """Declare and read three floats (a position, a set of angles); None: required."""
+        x, y, z = self.double_array(
+            name, REQUIRED if default is None else default, description=description,
+            unit=unit, length=3,
+        )
+        return x, y, z
+
     def integer_array(
         self,
         name: str,

@@ -165,7 +165,8 @@ class RobotBody:
             return (0.0, 0.0, 0.0)
         # Plain floats: four speeds every tick cost less than building an array.
         speeds = [w.model.velocity * d for w, d in zip(self.wheels, self._directions, strict=True)]
-        return tuple(self.kinematics.forward(speeds))
+        vx, vy, wz = self.kinematics.forward(speeds)
+        return vx, vy, wz
 
     @staticmethod
     def _to_world(vx: float, vy: float, heading: float) -> tuple[float, float]:
@@ -347,7 +348,9 @@ def body_from_config(config: Mapping[str, Any], devices: Mapping[str, SimDevice]
     """
     _check_keys(config, {'initial_pose', 'chassis', 'gimbal'}, 'body')
     try:
-        kinematics, wheels, directions = None, [], None
+        kinematics: WheelKinematics | None = None
+        wheels: list[SimDevice] = []
+        directions: list[float] | None = None
         if 'chassis' in config:
             if not isinstance(config['chassis'], Mapping):
                 raise SimConfigError(f'chassis must be a mapping, got {config["chassis"]!r}')

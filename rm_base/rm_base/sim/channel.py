@@ -174,6 +174,7 @@ class SimChannel:
             can.CanOperationError: the channel is closed or in (injected) bus-off.
         """
         lock = self.world.lock
+        direct: can.Message | None = msg  # None: handed over, the flush sends it
         if not lock.acquire(blocking=False):
             if not self._can_hand_over():
                 lock.acquire()
@@ -183,11 +184,11 @@ class SimChannel:
                 self._handed_over.append((sender, copy.copy(msg), timestamp))
                 if not lock.acquire(blocking=False):
                     return
-                msg = None  # the tick ended meanwhile: the flush below sends it, in order
+                direct = None  # the tick ended meanwhile: the flush below sends it, in order
         try:
             self.flush_handed_over()
-            if msg is not None:
-                self._send_locked(sender, msg, timestamp)
+            if direct is not None:
+                self._send_locked(sender, direct, timestamp)
         finally:
             lock.release()
 

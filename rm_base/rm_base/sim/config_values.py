@@ -4,11 +4,19 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, overload
 
 from rm_base.hardware.protocols import mit
 from rm_base.sim.devices import STD_ID_MAX
 from rm_base.sim.errors import SimConfigError
+
+
+@overload
+def number(cfg: Mapping[str, Any], key: str, default: float, name: str) -> float: ...
+
+
+@overload
+def number(cfg: Mapping[str, Any], key: str, default: None, name: str) -> float | None: ...
 
 
 def number(cfg: Mapping[str, Any], key: str, default: float | None, name: str) -> float | None:

@@ -22,7 +22,7 @@ import termios
 import threading
 import tty
 from collections.abc import Mapping, Sequence
-from typing import Any
+from typing import Any, TypedDict
 
 import numpy as np
 
@@ -51,6 +51,19 @@ def expand_path(path: str) -> str:
     if '$' in expanded:
         raise SimConfigError(f'IMU path {path!r} uses an unset environment variable')
     return expanded
+
+
+Vector3 = tuple[float, float, float]
+
+
+class ImuSample(TypedDict):
+    """What the simulated sensor measures at one instant (see ``SimImu.sample``)."""
+
+    acc: Vector3
+    gyr: Vector3
+    mag: Vector3
+    quat: tuple[float, float, float, float]
+    euler: Vector3
 
 
 class SimImu:
@@ -153,7 +166,7 @@ class SimImu:
         """Rotation matrix world <- sensor."""
         return self.body.orientation(self.mount) @ self.mount_rotation
 
-    def sample(self) -> dict[str, tuple[float, ...]]:
+    def sample(self) -> ImuSample:
         """What the sensor measures now, in the sensor frame (SI).
 
         Plain floats: at 400 Hz under the world lock the numpy path (``sensor_rotation``

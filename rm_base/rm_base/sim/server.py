@@ -109,7 +109,7 @@ class SimServer:
                 sock = key.fileobj
                 if sock is self._listener:
                     self._accept()
-                else:
+                elif isinstance(sock, socket.socket):  # every registered object is one
                     self._read(sock)
 
     def _accept(self) -> None:

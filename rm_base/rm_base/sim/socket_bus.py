@@ -157,6 +157,10 @@ class SimSocketBus(can.BusABC):
         """ERROR while rm_sim reports bus-off, else ACTIVE."""
         return can.BusState.ERROR if self.bus_off else can.BusState.ACTIVE
 
+    @state.setter
+    def state(self, new_state: can.BusState) -> None:
+        raise NotImplementedError('rm_sim sets the bus state (bus-off faults)')
+
     def shutdown(self) -> None:
         """Close the connection (idempotent)."""
         super().shutdown()

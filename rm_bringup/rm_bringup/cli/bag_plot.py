@@ -18,6 +18,7 @@ import argparse
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 from .bag_io import open_bag, read_messages
 from .bag_types import BagTypes, rm_bag_types
@@ -42,8 +43,9 @@ def _twist(prefix: str, twist) -> dict[str, float]:
     }
 
 
-# msgtype -> message -> named values of one sample
-EXTRACTORS: dict[str, Callable[[object], dict[str, float]]] = {
+# msgtype -> message -> named values of one sample (rosbags' deserialised message classes
+# are made at run time from the type definitions: Any)
+EXTRACTORS: dict[str, Callable[[Any], dict[str, float]]] = {
     TWIST: lambda m: _twist('', m),
     ODOMETRY: lambda m: _twist('', m.twist.twist),
     CHASSIS_CMD: lambda m: {'mode': m.mode},

@@ -257,7 +257,7 @@ def record(executor, recorder: Recorder, stop, poll_period_s: float | None) -> N
     next_poll = None if poll_period_s is None else time.monotonic() + poll_period_s
     while not stop.is_set():
         executor.spin_once(timeout_sec=_SPIN_PERIOD_S)
-        if next_poll is not None and time.monotonic() >= next_poll:
+        if poll_period_s is not None and next_poll is not None and time.monotonic() >= next_poll:
             recorder.discover()
             next_poll = time.monotonic() + poll_period_s
     _drain(executor, recorder)

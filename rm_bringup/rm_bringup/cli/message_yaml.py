@@ -60,8 +60,11 @@ _FLOAT_TYPES = ('float', 'double', 'long double')
 # Type introspection
 
 
-def field_slots(msg_class: type) -> dict[str, idl.AbstractType]:
-    """Return ``{field name: rosidl type}`` of a generated message class, in .msg order."""
+def field_slots(msg_class: Any) -> dict[str, idl.AbstractType]:
+    """Return ``{field name: rosidl type}`` of a generated message class, in .msg order.
+
+    (Any: rosidl makes the class and its introspection attributes at import.)
+    """
     return dict(zip(msg_class.get_fields_and_field_types(), msg_class.SLOT_TYPES, strict=True))
 
 
@@ -413,19 +416,21 @@ def _abbreviation(value, slot) -> str:
 
 def _plain(value, slot, truncate_length: int | None, no_arr: bool, no_str: bool):
     """One field value as plain Python data, as rosidl_runtime_py's _convert_value does."""
-    cut = truncate_length is not None
+    def cut(length: int) -> bool:
+        return truncate_length is not None and length > truncate_length
+
     if isinstance(value, bytes):
         text = ''.join(chr(c) for c in value[:truncate_length])
-        return text + '...' if cut and len(value) > truncate_length else text
+        return text + '...' if cut(len(value)) else text
     if isinstance(value, str):
         if no_str:
             return f'<string length: <{len(value)}>>'
-        return value[:truncate_length] + '...' if cut and len(value) > truncate_length else value
+        return value[:truncate_length] + '...' if cut(len(value)) else value
     if isinstance(value, list | tuple | array.array | np.ndarray):
         if no_arr and slot is not None:
             return _abbreviation(value, slot)
         items = [_plain(v, None, truncate_length, no_arr, no_str) for v in value[:truncate_length]]
-        return [*items, '...'] if cut and len(value) > truncate_length else items
+        return [*items, '...'] if cut(len(value)) else items
     if isinstance(value, np.number | np.bool_):
         return value.item()
     if isinstance(value, bool | int | float):

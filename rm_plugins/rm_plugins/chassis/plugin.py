@@ -180,14 +180,15 @@ class StandChassis(PluginBase):
         now_ns = now.nanoseconds
         wheels, wheel_problem = self._wheel_states(now_ns)
         self._update_odometry(now_ns, wheels)
-        speeds = None if wheels is None else [w.velocity for w in wheels]
+        speeds = None
         if wheels is not None:
+            speeds = [w.velocity for w in wheels]
             self._predictor.update(max(w.stamp_ns for w in wheels), speeds)
         decision = self._decide(now_ns, wheel_problem)
         if decision.request is None or speeds is None:
             self._passive(decision.state, decision.reason, speeds)
         else:
-            self._drive_wheels(now_ns, dt, decision, speeds)
+            self._drive_wheels(now_ns, dt, decision, decision.request, speeds)
         self._maybe_publish(now)
 
     def on_command_lost(self, now: Any, dt: float) -> None:
@@ -389,9 +390,13 @@ class StandChassis(PluginBase):
         self._report.speeds = speeds
 
     def _drive_wheels(
-        self, now_ns: int, dt: float, decision: _Decision, speeds: list[float]
+        self,
+        now_ns: int,
+        dt: float,
+        decision: _Decision,
+        request: ChassisRequest,
+        speeds: list[float],
     ) -> None:
-        request = decision.request
         self.transition(decision.state, decision.reason)
         if not self._active:
             # Take over from the measured motion (the chassis may still be rolling).

@@ -186,10 +186,9 @@ def read_config(p: PluginParams) -> GimbalConfig:
         raise PluginConfigError(
             f'pitch_min ({pitch_min} rad) must be below pitch_max ({pitch_max} rad)'
         )
-    pivot = p.double_array(
+    pivot = p.vector3(
         'pivot_position',
         (0.0, 0.0, 0.0),
-        length=3,
         unit='m',
         description='yaw/pitch axes crossing in base_link (x, y, z)',
     )

@@ -269,6 +269,7 @@ class StandGimbal(PluginBase):
             yaw_target, rates, follows_base = m.base_yaw + aim.yaw, (0.0, 0.0), True
         else:
             # A point fixed in odom: the line of sight turns as the pivot moves.
+            assert not isinstance(odom, str)  # world frames without odometry returned above
             yaw_target = aim.yaw + (self._odom_offset.value or 0.0)
             vx, vy = odom.pose.velocity_of(px, py, odom.vx, odom.vy, odom.wz)
             offset = (target[0] - origin[0], target[1] - origin[1], target[2] - origin[2])
@@ -310,10 +311,11 @@ class StandGimbal(PluginBase):
         self, mode: GimbalMode, cmd: GimbalCmd, m: Measurement, aim: _Aim | None, dt: float
     ) -> None:
         cfg = self.config
-        if self._active_mode is GimbalMode.PASSIVE or self._yaw_target is None:
+        held_yaw, held_pitch = self._yaw_target, self._pitch_target
+        if self._active_mode is GimbalMode.PASSIVE or held_yaw is None or held_pitch is None:
             # From limp to active: start where the barrel points, with fresh loops.
             self.on_reset()
-            self._yaw_target, self._pitch_target = m.yaw, m.pitch
+            held_yaw, held_pitch = m.yaw, m.pitch
         self._active_mode = mode
 
         yaw_base_rate = self._yaw_base_rate.update(m.yaw_rate - m.yaw_joint_velocity, dt)
@@ -328,12 +330,8 @@ class StandGimbal(PluginBase):
             # Integrate, but never lead the barrel by more than max_target_lead: a gimbal
             # held back (blocked, or its loop starved) must not wind the target up.
             lead = cfg.max_target_lead
-            yaw_target = m.yaw + clamp(
-                wrap_to_pi(self._yaw_target + yaw_ff * dt - m.yaw), -lead, lead
-            )
-            pitch_target = m.pitch + clamp(
-                self._pitch_target + pitch_ff * dt - m.pitch, -lead, lead
-            )
+            yaw_target = m.yaw + clamp(wrap_to_pi(held_yaw + yaw_ff * dt - m.yaw), -lead, lead)
+            pitch_target = m.pitch + clamp(held_pitch + pitch_ff * dt - m.pitch, -lead, lead)
         elif aim is not None:
             yaw_ff = clamp(
                 aim.yaw_rate + (yaw_base_rate if aim.follows_base else 0.0), -yaw_rate, yaw_rate
@@ -342,7 +340,7 @@ class StandGimbal(PluginBase):
             yaw_target, pitch_target = aim.yaw, aim.pitch
         else:  # TRACK, holding the aim
             yaw_ff = pitch_ff = 0.0
-            yaw_target, pitch_target = self._yaw_target, self._pitch_target
+            yaw_target, pitch_target = held_yaw, held_pitch
 
         # The joint limits, seen in the world: the base may be tilted.
         low, high = cfg.pitch_min + base_pitch, cfg.pitch_max + base_pitch
@@ -454,7 +452,7 @@ class StandGimbal(PluginBase):
 
     def _publish_state(self, now: Any, measurement: Measurement | str) -> None:
         now_ns = now.nanoseconds
-        mode = self.state
+        mode = GimbalMode(self.state.value)
         if now_ns < self._next_state_ns and mode is self._published_mode:
             return
         if not self.heard(self._gimbal_state_pub):
@@ -475,7 +473,10 @@ class StandGimbal(PluginBase):
             msg.pitch_joint = measurement.pitch_joint
         else:
             msg.yaw = msg.pitch = msg.yaw_joint = msg.pitch_joint = nan
-        active = mode is not GimbalMode.PASSIVE and self._yaw_target is not None
-        msg.yaw_target = wrap_to_pi(self._yaw_target - offset) if active else nan
-        msg.pitch_target = self._pitch_target if active else nan
+        yaw_target, pitch_target = self._yaw_target, self._pitch_target
+        if mode is GimbalMode.PASSIVE or yaw_target is None or pitch_target is None:
+            msg.yaw_target = msg.pitch_target = nan
+        else:
+            msg.yaw_target = wrap_to_pi(yaw_target - offset)
+            msg.pitch_target = pitch_target
         self._gimbal_state_pub.publish(msg)

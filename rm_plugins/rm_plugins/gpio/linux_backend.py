@@ -92,20 +92,24 @@ class LinuxGpioBackend(GpioBackend):
         spec = self.pins[name]
         if spec.kind is not PinKind.INPUT:
             return self._written[name]
-        request = self._requests[spec.line.chip]
+        line = spec.digital_line()
+        request = self._requests[line.chip]
         try:
-            value = request.get_value(spec.line.offset)
+            value = request.get_value(line.offset)
         except Exception as err:
             raise GpioBackendError(f'pin {name!r}: cannot read line: {err}') from err
-        return 1.0 if value == self._gpiod.line.Value.ACTIVE else 0.0
+        return 1.0 if value == self._gpiod_module().line.Value.ACTIVE else 0.0
 
     def write(self, name: str, value: float) -> None:
         """Drive an output line, or set a PWM channel's duty cycle."""
         spec = self.pins[name]
         try:
             if spec.kind is PinKind.OUTPUT:
-                line = self._gpiod.line.Value.ACTIVE if value else self._gpiod.line.Value.INACTIVE
-                self._requests[spec.line.chip].set_value(spec.line.offset, line)
+                levels = self._gpiod_module().line.Value
+                digital = spec.digital_line()
+                self._requests[digital.chip].set_value(
+                    digital.offset, levels.ACTIVE if value else levels.INACTIVE
+                )
             elif spec.kind is PinKind.PWM:
                 self._pwms[name].duty_cycle = float(value)
             else:
@@ -115,6 +119,11 @@ class LinuxGpioBackend(GpioBackend):
         except Exception as err:
             raise GpioBackendError(f'pin {name!r}: cannot write {value}: {err}') from err
         self._written[name] = float(value)
+
+    def _gpiod_module(self) -> ModuleType:
+        if self._gpiod is None:  # no digital pin was opened
+            raise GpioBackendError('no digital pin is configured')
+        return self._gpiod
 
     def close(self) -> None:
         """Release every line request and PWM channel (PWM disabled first). Idempotent."""
@@ -150,7 +159,8 @@ class LinuxGpioBackend(GpioBackend):
         by_chip: dict[str, dict[int, Any]] = {}
         owner: dict[tuple[str, int], str] = {}
         for name, spec in pins.items():
-            key = (spec.line.chip, spec.line.offset)
+            digital = spec.digital_line()
+            key = (digital.chip, digital.offset)
             if key in owner:
                 raise GpioConfigError(
                     f'pins {owner[key]!r} and {name!r} are both line {key[1]} of {key[0]}'
@@ -159,17 +169,17 @@ class LinuxGpioBackend(GpioBackend):
             if spec.kind is PinKind.INPUT:
                 settings = gpiod.LineSettings(
                     direction=line.Direction.INPUT,
-                    active_low=spec.line.active_low,
-                    bias=biases[spec.line.bias],
+                    active_low=digital.active_low,
+                    bias=biases[digital.bias],
                 )
             else:
                 settings = gpiod.LineSettings(
                     direction=line.Direction.OUTPUT,
-                    active_low=spec.line.active_low,
-                    bias=biases[spec.line.bias],
+                    active_low=digital.active_low,
+                    bias=biases[digital.bias],
                     output_value=line.Value.ACTIVE if spec.initial else line.Value.INACTIVE,
                 )
-            by_chip.setdefault(spec.line.chip, {})[spec.line.offset] = settings
+            by_chip.setdefault(digital.chip, {})[digital.offset] = settings
         for chip, config in by_chip.items():
             names = ', '.join(owner[(chip, offset)] for offset in config)
             try:
@@ -183,7 +193,7 @@ class LinuxGpioBackend(GpioBackend):
     def _open_pwms(self, pins: Mapping[str, PinSpec]) -> None:
         periphery = _import('periphery', _PERIPHERY_HINT)
         for name, spec in pins.items():
-            channel = spec.pwm
+            channel = spec.pwm_channel()
             try:
                 pwm = periphery.PWM(channel.chip, channel.channel)
             except Exception as err:

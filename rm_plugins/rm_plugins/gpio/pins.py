@@ -152,6 +152,18 @@ class PinSpec:
             if problem:
                 raise GpioConfigError(f'pin {self.name!r}: initial value {problem}')
 
+    def digital_line(self) -> DigitalLine:
+        """The hardware line of a digital pin (the linux backend's config requires it)."""
+        if self.line is None:
+            raise GpioConfigError(f'pin {self.name!r}: no line configured')
+        return self.line
+
+    def pwm_channel(self) -> PwmChannel:
+        """The hardware channel of a PWM pin (the linux backend's config requires it)."""
+        if self.pwm is None:
+            raise GpioConfigError(f'pin {self.name!r}: no PWM channel configured')
+        return self.pwm
+
 
 def value_problem(kind: PinKind, value: float) -> str | None:
     """Return why value cannot be written to a pin of kind, or None if it can.

@@ -116,10 +116,9 @@ class Hi220(PluginBase):
         self.baudrate = p.integer('baudrate', 115200, description='baud rate', unit='bit/s', gt=0)
         self.frame_id = p.string('frame_id', 'imu_link', description='frame_id of /imu')
         topic = p.string('topic', 'imu', description='sensor_msgs/Imu output topic')
-        mount = p.double_array(
+        mount = p.vector3(
             'mount_rpy',
             (0.0, 0.0, 0.0),
-            length=3,
             unit='rad',
             description="roll, pitch, yaw of the sensor's axes in frame_id",
         )
@@ -295,7 +294,7 @@ class Hi220(PluginBase):
     # -- diagnostics ------------------------------------------------------------------------
 
     def _publish_diagnostics(self, now, stats: ReaderStats) -> None:
-        state, reason = self.state, self.reason
+        state, reason = ImuState(self.state.value), self.reason
         with self._lock:
             published = self._published
         now_ns = now.nanoseconds

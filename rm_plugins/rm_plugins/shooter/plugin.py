@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import threading
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -274,7 +275,7 @@ class StandShooter(PluginBase):
     def _advance(
         self,
         command: ShootCommand | None,
-        joints: dict[str, JointState],
+        joints: Mapping[str, JointState],
         ball: bool | None,
         now_ns: int,
         dt: float,
@@ -282,8 +283,8 @@ class StandShooter(PluginBase):
         """Decide the state for this tick and send the joint targets (all transitions)."""
         cfg = self.config
         passive_reason = self._passive_reason(command, joints, now_ns)
-        if passive_reason is not None:
-            self._go_passive(passive_reason)
+        if passive_reason is not None or command is None:  # no command is a passive reason
+            self._go_passive(passive_reason or 'no command')
             return
         self._speed = command.speed
         wheel = cfg.wheel_speed(command.speed)
@@ -313,7 +314,7 @@ class StandShooter(PluginBase):
         self.send_joint_targets(targets)
 
     def _passive_reason(
-        self, command: ShootCommand | None, joints: dict[str, JointState], now_ns: int
+        self, command: ShootCommand | None, joints: Mapping[str, JointState], now_ns: int
     ) -> str | None:
         if command is None:
             return self._rejection or 'no valid command on /shoot_cmd'
@@ -515,7 +516,7 @@ class StandShooter(PluginBase):
         joints = self.joint_states.snapshot(self.config.friction_joints)
         msg = ShooterState()
         msg.header.stamp = now.to_msg()
-        msg.state = int(self.state)
+        msg.state = int(self.state.value)
         msg.reason = self.reason
         msg.bullet_speed = float(self._speed)
         msg.friction_target = [float(v) for v in self._friction_target]

@@ -213,6 +213,7 @@ class Actuator(abc.ABC):
         # motor gives torque x (ratio / stock) and speed x (stock / ratio) at the joint
         # (e.g. an M3508 friction wheel without its 19.2:1 gearbox spins 19.2x faster).
         torque_scale = self.gear_ratio / d.gear_ratio
+        self.torque_constant: float | None
         if config.torque_constant is not None:
             self.torque_constant = config.torque_constant
         elif d.torque_constant is not None:
@@ -438,6 +439,14 @@ class Actuator(abc.ABC):
                 )
             self._hold_zero(HoldReason.ERROR)
 
+    def _current_kt(self) -> float:
+        """Kt [N·m/A] of a joint whose family speaks in amperes (its Defaults give one)."""
+        if self.torque_constant is None:
+            raise HardwareConfigError(
+                f'joints.{self.name}.torque_constant is required for type {self.type_name!r}'
+            )
+        return self.torque_constant
+
     @property
     def effort_out(self) -> float:
         """The effort this tick's update commands [N·m] (0 while held at zero)."""
@@ -454,11 +463,10 @@ class Actuator(abc.ABC):
         """
         if not 0.0 <= factor <= 1.0:
             raise ValueError(f'{self.name}: output scale must be in [0, 1], got {factor!r}')
-        if self._applied_mode is Mode.OFF or factor == 1.0:
+        cmd, fb = self._command, self._feedback
+        if self._applied_mode is Mode.OFF or factor == 1.0 or cmd is None or fb is None:
             return
-        self._effort_out = self._set_output(
-            self._effort_out * factor, self._command, self._feedback
-        )
+        self._effort_out = self._set_output(self._effort_out * factor, cmd, fb)
 
     def _hold_reason(
         self, now_ns: int, fb: Feedback | None, cmd: JointCommand | None
@@ -476,7 +484,7 @@ class Actuator(abc.ABC):
                     self.name,
                     self._feedback_timeout_ns / 1e6,
                 )
-        if not online:
+        if fb is None or not online:
             return HoldReason.OFFLINE
         if self._is_fault(fb.error_code):
             return HoldReason.DEVICE_FAULT
@@ -511,6 +519,7 @@ class Actuator(abc.ABC):
         if hold is not HoldReason.NONE:
             self._hold_zero(hold)
             return
+        assert fb is not None and cmd is not None  # no hold: both are there
         mode = cmd.mode
         if mode is not self._last_mode:
             self._velocity_pid.reset()

@@ -106,7 +106,12 @@ def decode(data: bytes | bytearray) -> DbusFrame:
         ((b2 >> 6) | (b3 << 2) | (b4 << 10)) & CHANNEL_MASK,
         ((b4 >> 1) | (b5 << 7)) & CHANNEL_MASK,
     )
-    channels = tuple(r - CHANNEL_OFFSET for r in raw)
+    channels = (
+        raw[0] - CHANNEL_OFFSET,
+        raw[1] - CHANNEL_OFFSET,
+        raw[2] - CHANNEL_OFFSET,
+        raw[3] - CHANNEL_OFFSET,
+    )
     mx, my, mz, left, right, keys, wheel_raw = _TAIL.unpack_from(data, 6)
     wheel = wheel_raw - CHANNEL_OFFSET
     for i, c in enumerate((*channels, wheel)):

@@ -45,7 +45,7 @@ class Damiao(MitActuator):
         # the motor reports its own output shaft; torque is reported, so no Kt is needed
         self.defaults = Defaults(1.0, None, limits.t_max, limits.v_max, 80.0)
         self.model = model.upper()
-        self._device_state = damiao.DmState.DISABLED
+        self._device_state: int = damiao.DmState.DISABLED  # or an unknown code
         super().__init__(config, limits, safety)
 
     @staticmethod
@@ -65,7 +65,7 @@ class Damiao(MitActuator):
         fb = damiao.decode_feedback(msg.data, self.limits)
         self._device_state = fb.state
         position = self._position_unwrapper.update(fb.position)
-        error = fb.state if fb.state in damiao.FAULT_STATES else 0
+        error = int(fb.state) if fb.state in damiao.FAULT_STATES else 0
         return position, fb.velocity, fb.torque, float(max(fb.t_mos, fb.t_rotor)), error
 
     def _reports_disabled(self) -> bool:

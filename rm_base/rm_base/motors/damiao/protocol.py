@@ -297,7 +297,7 @@ def unpack_vel(data: bytes | bytearray) -> float:
     """
     if len(data) not in (VEL_FRAME_LENGTH, FRAME_LENGTH):
         raise FrameLengthError(f'Damiao VEL frame must be 4 or 8 bytes, got {len(data)}')
-    return _VEL.unpack_from(data)[0]
+    return float(_VEL.unpack_from(data)[0])
 
 
 def pack_pos_force(position: float, velocity: float, current_pu: float) -> bytes:

@@ -65,8 +65,9 @@ class DjiActuator(Actuator):
         except ValueRangeError as err:
             raise HardwareConfigError(f'joints.{config.name}.id: {err}') from err
         self.feedback_id = self.spec.feedback_id(config.id)
+        self._kt = self._current_kt()
         # rotor torque per ampere: the joint constant spread over the gear ratio
-        self._kt_rotor = self.torque_constant / self.gear_ratio
+        self._kt_rotor = self._kt / self.gear_ratio
         self._unwrapper = EncoderUnwrapper(dji.ENCODER_TICKS_PER_REV)
         self._has_temperature = self.spec.has_temperature
         # A DJI frame has no checksum: a corrupted one (or another device on the id) can
@@ -95,10 +96,10 @@ class DjiActuator(Actuator):
         return angle, fb.rotor_rpm * _RPM_TO_RAD_S, torque, fb.temperature_c, 0
 
     def _set_output(self, effort: float, command: JointCommand, feedback: Feedback) -> float:
-        amps = self.direction * effort / self.torque_constant
+        amps = self.direction * effort / self._kt
         raw = self.spec.raw_from_si(amps)
         self.command_raw = raw
-        return self.direction * raw * self.spec.si_per_raw * self.torque_constant
+        return self.direction * raw * self.spec.si_per_raw * self._kt
 
     def _set_zero_output(self) -> None:
         self.command_raw = 0
@@ -158,14 +159,14 @@ class Gm6020Voltage(DjiActuator):
 
     def _set_output(self, effort: float, command: JointCommand, feedback: Feedback) -> float:
         rotor_velocity = feedback.device_velocity
-        amps = self.direction * effort / self.torque_constant
+        amps = self.direction * effort / self._kt
         volts = self.resistance * amps + self.back_emf_constant * rotor_velocity
         raw = self.spec.raw_from_si(volts)
         self.command_raw = raw
         applied_amps = (raw * self.spec.si_per_raw - self.back_emf_constant * rotor_velocity) / (
             self.resistance
         )
-        return self.direction * applied_amps * self.torque_constant
+        return self.direction * applied_amps * self._kt
 
 
 def _positive(name: str, key: str, value: object) -> float:

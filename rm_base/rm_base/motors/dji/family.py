@@ -5,10 +5,11 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from rm_base.hardware.actuators import Actuator
 from rm_base.hardware.errors import HardwareConfigError, ValueRangeError
 from rm_base.motors.dji import protocol as dji
-from rm_base.motors.dji.actuator import M2006, M3508, Gm6020Current, Gm6020Voltage
-from rm_base.motors.dji.groups import build_dji_groups
+from rm_base.motors.dji.actuator import M2006, M3508, DjiActuator, Gm6020Current, Gm6020Voltage
+from rm_base.motors.dji.groups import DjiCommandGroup, build_dji_groups
 from rm_base.motors.dji.sim_device import DjiDevice
 from rm_base.motors.family import DeviceParts, MotorFamily, SimFamily
 from rm_base.sim.config_values import number
@@ -55,6 +56,13 @@ def _build(cfg: Mapping[str, Any], parts: DeviceParts) -> DjiDevice:
     )
 
 
+def _groups(actuators: Sequence[Actuator]) -> list[DjiCommandGroup]:
+    djis = [a for a in actuators if isinstance(a, DjiActuator)]
+    if len(djis) != len(actuators):
+        raise TypeError('DJI command groups take DJI actuators only')
+    return build_dji_groups(djis)
+
+
 def _check_channel(devices: Sequence[SimDevice]) -> None:
     djis = [d for d in devices if isinstance(d, DjiDevice)]
     try:
@@ -66,7 +74,7 @@ def _check_channel(devices: Sequence[SimDevice]) -> None:
 FAMILY = MotorFamily(
     name='dji',
     actuators=(M3508, M2006, Gm6020Voltage, Gm6020Current),
-    build_groups=build_dji_groups,
+    build_groups=_groups,
     sim=SimFamily(
         models={
             t.value: MOTOR_DEFAULTS[t] for t in (MotorType.M3508, MotorType.M2006, MotorType.GM6020)

@@ -27,7 +27,7 @@ import enum
 import math
 import struct
 from collections.abc import Iterable, Sequence
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 from rm_base.hardware.errors import FrameLengthError, HardwareConfigError, ValueRangeError
 
@@ -229,7 +229,7 @@ def make_dji_spec(
         raise HardwareConfigError(f'unknown DJI kind {kind!r}; known: {known}') from err
     base = _DEFAULT_SPECS[kind]
     hard_limit = _HARD_RAW_LIMITS[kind]
-    changes: dict[str, object] = {}
+    changes: dict[str, Any] = {}
     if raw_limit is not None:
         if isinstance(raw_limit, bool) or not isinstance(raw_limit, int):
             raise HardwareConfigError(f'{kind.value}: raw_limit must be an int, got {raw_limit!r}')

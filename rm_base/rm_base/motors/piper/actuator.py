@@ -50,6 +50,7 @@ class PiperJoint(Actuator):
         kt = piper.EFFORT_PER_AMP[config.id - 1]
         self.defaults = Defaults(1.0, kt, self.limits.t_max, self.limits.v_max, 80.0)
         super().__init__(config, safety)
+        self._kt = self._current_kt()
         self.joint = config.id
         self.command_id = piper.joint_command_id(config.id)
         self._angle_id, self._angle_index = piper.joint_feedback_id(config.id)
@@ -69,7 +70,7 @@ class PiperJoint(Actuator):
         else:
             _, velocity, current, _ = piper.decode_high_speed_feedback(msg.arbitration_id, msg.data)
             self._velocity = velocity
-            self._torque = current * self.torque_constant
+            self._torque = current * self._kt
         return self._angle, self._velocity, self._torque, None, 0
 
     def _set_output(self, effort: float, command: JointCommand, feedback: Feedback) -> float:

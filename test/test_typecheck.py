@@ -1,0 +1,15 @@
+"""The type checker runs as a test: mypy with mypy.ini (strict on the pure layers)."""
+
+import pathlib
+import subprocess
+import sys
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+
+
+def test_mypy_finds_no_problems(tmp_path):
+    result = subprocess.run(
+        [sys.executable, '-m', 'mypy', '--cache-dir', str(tmp_path / 'mypy_cache')],
+        cwd=ROOT, capture_output=True, text=True, check=False,
+    )
+    assert result.returncode == 0, result.stdout + result.stderr
