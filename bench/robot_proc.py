@@ -1,5 +1,8 @@
 """Child process of the bench: the whole standard robot in one process, instrumented.
 
+Why one module: the instrumented robot and every measuring hook the bench asks it for; each
+hook is short.
+
 Exactly what ``bringup --robot standard --sim`` runs (can_bridge + rm_robot on one
 EventsExecutor spun by the main thread, the 1 kHz loop running the plugins, the edge's
 publisher and reader threads; rm_sim in a process of its own, or in this one for the split

@@ -149,9 +149,13 @@ class Rig:
         return len(recent) == 5 and all(recent)
 
     def state(self, name='wheel'):
-        msg = self.latest.get('actuator_states')
-        if msg is None:
-            return None
+        """The joint's fields in the latest /actuator_states (waits for the first one).
+
+        The bridge sees this test's subscription some time after it is made (discovery),
+        so the first states can come after the first frames on the wire.
+        """
+        assert wait_until(lambda: 'actuator_states' in self.latest, WAIT), 'no actuator_states'
+        msg = self.latest['actuator_states']
         i = list(msg.name).index(name)
         return {
             field: getattr(msg, field)[i]
@@ -191,7 +195,7 @@ class Rig:
     def held_safe(self):
         """/actuator_states shows the wheel held: MODE_OFF and zero command."""
         s = self.state()
-        return s is not None and s['mode'] == MODE_OFF and s['command'] == 0.0
+        return s['mode'] == MODE_OFF and s['command'] == 0.0
 
     def spin_up(self):
         self.command = velocity_cmd({'wheel': TARGET})
@@ -357,7 +361,7 @@ def test_sim_services_inject_and_clear_faults(make_rig):
 
     response = call(client, True)
     assert response.success and response.message == 'wheel: offline injected'
-    assert wait_until(lambda: rig.state() is not None and not rig.state()['online'], WAIT)
+    assert wait_until(lambda: not rig.state()['online'], WAIT)
     assert call(client, False).success
     assert wait_until(lambda: rig.state()['online'], WAIT)
     assert call(bus_off, True).message == 'can0: bus-off injected'

@@ -1,4 +1,8 @@
-"""CanBridgeNode: the thin rclpy edge over the CAN hardware layer (``can_bridge``)."""
+"""CanBridgeNode: the thin rclpy edge over the CAN hardware layer (``can_bridge``).
+
+Why one module: the node's set-up (parameters, simulator or hardware, publishers, services)
+and its ROS edges; the work is in the modules it imports.
+"""
 
 from __future__ import annotations
 

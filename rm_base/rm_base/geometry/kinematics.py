@@ -1,5 +1,8 @@
 r"""Wheel kinematics of holonomic chassis (mecanum, omni) through one wheel Jacobian.
 
+Why one module: one wheel Jacobian for mecanum and omni chassis, both directions, with the
+layouts and their checks.
+
 Frames and signs (REP 103): the base frame has x forward, y left, z up, its origin at the
 point the chassis turns about. A twist (vx, vy, wz) is in m/s, m/s and rad/s, wz positive
 counter-clockwise seen from above. Wheel speeds are angular speeds of the wheels [rad/s];

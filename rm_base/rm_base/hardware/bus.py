@@ -1,5 +1,8 @@
 """A managed python-can bus: send, dispatch of received frames, reconnects.
 
+Why one module: one bus's whole life (open, send, dispatch, failure and reopen, load and
+counters), which share its lock and state.
+
 :class:`ManagedBus` wraps one ``can.Bus`` (any interface). Received frames are handed to
 their owners — handlers registered per arbitration id — either by the control loop, which
 calls :meth:`ManagedBus.poll` at the start of each tick (the default), or by a receive

@@ -12,7 +12,8 @@ if TYPE_CHECKING:
     from rm_base.hardware.actuators.base import Actuator
     from rm_base.hardware.config import JointConfig
     from rm_base.sim.devices import SimDevice
-    from rm_base.sim.motor import MotorModel, MotorParams
+    from rm_base.sim.motor import MotorModel
+    from rm_base.sim.motor_params import MotorParams
 
 class SharedFrame(Protocol):
     """The owner of a command frame that several motors share (a DJI group)."""

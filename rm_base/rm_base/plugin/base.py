@@ -1,5 +1,8 @@
 """PluginBase: the API every rm_ros2 mechanism plugin implements.
 
+Why one module: it is the whole plugin API in one class (lifecycle, state machine, watchdog,
+joint I/O), which a plugin author reads in one place.
+
 The base class owns the public methods (``init``, ``run``, ``enable``, ``disable``,
 ``reset``): checks, logging, the state machine, the command watchdog and zero output. A
 plugin overrides hooks, all of which succeed by default:

@@ -1,5 +1,8 @@
 """Typed ROS parameters under a plugin's dotted prefix (``chassis.wheel_radius``).
 
+Why one module: one typed accessor per ROS parameter type, each with its descriptor and the
+checks that name the key.
+
 Each accessor declares one parameter on the host node with a ``ParameterDescriptor``
 (description, unit, constraints, read-only), takes its value from the robot config
 (``--params-file`` or ``parameter_overrides``) or the typed default, checks type and range,

@@ -13,15 +13,8 @@ from rm_base.sim.errors import SimConfigError, SimError, SimLookupError, SimStat
 from rm_base.sim.faults import Fault, FaultKind
 from rm_base.sim.imu import SimImu, expand_path, imu_from_config
 from rm_base.sim.mit_device import MitDevice
-from rm_base.sim.motor import (
-    DJI_ENCODER_COUNTS,
-    MOTOR_DEFAULTS,
-    DriveMode,
-    MotorModel,
-    MotorParams,
-    MotorType,
-    motor_params,
-)
+from rm_base.sim.motor import DJI_ENCODER_COUNTS, DriveMode, MotorModel
+from rm_base.sim.motor_params import MOTOR_DEFAULTS, MotorParams, MotorType, motor_params
 from rm_base.sim.world import SimWorld, Timing, load_config
 
 __all__ = [

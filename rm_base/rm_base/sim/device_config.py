@@ -14,7 +14,8 @@ from rm_base.motors import DeviceParts, UnknownTypeError, families, sim_family
 from rm_base.sim.config_values import can_id, number
 from rm_base.sim.devices import SimDevice
 from rm_base.sim.errors import SimConfigError
-from rm_base.sim.motor import MotorModel, MotorParams
+from rm_base.sim.motor import MotorModel
+from rm_base.sim.motor_params import MotorParams
 
 _PARAM_KEYS = frozenset(MotorParams.__dataclass_fields__)
 _COMMON_KEYS = frozenset(

@@ -23,7 +23,8 @@ from typing import Any, ClassVar
 from rm_base.hardware.errors import ProtocolError, ValueRangeError
 from rm_base.sim._schedule import RateSchedule
 from rm_base.sim.faults import Fault, FaultKind
-from rm_base.sim.motor import MotorModel, MotorType
+from rm_base.sim.motor import MotorModel
+from rm_base.sim.motor_params import MotorType
 
 #: A frame a device sends: (11-bit arbitration id, data bytes).
 Frame = tuple[int, bytes]

@@ -1,5 +1,8 @@
 """A simulated HiPNUC IMU that writes real 0x91 frames to a pseudo-terminal.
 
+Why one module: the sensor model and the pseudo-terminal it writes to; its plain-float maths
+stays here for speed.
+
 The IMU reads its orientation, angular velocity and specific force from the
 :class:`~rm_base.sim.body.RobotBody` it is mounted on (chassis or gimbal) and sends them
 at a fixed rate as HiPNUC 0x91 (IMUSOL) frames, encoded with

@@ -10,7 +10,8 @@ from abc import abstractmethod
 
 from rm_base.hardware.protocols import mit
 from rm_base.sim.devices import Frame, SimDevice
-from rm_base.sim.motor import MotorModel, MotorType
+from rm_base.sim.motor import MotorModel
+from rm_base.sim.motor_params import MotorType
 
 
 class MitDevice(SimDevice):

@@ -1,5 +1,8 @@
 """The simulated world: CAN channels with their motors, the robot body, IMUs, and the clock.
 
+Why one module: the clock and its stepping, which every part of the world shares; channels,
+devices and the body are modules of their own.
+
 One :class:`SimWorld` owns everything that moves together. It advances in fixed ticks
 (1 kHz by default), either
 

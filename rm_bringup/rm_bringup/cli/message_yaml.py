@@ -1,5 +1,8 @@
 """YAML <-> ROS messages with the semantics of ``ros2 topic pub`` and ``ros2 topic echo``.
 
+Why one module: both directions of ros2 topic pub/echo's YAML rules, which share the type
+introspection.
+
 Reading (``topic pub``): ``fill_message(msg, parse_values(text))`` fills a message from
 YAML like ``'{mode: GYRO, accel: {linear: {x: 1.0}}}'``. On top of ros2's syntax it
 accepts the names of the message's integer constants for integer fields, case-insensitive

@@ -1,5 +1,8 @@
 """StandChassis: a mecanum/omni chassis with PASSIVE, RAW, FOLLOW, TWIST and GYRO states.
 
+Why one module: one state machine and the tick that runs it; kinematics, planner, odometry,
+power and config are modules of their own.
+
 Inputs
     /chassis_cmd (rm_msgs/ChassisCmd): the state, acceleration limits, power limit and
         follow source. Watched: without a command for ``command_timeout`` the framework

@@ -1,5 +1,8 @@
 """StandGimbal: a yaw/pitch gimbal stabilised in the world by its IMU.
 
+Why one module: the mode decision (RATE, TRACK in any frame) and the control tick; config,
+aim and loops are modules of their own.
+
 Inputs:
     /gimbal_cmd (rm_msgs/GimbalCmd, watched): the mode, rates or target point.
     /imu (sensor_msgs/Imu): orientation and rates of the gimbal (the IMU is on it).

@@ -1,4 +1,8 @@
-"""StandShooter: friction wheels and a trigger, from /shoot_cmd to shots."""
+"""StandShooter: friction wheels and a trigger, from /shoot_cmd to shots.
+
+Why one module: one state machine (FEED, FIRE, REVERSE, BLOCK) whose steps share the
+trigger's hold and the burst; config and command are modules of their own.
+"""
 
 from __future__ import annotations
 
@@ -8,18 +12,13 @@ from dataclasses import dataclass
 from typing import Any
 
 from rclpy.qos import qos_profile_sensor_data
-from rm_base.control import JamDetector, JamDetectorParams, LookupTable
+from rm_base.control import JamDetector
 from rm_base.errors import InputRejectedError
 from rm_base.plugin import JointState, JointTarget, PluginBase
 
 from rm_msgs.msg import GpioState, ShootCmd, ShooterState
-from rm_plugins.shooter.command import (
-    ShootCommand,
-    ShooterConfig,
-    ShooterStage,
-    ShootMode,
-    parse_shoot_cmd,
-)
+from rm_plugins.shooter.command import ShootCommand, ShooterStage, ShootMode, parse_shoot_cmd
+from rm_plugins.shooter.config import read_config
 
 COMMAND_TOPIC = 'shoot_cmd'
 STATE_TOPIC = 'shooter_state'
@@ -133,7 +132,7 @@ class StandShooter(PluginBase):
 
     def on_init(self) -> None:
         """Read the config, claim the joints, subscribe the topics."""
-        self.config = self._read_config()
+        self.config = read_config(self.params)
         cfg = self.config
         self._trigger = cfg.trigger_joint
         self._joints = self.claim_joints((*cfg.friction_joints, cfg.trigger_joint))
@@ -529,120 +528,3 @@ class StandShooter(PluginBase):
         msg.jam_count = self._jam_count
         msg.fault = self._fault
         self.state_pub.publish(msg)
-
-    # -- config -------------------------------------------------------------------------------
-
-    def _read_config(self) -> ShooterConfig:
-        p = self.params
-        friction_joints = p.string_array(
-            'friction_joints', description='friction wheel joints', unique=True
-        )
-        friction_directions = p.double_array(
-            'friction_directions',
-            description='per friction wheel, the sign (+1/-1) of the joint velocity that '
-            'launches a ball',
-        )
-        bullet_speeds = p.double_array(
-            'bullet_speeds',
-            description='bullet speeds of the lookup table (x, increasing)',
-            unit='m/s',
-            gt=0.0,
-        )
-        wheel_speeds = p.double_array(
-            'wheel_speeds',
-            description='friction wheel speed giving each of bullet_speeds',
-            unit='rad/s',
-            gt=0.0,
-        )
-        return ShooterConfig(
-            friction_joints=friction_joints,
-            friction_directions=friction_directions,
-            trigger_joint=p.string('trigger_joint', description='trigger (loader) joint'),
-            trigger_direction=p.double(
-                'trigger_direction',
-                1.0,
-                description='sign (+1/-1) of the trigger motion that feeds balls',
-            ),
-            wheel_speed=LookupTable.from_columns(bullet_speeds, wheel_speeds),
-            friction_tolerance=p.double(
-                'friction_tolerance',
-                description='a friction wheel is at speed within this of its target',
-                unit='rad/s',
-                gt=0.0,
-            ),
-            slots=p.integer('slots', description='trigger pockets per turn', ge=1),
-            feed_speed=p.double(
-                'feed_speed', description='trigger speed while feeding', unit='rad/s', gt=0.0
-            ),
-            step_speed=p.double(
-                'step_speed',
-                description='trigger speed of a slot step (setpoint ramp and feed-forward)',
-                unit='rad/s',
-                gt=0.0,
-            ),
-            step_tolerance=p.double(
-                'step_tolerance',
-                description='a slot step or the reverse is done within this',
-                unit='rad',
-                gt=0.0,
-            ),
-            max_hz=p.double('max_hz', description='highest firing rate', unit='shots/s', gt=0.0),
-            limit_switch=p.string(
-                'limit_switch', description='name of the ball switch on /gpio_state'
-            ),
-            switch_timeout=p.double(
-                'switch_timeout',
-                0.2,
-                description='an older limit switch state is unknown',
-                unit='s',
-                gt=0.0,
-            ),
-            switch_debounce=p.double(
-                'switch_debounce',
-                0.05,
-                description='between shots, the switch must read "no ball" this long '
-                'before the trigger feeds again',
-                unit='s',
-                ge=0.0,
-            ),
-            jam=JamDetectorParams(
-                effort_threshold=p.double(
-                    'jam.effort',
-                    description='trigger effort above which it may be jammed',
-                    unit='N*m',
-                    gt=0.0,
-                ),
-                speed_threshold=p.double(
-                    'jam.speed',
-                    description='trigger speed below which it may be jammed',
-                    unit='rad/s',
-                    gt=0.0,
-                ),
-                time_s=p.double(
-                    'jam.time',
-                    description='how long both must hold to be a jam',
-                    unit='s',
-                    gt=0.0,
-                ),
-            ),
-            reverse_angle=p.double(
-                'reverse_angle',
-                description='how far the trigger turns back after a jam',
-                unit='rad',
-                gt=0.0,
-            ),
-            block_timeout=p.double(
-                'block_timeout',
-                description='longest reverse before feeding again',
-                unit='s',
-                gt=0.0,
-            ),
-            jam_retries=p.integer(
-                'jam_retries',
-                description='recoveries tried after jams in a row before giving up (fault)',
-                ge=0,
-            ),
-            state_rate=p.double(
-                'state_rate', 50.0, description='rate of /shooter_state', unit='Hz', gt=0.0
-            ),
-        )

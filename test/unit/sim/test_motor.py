@@ -7,14 +7,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from rm_base.sim.errors import SimConfigError
-from rm_base.sim.motor import (
-    DJI_ENCODER_COUNTS,
-    MOTOR_DEFAULTS,
-    DriveMode,
-    MotorModel,
-    MotorType,
-    motor_params,
-)
+from rm_base.sim.motor import DJI_ENCODER_COUNTS, DriveMode, MotorModel
+from rm_base.sim.motor_params import MOTOR_DEFAULTS, MotorType, motor_params
 
 DT = 1e-3
 

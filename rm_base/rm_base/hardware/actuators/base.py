@@ -1,5 +1,8 @@
 """The shared actuator base: commands, control modes, safety and SI conversion.
 
+Why one module: the one class every family shares and the records it speaks in; its length
+is the checks and log lines, which keep each family's hooks short.
+
 :class:`Actuator` owns every public method, check and log line. A motor family overrides
 only protected hooks:
 

@@ -1,5 +1,8 @@
 """HiPNUC IMU serial protocol (HI220 / HI221 / HI226 ...): framing, 0x91 and legacy items.
 
+Why one module: framing, CRC and every data item the vendor's decoder reads (0x91 and the
+legacy items).
+
 docs/PROTOCOLS.md §4. A frame is::
 
     5A A5 | LEN (uint16 LE, payload only) | CRC16 (uint16 LE) | payload (LEN bytes)

@@ -10,7 +10,7 @@ from rm_base.motors.cheetah.actuator import Cheetah
 from rm_base.motors.cheetah.sim_device import CheetahDevice
 from rm_base.motors.family import DeviceParts, MotorFamily, SimFamily
 from rm_base.sim.config_values import can_id, flag, mit_limits
-from rm_base.sim.motor import MOTOR_DEFAULTS, MotorType
+from rm_base.sim.motor_params import MOTOR_DEFAULTS, MotorType
 
 
 def _build(cfg: Mapping[str, Any], parts: DeviceParts) -> CheetahDevice:

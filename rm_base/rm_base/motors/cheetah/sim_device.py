@@ -10,7 +10,8 @@ from rm_base.hardware.protocols import mit
 from rm_base.motors.cheetah import protocol as cheetah
 from rm_base.sim.devices import Frame
 from rm_base.sim.mit_device import MitDevice
-from rm_base.sim.motor import DriveMode, MotorModel, MotorType
+from rm_base.sim.motor import DriveMode, MotorModel
+from rm_base.sim.motor_params import MotorType
 
 
 class CheetahDevice(MitDevice):

@@ -12,7 +12,7 @@ from rm_base.motors.damiao.sim_device import DamiaoDevice
 from rm_base.motors.family import DeviceParts, MotorFamily, SimFamily
 from rm_base.sim.config_values import can_id, flag, mit_limits, number
 from rm_base.sim.errors import SimConfigError
-from rm_base.sim.motor import MOTOR_DEFAULTS, MotorType
+from rm_base.sim.motor_params import MOTOR_DEFAULTS, MotorType
 
 _MODELS = {'dm4310': 'DM4310', 'dm8009': 'DM8009'}
 _MODES = {'mit': damiao.DmMode.MIT, 'pos_vel': damiao.DmMode.POS_VEL, 'vel': damiao.DmMode.VEL}

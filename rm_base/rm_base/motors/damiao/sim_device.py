@@ -13,7 +13,8 @@ from rm_base.motors.damiao import protocol as damiao
 from rm_base.sim.devices import NS_PER_S, Frame, require_finite
 from rm_base.sim.errors import SimConfigError
 from rm_base.sim.mit_device import MitDevice
-from rm_base.sim.motor import MotorModel, MotorType
+from rm_base.sim.motor import MotorModel
+from rm_base.sim.motor_params import MotorType
 
 
 class DamiaoDevice(MitDevice):

@@ -15,7 +15,7 @@ from rm_base.motors.family import DeviceParts, MotorFamily, SimFamily
 from rm_base.sim.config_values import number
 from rm_base.sim.devices import SimDevice
 from rm_base.sim.errors import SimConfigError
-from rm_base.sim.motor import MOTOR_DEFAULTS, MotorType
+from rm_base.sim.motor_params import MOTOR_DEFAULTS, MotorType
 
 _KINDS = {'m3508': dji.DjiKind.C620, 'm2006': dji.DjiKind.C610}
 

@@ -1,5 +1,8 @@
 """DJI RoboMaster ESCs and motors over CAN: C620 (M3508), C610 (M2006), GM6020.
 
+Why one module: both directions (host and simulated ESC) for three ESC kinds, with their
+ids, scales and checks.
+
 Both directions are here, because the simulator plays the motor with the same code:
 
 * host side: :func:`pack_command` (one shared frame for up to four motors),

@@ -11,7 +11,8 @@ from __future__ import annotations
 from rm_base.motors.dji import protocol as dji
 from rm_base.sim._schedule import RateSchedule
 from rm_base.sim.devices import NS_PER_S, Frame, SimDevice
-from rm_base.sim.motor import MotorModel, MotorType
+from rm_base.sim.motor import MotorModel
+from rm_base.sim.motor_params import MotorType
 
 
 class DjiDevice(SimDevice):
