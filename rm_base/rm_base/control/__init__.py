@@ -6,6 +6,7 @@ non-positive dt, and every config dataclass raises ``rm_base.errors.ConfigError`
 construction with a bad value.
 """
 
+from rm_base.control.barrel_heat import BarrelHeat, BarrelHeatParams
 from rm_base.control.chassis_modes import (
     ChassisModeController,
     ChassisModeParams,
@@ -33,6 +34,8 @@ from rm_base.control.ramp import RampLimiter, RampLimits, ramp_step
 from rm_base.control.tracking_differentiator import TdParams, TrackingDifferentiator, fhan
 
 __all__ = [
+    'BarrelHeat',
+    'BarrelHeatParams',
     'ChassisModeController',
     'ChassisModeParams',
     'ChassisMotionMode',
