@@ -37,7 +37,7 @@ from rclpy.qos import qos_profile_sensor_data
 from rm_base.motors.dji import protocol as dji
 from support.ros import start_process, stop_process, wait_until
 
-from rm_msgs.msg import ActuatorState, ChassisCmd, ChassisState
+from rm_msgs.msg import ActuatorCmd, ActuatorState, ChassisCmd, ChassisState
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
@@ -152,7 +152,8 @@ class Robot:
     def driven(self, since: float = 0.0) -> bool:
         recent = self.wheels(since)[-3:]
         return len(recent) == 3 and all(
-            len(w) == 4 and all(mode == 1 and cmd != 0.0 for mode, cmd in w.values())
+            len(w) == 4
+            and all(mode == ActuatorCmd.MODE_VELOCITY and cmd != 0.0 for mode, cmd in w.values())
             for _, w in recent
         )
 

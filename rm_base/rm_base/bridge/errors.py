@@ -4,6 +4,7 @@ The tree, rooted at :class:`rm_base.errors.RmError`::
 
     BridgeConfigError (ConfigError)        a parameter set that cannot become a config
     ActuatorCmdRejectedError (InputRejectedError)   an /actuator_cmd message not applied
+    PowerLimitRejectedError (InputRejectedError)    a /power_limit message not applied
 
 Errors of the layers below keep their own types (``HardwareConfigError``,
 ``SimConfigError``); all configuration errors are ``ConfigError``, so ``main`` prints one
@@ -49,3 +50,10 @@ class ActuatorCmdRejectedError(InputRejectedError):
     def __init__(self, reason: Rejection, message: str) -> None:
         super().__init__(message)
         self.reason = reason
+
+
+class PowerLimitRejectedError(InputRejectedError):
+    """A /power_limit message was rejected; the stage it named stays as it was.
+
+    Example: a joint the bridge does not drive, or a negative ``k1``.
+    """

@@ -21,7 +21,11 @@ from sensor_msgs.msg import JointState
 
 from rm_base.bridge.commands import check_stamp, parse_actuator_cmd
 from rm_base.bridge.diagnostics import CommandStats, DiagnosticsReporter
-from rm_base.bridge.errors import ActuatorCmdRejectedError, BridgeConfigError
+from rm_base.bridge.errors import (
+    ActuatorCmdRejectedError,
+    BridgeConfigError,
+    PowerLimitRejectedError,
+)
 from rm_base.bridge.frames import FrameTap
 from rm_base.bridge.messages import (
     actuator_state_msg,
@@ -37,17 +41,19 @@ from rm_base.bridge.params import (
     settings_from_parameters,
     with_sim_world,
 )
+from rm_base.bridge.power_limits import RemotePowerLimits, parse_power_limit
 from rm_base.bridge.sim_config import world_config
 from rm_base.bridge.sim_services import SimFaultServices
 from rm_base.hardware import CanHardware
 from rm_base.hardware.bus import BusFactory
 from rm_base.node_main import inbox_node
 from rm_base.plugin.inbox import Inbox
+from rm_base.plugin.node_io import POWER_LIMIT_QOS, POWER_LIMIT_TOPIC
 from rm_base.plugin.params import PluginParams
 from rm_base.realtime import EDGE_PRIORITY, LOOP_PRIORITY
 from rm_base.ros_logging import FastLogger
 from rm_base.sim import SimConfigError, SimWorld, Timing
-from rm_msgs.msg import ActuatorCmd, ActuatorState, CanFrame
+from rm_msgs.msg import ActuatorCmd, ActuatorState, CanFrame, PowerLimit
 
 NODE_NAME = 'can_bridge'
 
@@ -190,6 +196,12 @@ class CanBridgeNode(Node):
                 lambda msg, _receive_ns: self._on_actuator_cmd(msg), _COMMAND_QOS,
             )
             hw.scheduler.add_stage(self._inbox)
+        # rm_robot in a process of its own asks for its power stages here (rare: executor)
+        self._power_limits = RemotePowerLimits(hw)
+        self.power_limit_rejections = 0
+        self._power_limit_sub = self.create_subscription(
+            PowerLimit, POWER_LIMIT_TOPIC, self._on_power_limit, POWER_LIMIT_QOS
+        )
         if self.sim_world is not None:
             self._sim_services = SimFaultServices(
                 self, self.sim_world, self.hardware.joint_names,
@@ -380,6 +392,16 @@ class CanBridgeNode(Node):
             return
         with self._stats_lock:
             self._accepted += 1
+
+    def _on_power_limit(self, msg: PowerLimit) -> None:
+        try:
+            self._power_limits.apply(parse_power_limit(msg, self._joints))
+        except PowerLimitRejectedError as err:
+            self.power_limit_rejections += 1
+            self.get_logger().warning(
+                f'rejected /power_limit ({self.power_limit_rejections} so far): {err}',
+                throttle_duration_sec=_REJECT_LOG_PERIOD,
+            )
 
     def _on_set_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
         names = ', '.join(p.name for p in parameters)

@@ -16,7 +16,6 @@ from rm_plugins.chassis.config import ChassisConfig, ImuMount, Kinematics, read_
 from rm_plugins.chassis.motion import MotionOutput, MotionPlanner
 from rm_plugins.chassis.odometry import Odometry, Pose2D, YawSource
 from rm_plugins.chassis.plugin import StandChassis
-from rm_plugins.chassis.wheels import SpeedPredictor, WheelEfforts, WheelSpeedController
 
 __all__ = [
     'ChassisConfig',
@@ -29,10 +28,7 @@ __all__ = [
     'MotionPlanner',
     'Odometry',
     'Pose2D',
-    'SpeedPredictor',
     'StandChassis',
-    'WheelEfforts',
-    'WheelSpeedController',
     'YawSource',
     'parse_chassis_cmd',
     'parse_vel_cmd',

@@ -50,7 +50,6 @@ class ChassisConfig:
         wheel_joints: joint names, in the kinematics' wheel order.
         wheels: the wheel kinematics (Jacobian) built from the geometry.
         max_wheel_speed: largest |wheel speed| target [rad/s].
-        wheel_gains: wheel speed PID, speed error [rad/s] -> effort [N·m].
         wheel_feedback_timeout: wheel feedback older than this is missing [s].
         vel_cmd_timeout: a /vel_cmd older than this is no velocity (brake to zero) [s].
         yaw_joint: the gimbal yaw joint whose angle is the gimbal's heading on the chassis.
@@ -75,7 +74,6 @@ class ChassisConfig:
     wheel_joints: tuple[str, ...]
     wheels: WheelKinematics
     max_wheel_speed: float
-    wheel_gains: PidGains
     wheel_feedback_timeout: float
     vel_cmd_timeout: float
     yaw_joint: str
@@ -212,11 +210,6 @@ def read_config(p: PluginParams) -> ChassisConfig:
     max_wheel_speed = p.double(
         'max_wheel_speed', description='largest wheel speed target', unit='rad/s', gt=0.0
     )
-    wheel_gains = _pid(
-        p, 'wheel_pid', 'rad/s', 'N*m', angle=False,
-        defaults={'kp': 0.6, 'ki': 4.0, 'kd': 0.0, 'output_limit': 4.0,
-                  'integral_limit': 1.5, 'integral_separation': 5.0},
-    )
     follow_gains = _pid(
         p, 'follow.pid', 'rad', 'rad/s', angle=True,
         defaults={'kp': 10.0, 'ki': 0.0, 'kd': 0.0, 'output_limit': 8.0,
@@ -273,7 +266,6 @@ def read_config(p: PluginParams) -> ChassisConfig:
         wheel_joints=joints,
         wheels=wheels,
         max_wheel_speed=max_wheel_speed,
-        wheel_gains=wheel_gains,
         wheel_feedback_timeout=p.double(
             'wheel_feedback_timeout', 0.1,
             description='wheel feedback older than this counts as missing', unit='s', gt=0.0),

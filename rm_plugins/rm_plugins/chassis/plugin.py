@@ -15,7 +15,7 @@ Inputs
         FOLLOW feeds forward.
 
 Outputs
-    /actuator_cmd: MODE_EFFORT on every wheel while active, MODE_OFF in PASSIVE.
+    /actuator_cmd: MODE_VELOCITY on every wheel while active, MODE_OFF in PASSIVE.
     /chassis_state (rm_msgs/ChassisState) and /odom (nav_msgs/Odometry, odom -> base_link,
         twist in base_link) at ``publish_rate``; odom -> base_link on /tf where tf2_ros
         imports.
@@ -36,15 +36,13 @@ holds the robot's own heading at the moment the mode was entered, in odom (so FO
 drives straight in the robot frame it had, TWIST swings about it, and GYRO translates in
 that fixed world direction while spinning); it is taken anew after any PASSIVE.
 
-The wheel speed loops: in the one-process robot the chassis sends wheel *velocity*
-targets, each wheel's velocity PID (its joint's ``velocity_pid`` in can_bridge) runs in the
-1 kHz loop, and a power-limit stage of the same tick scales the four efforts by one common
-factor before they are packed (``PluginBase.power_limit``; the firmware order: speed loops,
-then one factor on the four currents), so the power model sees speeds at most one tick
-old. With rm_robot as a process of its own the speed PIDs and the power limit run here
-instead (``wheels``, gains ``wheel_pid``) in effort mode, closing over /actuator_states:
-run the plugin at the bridge's publish rate then. If the plugin stalls, the bridge's own
-command timeout (100 ms) zeroes the wheels.
+The wheel speed loops: the chassis sends wheel *velocity* targets, each wheel's velocity
+PID (its joint's ``velocity_pid`` in can_bridge) runs in the 1 kHz loop, and a power-limit
+stage of the same tick scales the four efforts by one common factor before they are
+packed (``PluginBase.power_limit``; the firmware order: speed loops, then one factor on
+the four currents), so the power model sees speeds at most one tick old. With rm_robot as
+a process of its own the stage runs in the bridge, which gets it on /power_limit. If the
+plugin stalls, the bridge's own command timeout (100 ms) zeroes the wheels.
 
 Odometry (``odometry``) counts the wheels' angle changes, so late ticks lose no distance;
 its yaw comes from the IMU when one is configured and fresh (minus the yaw joint angle
@@ -60,10 +58,10 @@ from typing import Any, NamedTuple
 from geometry_msgs.msg import TransformStamped, Twist
 from nav_msgs.msg import Odometry as OdometryMsg
 from rclpy.qos import qos_profile_sensor_data
-from rm_base.control import ChassisMotionMode
+from rm_base.control import ChassisMotionMode, estimate_power
 from rm_base.errors import InputRejectedError
 from rm_base.geometry import Twist2D, quaternion_from_yaw, wrap_to_pi, yaw_from_quaternion
-from rm_base.plugin import JointTarget, LatestMessage, LogThrottle, PluginBase
+from rm_base.plugin import JointTarget, LatestMessage, LogThrottle, PluginBase, PluginConfigError
 from rm_base.plugin.commands import stamp_ns_of
 from sensor_msgs.msg import Imu
 
@@ -84,7 +82,6 @@ from rm_plugins.chassis.motion import (
     held_frame,
 )
 from rm_plugins.chassis.odometry import Odometry
-from rm_plugins.chassis.wheels import SpeedPredictor, WheelSpeedController
 
 _NS_PER_S = 1_000_000_000
 _LOG_PERIOD_NS = _NS_PER_S  # at most one line per second per kind of rejected input
@@ -140,11 +137,12 @@ class StandChassis(PluginBase):
         self._planner = MotionPlanner(
             cfg.wheels, cfg.modes, cfg.linear_limits, cfg.angular_limits, cfg.max_wheel_speed
         )
-        self._drive = WheelSpeedController(len(cfg.wheel_joints), cfg.wheel_gains, cfg.power_model)
-        # In the one-process robot: the wheels' own 1 kHz loops and a power stage after them.
+        # The wheels' own 1 kHz loops and a power stage after them, in the loop that drives
+        # them (this process's, or the bridge's when rm_robot runs alone).
         self._power_stage = self.power_limit(cfg.wheel_joints, cfg.power_model)
+        if self._power_stage is None:
+            raise PluginConfigError('no control loop runs the wheels (no power stage)')
         self._odometry = Odometry(cfg.wheels)
-        self._predictor = SpeedPredictor()
         self._imu = LatestMessage(use_stamp=False)
         if cfg.imu_mount is not ImuMount.NONE:
             # Sensor QoS (best effort, keep last): an old IMU sample is worthless.
@@ -175,7 +173,6 @@ class StandChassis(PluginBase):
         # Control: restarted from the measured motion when a motion state is entered.
         self._active = False
         self._held_heading: float | None = None
-        self._drive.reset()
         self._planner.reset()
 
     def update(self, now: Any, dt: float) -> None:
@@ -183,10 +180,7 @@ class StandChassis(PluginBase):
         now_ns = now.nanoseconds
         wheels, wheel_problem = self._wheel_states(now_ns)
         self._update_odometry(now_ns, wheels)
-        speeds = None
-        if wheels is not None:
-            speeds = [w.velocity for w in wheels]
-            self._predictor.update(max(w.stamp_ns for w in wheels), speeds)
+        speeds = None if wheels is None else [w.velocity for w in wheels]
         decision = self._decide(now_ns, wheel_problem)
         if decision.request is None or speeds is None:
             self._passive(decision.state, decision.reason, speeds)
@@ -386,11 +380,17 @@ class StandChassis(PluginBase):
         count = len(self.config.wheel_joints)
         self._report.set_output(
             Twist2D(), [0.0] * count, [0.0] * count,
-            self._drive.idle_power(speeds) if speeds is not None else 0.0,
+            self._idle_power(speeds),
             self.config.power_limit if self._request is None or self._request.power_limit is None
             else self._request.power_limit,
         )
         self._report.speeds = speeds
+
+    def _idle_power(self, speeds: list[float] | None) -> float:
+        """Predicted chassis power with no effort at the measured speeds [W]."""
+        if speeds is None:
+            return 0.0
+        return estimate_power(self.config.power_model, [0.0] * len(speeds), speeds)
 
     def _drive_wheels(
         self,
@@ -404,7 +404,6 @@ class StandChassis(PluginBase):
         if not self._active:
             # Take over from the measured motion (the chassis may still be rolling).
             self._planner.reset(self._odometry.twist)
-            self._drive.reset()
             self._active = True
         command = self._take_vel_cmd(now_ns)
         mode = _MOTION_MODES[request.mode]
@@ -437,24 +436,14 @@ class StandChassis(PluginBase):
         limit = self.config.power_limit if request.power_limit is None else request.power_limit
         joints = self.config.wheel_joints
         stage = self._power_stage
-        if stage is not None:
-            stage.limit_w = limit
-            self.send_joint_targets({
-                joint: JointTarget.with_velocity(target)
-                for joint, target in zip(joints, motion.wheel_targets, strict=True)
-            })
-            last = stage.last  # the loop's latest tick
-            efforts = last.torques if last is not None else (0.0,) * len(joints)
-            power_w = last.power_w if last is not None else self._drive.idle_power(speeds)
-        else:
-            # Power at the speeds the wheels will have at the end of the coming period.
-            ahead = self._predictor.predict(now_ns + round(_NS_PER_S / self.rate))
-            wheels = self._drive.update(motion.wheel_targets, speeds, dt, limit, ahead or None)
-            self.send_joint_targets({
-                joint: JointTarget.with_effort(effort)
-                for joint, effort in zip(joints, wheels.efforts, strict=True)
-            })
-            efforts, power_w = wheels.efforts, wheels.power_w
+        stage.limit_w = limit
+        self.send_joint_targets({
+            joint: JointTarget.with_velocity(target)
+            for joint, target in zip(joints, motion.wheel_targets, strict=True)
+        })
+        last = stage.last  # the loop's latest tick
+        efforts = last.torques if last is not None else (0.0,) * len(joints)
+        power_w = last.power_w if last is not None else self._idle_power(speeds)
         self._report.set_output(motion.twist, motion.wheel_targets, efforts, power_w, limit)
         self._report.speeds = speeds
 
