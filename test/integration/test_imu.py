@@ -6,12 +6,9 @@ simulator's IMU or /dev/ttyUSB0 on a robot. The test writes frames built with th
 encoder into the pty's master side and watches the plugin's topics only.
 """
 
-import contextlib
 import math
-import os
 import threading
 import time
-import tty
 
 import pytest
 import rclpy
@@ -26,58 +23,13 @@ from rm_plugins.imu import ImuState
 from sensor_msgs.msg import Imu
 from std_srvs.srv import SetBool
 from support.ros import wait_until
+from support.serial_port import Pty, Streamer
 
 from rm_msgs.msg import PluginState
 
 pytestmark = pytest.mark.ros
 
 WAIT = 10.0  # longest wait for any condition [s]; normally met in well under a second
-
-
-class Pty:
-    """A pseudo-terminal whose slave is symlinked at path."""
-
-    def __init__(self, path):
-        self.path = path
-        self.master, self.slave = os.openpty()
-        tty.setraw(self.slave)
-        os.symlink(os.ttyname(self.slave), path)
-
-    def write(self, data):
-        os.write(self.master, data)
-
-    def close(self):
-        with contextlib.suppress(OSError):
-            os.unlink(self.path)
-        for fd in (self.master, self.slave):
-            with contextlib.suppress(OSError):
-                os.close(fd)
-
-
-class Streamer:
-    """Writes a frame (from make_frame()) to a pty every period [s] in a thread."""
-
-    def __init__(self, make_frame, period=0.005):
-        self.make_frame = make_frame
-        self.port = None
-        self._period = period
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._run, daemon=True)
-
-    def start(self, port):
-        self.port = port
-        self._thread.start()
-
-    def _run(self):
-        while not self._stop.wait(self._period):
-            port = self.port
-            if port is not None:
-                with contextlib.suppress(OSError):
-                    port.write(self.make_frame())
-
-    def stop(self):
-        self._stop.set()
-        self._thread.join()
 
 
 # Roll 0.1, pitch -0.2 (nose up), yaw 1.0 rad; rates and specific force in SI.

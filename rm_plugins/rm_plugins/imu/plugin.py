@@ -11,7 +11,7 @@ a moving counter is stamped at its receipt. The plugin's ``run()`` only decides 
 state from what the reader reports and publishes the counters on /diagnostics; it never
 touches the port.
 
-States (``ImuState``), all decided in ``_decide``:
+States (``ImuState``, a serial device's ``LinkState``):
 
 - PASSIVE: disabled; the port is closed.
 - NO_PORT: the port cannot be opened, or it failed or went silent and is being reopened
@@ -27,19 +27,18 @@ and counted on /diagnostics (status ``rm_robot: <plugin>``), never fatal.
 from __future__ import annotations
 
 import math
-import os
 import threading
-from enum import IntEnum
 
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from diagnostic_msgs.msg import DiagnosticArray
 from rm_base.hardware.device_clock import DeviceClock
-from rm_base.hardware.protocols.hipnuc import ImuSample
-from rm_base.plugin import PluginBase, PluginConfigError
+from rm_base.hardware.protocols.hipnuc import HipnucParser, ImuSample
+from rm_base.plugin import PluginBase
 from sensor_msgs.msg import Imu
 
 from rm_plugins.imu.conversion import Mounting, reading_from_sample
 from rm_plugins.imu.message import imu_message
-from rm_plugins.imu.reader import ReaderStats, SerialReader
+from rm_plugins.serial.device import DeviceLink, LinkState, link_status, read_serial_settings
+from rm_plugins.serial.reader import ReaderStats
 
 _NS_PER_S = 1_000_000_000
 
@@ -50,35 +49,8 @@ _RATE_COV = (3.0e-6, 0.0, 0.0, 0.0, 3.0e-6, 0.0, 0.0, 0.0, 3.0e-6)
 _ACCEL_COV = (1.0e-2, 0.0, 0.0, 0.0, 1.0e-2, 0.0, 0.0, 0.0, 1.0e-2)
 
 
-class ImuState(IntEnum):
-    """States of the Hi220 plugin (see the module docstring)."""
-
-    PASSIVE = 0
-    NO_PORT = 1
-    NO_DATA = 2
-    STREAMING = 3
-
-
-_LEVELS = {
-    ImuState.PASSIVE: DiagnosticStatus.OK,
-    ImuState.NO_PORT: DiagnosticStatus.ERROR,
-    ImuState.NO_DATA: DiagnosticStatus.WARN,
-    ImuState.STREAMING: DiagnosticStatus.OK,
-}
-
-
-def expand_port(port: str) -> str:
-    """Expand ``${VAR}`` (and ``~`` in a plain path) in a port name.
-
-    Raises:
-        PluginConfigError: the name is empty or uses an unset environment variable.
-    """
-    expanded = os.path.expandvars(port.strip())
-    if '://' not in expanded:
-        expanded = os.path.expanduser(expanded)
-    if not expanded or '$' in expanded:
-        raise PluginConfigError(f'port {port!r} is empty or uses an unset environment variable')
-    return expanded
+#: The Hi220's states are a serial device's (see ``rm_plugins.serial.device.LinkState``).
+ImuState = LinkState
 
 
 class Hi220(PluginBase):
@@ -107,13 +79,10 @@ class Hi220(PluginBase):
     def on_init(self) -> None:
         """Read the parameters, create the publishers and the (not yet started) reader."""
         p = self.params
-        self.port = expand_port(
-            p.string(
-                'port',
-                description='serial port: device path or pyserial URL; ${VAR} and ~ are expanded',
-            )
+        self._settings = settings = read_serial_settings(
+            p, baudrate=115200, data_timeout=0.1, silence_reopen=1.0
         )
-        self.baudrate = p.integer('baudrate', 115200, description='baud rate', unit='bit/s', gt=0)
+        self.port, self.baudrate = settings.port, settings.baudrate
         self.frame_id = p.string('frame_id', 'imu_link', description='frame_id of /imu')
         topic = p.string('topic', 'imu', description='sensor_msgs/Imu output topic')
         mount = p.vector3(
@@ -152,119 +121,44 @@ class Hi220(PluginBase):
         self.orientation_covariance = covariance['orientation_covariance']
         self.angular_velocity_covariance = covariance['angular_velocity_covariance']
         self.linear_acceleration_covariance = covariance['linear_acceleration_covariance']
-        self.data_timeout = p.double(
-            'data_timeout', 0.1, unit='s', gt=0.0, description='no valid frame this long -> NO_DATA'
-        )
-        read_timeout = p.double(
-            'read_timeout',
-            0.02,
-            unit='s',
-            gt=0.0,
-            le=1.0,
-            description='longest blocking read in the reader thread',
-        )
-        backoff_min = p.double(
-            'reopen_backoff_min',
-            0.1,
-            unit='s',
-            gt=0.0,
-            description='first wait before reopening a lost port',
-        )
-        backoff_max = p.double(
-            'reopen_backoff_max',
-            2.0,
-            unit='s',
-            gt=0.0,
-            description='longest wait between reopen attempts',
-        )
-        if backoff_max < backoff_min:
-            raise PluginConfigError(
-                f'reopen_backoff_max ({backoff_max} s) is below reopen_backoff_min '
-                f'({backoff_min} s)'
-            )
-        silence = p.double(
-            'silence_reopen',
-            1.0,
-            unit='s',
-            ge=0.0,
-            description='reopen a port silent this long; 0 = never',
-        )
-        self.diagnostics_period = p.double(
-            'diagnostics_period',
-            1.0,
-            unit='s',
-            gt=0.0,
-            description='period of the /diagnostics status',
-        )
-
         self._clock = self.node.get_clock()
         # a new message per sample: the gimbal and chassis get it with no copy
         self._publisher = self.create_publisher(Imu, topic, 10, hand_over=True)
         self._diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
         self._lock = threading.Lock()
-        self._last_sample_ns: int | None = None  # receipt of the latest sample
         self._device_clock = DeviceClock()
         self._published = 0
         self._next_diagnostics_ns: int | None = None
         self._report_published = 0
         self._report_ns: int | None = None
         self._report_bad = 0
-        # read after the loop's ticks, in its idle time (no loop: the reader's own pace)
-        self.reader = SerialReader(
-            self.port,
-            self.baudrate,
-            self._on_sample,
-            self.logger,
-            read_timeout=read_timeout,
-            backoff_min=backoff_min,
-            backoff_max=backoff_max,
-            silence_reopen=silence,
-            paced=self.in_loop,
+        self._link = DeviceLink(
+            self, settings, self._on_sample, parser=HipnucParser(), name='hipnuc'
         )
-        if self.reader.paced:
-            self.after_tick(self.reader.wake)
+        self.reader = self._link.reader
 
     # -- lifecycle --------------------------------------------------------------------------
 
     def on_enable(self) -> None:
         """Start the reader thread (it opens the port)."""
-        with self._lock:
-            self._last_sample_ns = None
         self._device_clock = DeviceClock()  # the reader thread is not running
-        self.reader.start()
+        self._link.start()
 
     def on_disable(self) -> None:
         """Stop the reader thread and close the port."""
-        if not self.reader.stop():
-            self.logger.error(f'the reader of {self.port} did not stop')
+        self._link.stop()
 
     # -- tick -------------------------------------------------------------------------------
 
     def update(self, now, dt: float) -> None:
         """Decide the state from the reader's report; publish /diagnostics when due."""
         now_ns = now.nanoseconds
-        stats = self.reader.stats()
-        state, reason = self._decide(now_ns, stats)
+        state, reason, stats = self._link.decide(now_ns)
         self.transition(state, reason)
         if self._next_diagnostics_ns is None or now_ns >= self._next_diagnostics_ns:
-            self._next_diagnostics_ns = now_ns + round(self.diagnostics_period * _NS_PER_S)
+            period_ns = round(self._settings.diagnostics_period * _NS_PER_S)
+            self._next_diagnostics_ns = now_ns + period_ns
             self._publish_diagnostics(now, stats)
-
-    def _decide(self, now_ns: int, stats: ReaderStats) -> tuple[ImuState, str]:
-        """The one place that chooses the state (called every tick while enabled)."""
-        with self._lock:
-            last_ns = self._last_sample_ns
-        if not stats.port_open:
-            why = stats.last_error or 'opening'
-            return ImuState.NO_PORT, f'{why}; reopening with back-off'
-        if last_ns is None:
-            return ImuState.NO_DATA, f'{self.port} open, no valid frame yet'
-        if now_ns - last_ns > self.data_timeout * _NS_PER_S:
-            return (
-                ImuState.NO_DATA,
-                f'no valid frame from {self.port} within {self.data_timeout:.3f} s',
-            )
-        return ImuState.STREAMING, f'streaming from {self.port}'
 
     # -- reader thread ----------------------------------------------------------------------
 
@@ -287,14 +181,14 @@ class Hi220(PluginBase):
              self.linear_acceleration_covariance),
         )
         self._publisher.publish(msg)
+        self._link.received(now_ns)
         with self._lock:
-            self._last_sample_ns = now_ns
             self._published += 1
 
     # -- diagnostics ------------------------------------------------------------------------
 
     def _publish_diagnostics(self, now, stats: ReaderStats) -> None:
-        state, reason = ImuState(self.state.value), self.reason
+        state = LinkState(self.state.value)
         with self._lock:
             published = self._published
         now_ns = now.nanoseconds
@@ -304,34 +198,11 @@ class Hi220(PluginBase):
         new_bad = stats.bad_frames + stats.sample_errors - self._report_bad
         self._report_ns, self._report_published = now_ns, published
         self._report_bad = stats.bad_frames + stats.sample_errors
-        level = _LEVELS[state]
-        if level == DiagnosticStatus.OK and new_bad:
-            level = DiagnosticStatus.WARN
-        status = DiagnosticStatus(
-            level=level,
-            name=f'{self.node.get_name()}: {self.name}',
-            message=reason if not new_bad else f'{reason}; {new_bad} bad frame(s) skipped',
-            hardware_id=self.port,
+        status = link_status(
+            f'{self.node.get_name()}: {self.name}', self._settings, state, stats,
+            reason=self.reason, new_bad=new_bad,
+            values={'published': published, 'rate [Hz]': f'{rate:.1f}'},
         )
-        values = {
-            'state': state.name,
-            'port': self.port,
-            'baudrate [bit/s]': self.baudrate,
-            'published': published,
-            'rate [Hz]': f'{rate:.1f}',
-            'frames_ok': stats.frames_ok,
-            'crc_errors': stats.crc_errors,
-            'length_errors': stats.length_errors,
-            'decode_errors': stats.decode_errors,
-            'sample_errors': stats.sample_errors,
-            'bytes_read': stats.bytes_read,
-            'bytes_discarded': stats.bytes_discarded,
-            'opens': stats.opens,
-            'open_failures': stats.open_failures,
-            'port_losses': stats.port_losses,
-            'last_error': stats.last_error or '',
-        }
-        status.values = [KeyValue(key=k, value=str(v)) for k, v in values.items()]
         msg = DiagnosticArray()
         msg.header.stamp = now.to_msg()
         msg.status = [status]

@@ -1,1 +1,6 @@
-"""The referee system on the robot: its records as rm_msgs messages (``messages``)."""
+"""The referee system on the robot (``rm_plugins/Referee``): its serial link as rm_msgs."""
+
+from rm_plugins.referee.messages import TOPICS
+from rm_plugins.referee.plugin import Referee
+
+__all__ = ['TOPICS', 'Referee']

@@ -79,12 +79,12 @@ def hurt(r: ref.Hurt) -> RefereeHurt:
     return RefereeHurt(armor_id=r.armor_id, cause=r.cause)
 
 
-#: Record type -> (topic, converter).
-TOPICS: dict[type, tuple[str, Callable[[Any], Any]]] = {
-    ref.GameStatus: ('referee/game_status', game_status),
-    ref.RobotStatus: ('referee/robot_status', robot_status),
-    ref.PowerHeat: ('referee/power_heat', power_heat),
-    ref.ShootData: ('referee/shot', shot),
-    ref.ProjectileAllowance: ('referee/projectiles', projectiles),
-    ref.Hurt: ('referee/hurt', hurt),
+#: Record type -> (topic, message type, converter).
+TOPICS: dict[type, tuple[str, type, Callable[[Any], Any]]] = {
+    ref.GameStatus: ('referee/game_status', RefereeGameStatus, game_status),
+    ref.RobotStatus: ('referee/robot_status', RefereeRobotStatus, robot_status),
+    ref.PowerHeat: ('referee/power_heat', RefereePowerHeat, power_heat),
+    ref.ShootData: ('referee/shot', RefereeShot, shot),
+    ref.ProjectileAllowance: ('referee/projectiles', RefereeProjectiles, projectiles),
+    ref.Hurt: ('referee/hurt', RefereeHurt, hurt),
 }

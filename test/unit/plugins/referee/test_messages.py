@@ -22,7 +22,8 @@ def test_every_record_type_has_a_topic_and_a_message():
     topics = {messages.TOPICS[type(r)][0] for r in records}
     assert len(topics) == len(records) and all(t.startswith('referee/') for t in topics)
     for record in records:
-        assert messages.TOPICS[type(record)][1](record) is not None
+        _, msg_type, convert = messages.TOPICS[type(record)]
+        assert isinstance(convert(record), msg_type)
 
 
 def test_game_status_keeps_its_values():

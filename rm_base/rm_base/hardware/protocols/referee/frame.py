@@ -135,6 +135,32 @@ class FrameParser:
     stats: ParserStats = field(default_factory=ParserStats)
     _buffer: bytearray = field(default_factory=bytearray)
 
+    # The counters a serial reader reports for any device's parser.
+    @property
+    def frames_ok(self) -> int:
+        """Frames whose CRCs held."""
+        return self.stats.frames
+
+    @property
+    def crc_errors(self) -> int:
+        """Frames whose CRC16 failed."""
+        return self.stats.crc_errors
+
+    @property
+    def length_errors(self) -> int:
+        """Headers that failed (CRC8, or a length beyond MAX_DATA_LENGTH)."""
+        return self.stats.header_errors
+
+    @property
+    def decode_errors(self) -> int:
+        """Always 0: the parser only frames; decoding comes after (``StatusDecoder``)."""
+        return 0
+
+    @property
+    def bytes_discarded(self) -> int:
+        """Bytes skipped while looking for a frame."""
+        return self.stats.skipped_bytes
+
     def feed(self, data: bytes) -> list[RawFrame]:
         """Add received bytes; return every frame completed by them, in order."""
         buffer = self._buffer

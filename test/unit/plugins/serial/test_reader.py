@@ -1,15 +1,14 @@
 """SerialReader on real pseudo-terminals and pyserial's loop://: frames, garbage, port loss."""
 
-import contextlib
 import math
-import os
 import threading
-import tty
 
 import pytest
 import serial
 from rm_base.hardware.protocols import hipnuc
-from rm_plugins.imu import SerialReader
+from rm_base.hardware.protocols.hipnuc import HipnucParser
+from rm_plugins.serial import SerialReader
+from support.serial_port import Pty
 
 WAIT = 10.0  # longest wait for a condition [s]; normally met within a few read timeouts
 
@@ -23,28 +22,6 @@ class Log:
 
     def warning(self, message):
         self.lines.append(('warning', message))
-
-
-class Pty:
-    """A pseudo-terminal whose slave is symlinked at path, like the simulator's IMU."""
-
-    def __init__(self, path):
-        self.path = path
-        self.master, self.slave = os.openpty()
-        tty.setraw(self.slave)
-        if os.path.lexists(path):
-            os.unlink(path)
-        os.symlink(os.ttyname(self.slave), path)
-
-    def write(self, data):
-        os.write(self.master, data)
-
-    def close(self):
-        with contextlib.suppress(OSError):
-            os.unlink(self.path)
-        for fd in (self.master, self.slave):
-            with contextlib.suppress(OSError):
-                os.close(fd)
 
 
 def frame(yaw=0.0, rate_z=0.0):
@@ -83,7 +60,7 @@ def reader_factory():
         kwargs.setdefault('read_timeout', 0.01)
         kwargs.setdefault('backoff_min', 0.02)
         kwargs.setdefault('backoff_max', 0.05)
-        reader = SerialReader(url, 115200, on_sample, Log(), **kwargs)
+        reader = SerialReader(url, 115200, on_sample, Log(), parser=HipnucParser(), **kwargs)
         readers.append(reader)
         return reader
 

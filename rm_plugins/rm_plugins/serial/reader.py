@@ -1,4 +1,4 @@
-"""SerialReader: a thread that reads HiPNUC frames from a serial port and hands out samples.
+"""SerialReader: a thread that reads frames from a serial port and hands out what they carry.
 
 The port is any pyserial URL (``serial.serial_for_url``): a device (``/dev/ttyUSB0``), a
 pseudo-terminal or a symlink to one (the simulator's IMU), ``loop://``, ``socket://h:p``.
@@ -8,8 +8,9 @@ of every tick) and then takes what the port holds, so it decodes in the loop's i
 and never asks for the interpreter in the middle of a tick. It learns how far apart data
 arrives and lets the wakes before the next arrival pass: a 400 Hz IMU costs about one
 thread wake-up per frame, not one per tick. Bytes go
-through ``HipnucParser``, which resynchronises after garbage and counts what it skips;
-every decoded sample is passed to ``on_sample`` in this thread.
+through the device's parser (``FrameStream``: the HiPNUC IMU's, the referee's...), which
+resynchronises after garbage and counts what it skips; everything it decodes is passed to
+``on_sample`` in this thread.
 
 A port that cannot be opened, fails while reading (unplugged, pty closed) or stays silent
 for ``silence_reopen`` is closed and reopened with exponential back-off between
@@ -26,7 +27,6 @@ from collections.abc import Callable
 from typing import Any, Protocol
 
 import serial
-from rm_base.hardware.protocols.hipnuc import HipnucParser, ImuSample
 
 _NS_PER_S = 1_000_000_000
 _LOG_PERIOD_NS = 5 * _NS_PER_S
@@ -36,6 +36,33 @@ _READ_CHUNK = 4096
 _GAP_WEIGHT = 0.125
 _GAP_SHARE = 0.5
 _MAX_GAP_NS = 50_000_000
+
+
+class FrameStream(Protocol):
+    """A device's byte-stream parser, as the reader drives it (counters since it began)."""
+
+    @property
+    def frames_ok(self) -> int:
+        """Frames decoded."""
+
+    @property
+    def crc_errors(self) -> int:
+        """Frames with a wrong CRC."""
+
+    @property
+    def length_errors(self) -> int:
+        """Headers with an impossible length."""
+
+    @property
+    def decode_errors(self) -> int:
+        """Frames with a good CRC but an undecodable payload."""
+
+    @property
+    def bytes_discarded(self) -> int:
+        """Bytes skipped while looking for a frame."""
+
+    def feed(self, data: bytes) -> list[Any]:
+        """Add received bytes; return what the frames they completed carry."""
 
 
 class Logger(Protocol):
@@ -92,13 +119,13 @@ def open_serial(url: str, baudrate: int, timeout: float) -> Any:
 
 
 class SerialReader:
-    """Reads one HiPNUC serial port in a background thread.
+    """Reads one device's serial port in a background thread.
 
     Args:
         url: pyserial URL or device path (already expanded).
         baudrate: [bit/s].
-        on_sample: called in the reader thread for each decoded sample; an exception
-            from it is counted as a sample error and logged (rate-limited).
+        on_sample: called in the reader thread for each thing the parser decodes; an
+            exception from it is counted as a sample error and logged (rate-limited).
         logger: receives open/lose/recover lines.
         read_timeout: longest blocking read [s] (also bounds how long stop() takes).
         backoff_min: first wait before reopening [s].
@@ -109,13 +136,15 @@ class SerialReader:
         clock_ns: monotonic clock [ns].
         paced: read only when woken (:meth:`wake`; at most ``read_timeout`` later
             regardless), and only what is waiting.
+        parser: the device's frame parser.
+        name: the device kind, for the thread's name (``<name> <url>``).
     """
 
     def __init__(
         self,
         url: str,
         baudrate: int,
-        on_sample: Callable[[ImuSample], None],
+        on_sample: Callable[[Any], None],
         logger: Logger,
         *,
         read_timeout: float = 0.02,
@@ -125,6 +154,8 @@ class SerialReader:
         opener: Callable[[str, int, float], Any] = open_serial,
         clock_ns: Callable[[], int] = time.monotonic_ns,
         paced: bool = False,
+        parser: FrameStream,
+        name: str = 'serial',
     ) -> None:
         if not 0.0 < read_timeout <= 1.0:
             raise ValueError(f'read_timeout must be in (0, 1] s, got {read_timeout}')
@@ -149,7 +180,8 @@ class SerialReader:
         self._data_ns: int | None = None  # when the last read found data
         self._gap_ns = 0.0  # moving mean of the time between reads that found data
         self.wakes_passed = 0  # wakes let pass: no data expected yet
-        self._parser = HipnucParser()
+        self._parser = parser
+        self._name = name
         self._lock = threading.Lock()
         self._stats = ReaderStats()
         self._stop = threading.Event()
@@ -165,7 +197,9 @@ class SerialReader:
         if self._thread is not None and self._thread.is_alive():
             return
         self._stop.clear()
-        self._thread = threading.Thread(target=self._run, name=f'hipnuc {self.url}', daemon=True)
+        self._thread = threading.Thread(
+            target=self._run, name=f'{self._name} {self.url}', daemon=True
+        )
         self._thread.start()
 
     def stop(self, timeout: float = 2.0) -> bool:

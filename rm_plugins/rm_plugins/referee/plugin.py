@@ -1,0 +1,138 @@
+"""Referee: the referee system's serial link -> typed rm_msgs reports, SI units.
+
+A reader thread owns the port (the power-management module's user UART, 115200 baud; a
+pyserial URL, ``~`` and ``${VAR}`` expanded) while the plugin is enabled. It splits the
+byte stream into frames (resyncing on bad CRCs and split reads), decodes them for the
+configured ``protocol_version`` and publishes each report at once on
+``referee/game_status``, ``referee/robot_status``, ``referee/power_heat``,
+``referee/shot``, ``referee/projectiles`` and ``referee/hurt`` (rm_msgs Referee*). The
+robot's other plugins get them in-process with no DDS hop (the outbox's loopback). A frame
+whose length fits no layout of the version, or a command this plugin does not read, is
+counted on /diagnostics and dropped.
+
+States are a serial device's (``LinkState``): NO_DATA is the lost link, no good frame
+for ``data_timeout`` (the referee sends robot status and power/heat at 10 Hz). Consumers
+of the limits fall back to their own conservative configuration then, never to none.
+docs/PROTOCOLS.md §6.
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import Any
+
+from diagnostic_msgs.msg import DiagnosticArray
+from rm_base.hardware.protocols.referee import FrameParser, ProtocolVersion, RawFrame, StatusDecoder
+from rm_base.plugin import PluginBase
+
+from rm_plugins.referee.messages import TOPICS
+from rm_plugins.serial.device import DeviceLink, LinkState, link_status, read_serial_settings
+
+_NS_PER_S = 1_000_000_000
+_QOS_DEPTH = 10
+
+
+class Referee(PluginBase):
+    """The referee system's serial link, published as rm_msgs Referee* reports.
+
+    Parameters (under ``<name>.``): ``port`` (required), ``baudrate`` (115200),
+    ``protocol_version`` (``2024``, ``2025``, ``2026``), ``data_timeout`` (no good frame this
+    long: the link is lost, 0.5 s), the reader's ``read_timeout``, ``reopen_backoff_min`` /
+    ``_max``, ``silence_reopen`` and ``diagnostics_period``.
+    """
+
+    State = LinkState
+
+    def on_init(self) -> None:
+        """Read the parameters, create the publishers and the (not yet started) reader."""
+        p = self.params
+        self._settings = settings = read_serial_settings(
+            p, baudrate=115200, data_timeout=0.5, silence_reopen=2.0
+        )
+        version = ProtocolVersion(str(p.integer(
+            'protocol_version', 2026, ge=2024, le=2026,
+            description="the season's referee protocol (its frames' layouts): 2024, 2025, 2026",
+        )))
+        self._publishers = {
+            record: (self.create_publisher(msg_type, topic, _QOS_DEPTH), convert)
+            for record, (topic, msg_type, convert) in TOPICS.items()
+        }
+        self._diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
+        self._decoder = StatusDecoder(version)
+        self._clock = self.node.get_clock()
+        self._lock = threading.Lock()
+        self._published = 0
+        self._next_diagnostics_ns: int | None = None
+        self._report_bad = 0
+        self._link = DeviceLink(
+            self, settings, self._on_frame, parser=FrameParser(), name='referee'
+        )
+        self.reader = self._link.reader
+
+    def on_enable(self) -> None:
+        """Start the reader thread (it opens the port)."""
+        self._link.start()
+
+    def on_disable(self) -> None:
+        """Stop the reader thread and close the port."""
+        self._link.stop()
+
+    def update(self, now: Any, dt: float) -> None:
+        """Decide the link state; publish /diagnostics when due."""
+        now_ns = now.nanoseconds
+        state, reason, stats = self._link.decide(now_ns)
+        self.transition(state, reason)
+        if self._next_diagnostics_ns is None or now_ns >= self._next_diagnostics_ns:
+            self._next_diagnostics_ns = now_ns + round(
+                self._settings.diagnostics_period * _NS_PER_S
+            )
+            self._publish_diagnostics(now, stats)
+
+    def _on_frame(self, frame: RawFrame) -> None:
+        """Decode and publish one frame (called in the reader thread)."""
+        now = self._clock.now()
+        record = self._decoder.decode(frame)
+        self._link.received(now.nanoseconds)
+        entry = self._publishers.get(type(record))
+        if entry is None:
+            return  # counted by the decoder (ignored, wrong length or rejected)
+        publisher, convert = entry
+        msg = convert(record)
+        msg.header.stamp = now.to_msg()
+        publisher.publish(msg)
+        with self._lock:
+            self._published += 1
+
+    def _publish_diagnostics(self, now: Any, stats: Any) -> None:
+        decoder = self._decoder
+        bad = stats.bad_frames + sum(decoder.wrong_length.values()) + sum(
+            decoder.rejected.values()
+        )
+        new_bad, self._report_bad = bad - self._report_bad, bad
+        with self._lock:
+            published = self._published
+        status = link_status(
+            f'{self.node.get_name()}: {self.name}', self._settings,
+            LinkState(self.state.value), stats, reason=self.reason, new_bad=new_bad,
+            values={
+                'protocol_version': decoder.version.value,
+                'published': published,
+                'wrong_length': _counts(decoder.wrong_length),
+                'ignored': _counts(decoder.ignored),
+                'rejected': _counts(decoder.rejected),
+            },
+        )
+        msg = DiagnosticArray()
+        msg.header.stamp = now.to_msg()
+        msg.status = [status]
+        self._diagnostics.publish(msg)
+
+
+def _counts(counter: Any) -> str:
+    return ', '.join(f'{_key(k)}: {n}' for k, n in sorted(counter.items())) or 'none'
+
+
+def _key(key: Any) -> str:
+    if isinstance(key, tuple):
+        return f'0x{key[0]:04X}/{key[1]} B'
+    return f'0x{key:04X}'
