@@ -19,7 +19,7 @@ import pytest
 from rm_base.sim import Fault, FaultKind
 from support.lockstep import LockstepRobot
 
-from rm_msgs.msg import ShootCmd, ShooterState
+from rm_msgs.msg import RefereeRobotStatus, ShootCmd, ShooterState
 
 pytestmark = pytest.mark.ros
 
@@ -366,3 +366,34 @@ def test_when_the_command_is_invalid_expect_it_rejected_and_nothing_moving(rig, 
     mark = r.mark()
     assert r.wait_until(lambda: r.mark() >= mark + 10, WAIT)
     assert max(r.wheel_speeds()) < 1.0 and abs(r.trigger_angle()) < 0.01
+
+
+def test_with_a_heat_limit_a_burst_stops_under_it_and_goes_on_as_fast_as_the_barrel_cools(rig):
+    r = rig(**{'heat.calibre': 17})  # 10 heat a shot, one shot of margin (10)
+    # the referee: limit 40, cooling 10 heat/s (a tenth every 100 ms), the barrel cold
+    r.robot.publish(
+        '/referee/robot_status',
+        RefereeRobotStatus(barrel_heat_limit=40.0, barrel_cooling=10.0, chassis_power_limit=60.0),
+        rate_hz=10.0,
+    )
+    ready(r)
+    r.send(ShootCmd.PUSH, speed=15.0, hz=10.0, num=8, burst_id=1)
+    t0 = r.now()
+    # (40 - 10) / 10 = 3 shots at once (heat 30), then each as cooling frees one (1 s)
+    assert r.wait_until(lambda: shots(r) >= 3, WAIT), r.state()
+    assert r.wait_until(lambda: r.now() - t0 >= 0.8, WAIT)
+    assert shots(r) == 3 and 'barrel heat' in r.state().reason
+    # ...and then at what cooling sustains: 10 heat/s = one shot a second
+    assert r.wait_until(lambda: r.now() - t0 >= 3.0, WAIT)
+    assert 4 <= shots(r) <= 6, (shots(r), r.state().reason)
+    assert r.state().state == ShooterState.PUSH
+
+
+def test_with_the_referee_silent_the_heat_limit_falls_back_never_to_none(rig):
+    # no /referee/* at all: the fallback limit 5 shots' heat (50), margin one shot -> 4
+    r = rig(**{'heat.calibre': 17})
+    ready(r)
+    r.send(ShootCmd.PUSH, speed=15.0, hz=10.0, num=8, burst_id=1)
+    t0 = r.now()
+    assert r.wait_until(lambda: r.now() - t0 >= 1.0, WAIT)
+    assert shots(r) == 4 and 'barrel heat' in r.state().reason

@@ -38,7 +38,9 @@ class BarrelHeatParams:
         confirm_timeout_s: a shot the referee has not reported within this is no longer
             added on top of its heat reports [s], > 0.
         steady_headroom: with fewer shots than this left under the limit, fire no faster
-            than cooling sustains, >= 1.
+            than cooling sustains, >= 1. 1 (the default): the whole headroom at the asked
+            rate, then each shot as cooling frees it (which is the rate cooling sustains);
+            more smooths the change from one to the other.
     """
 
     heat_per_shot: float
@@ -46,7 +48,7 @@ class BarrelHeatParams:
     fallback_limit: float
     fallback_cooling_per_s: float
     confirm_timeout_s: float = 0.5
-    steady_headroom: float = 3.0
+    steady_headroom: float = 1.0
 
     def __post_init__(self) -> None:
         owner = type(self).__name__

@@ -4,8 +4,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 from rm_base.control import JamDetectorParams, LookupTable
+from rm_base.control.barrel_heat import (
+    HEAT_PER_17MM_SHOT,
+    HEAT_PER_42MM_SHOT,
+    BarrelHeatParams,
+)
 from rm_base.errors import ConfigError
 from rm_base.plugin import PluginParams
 
@@ -36,6 +42,10 @@ class ShooterConfig:
         block_timeout: longest reverse before feeding again [s].
         jam_retries: BLOCK recoveries tried after jams in a row; one more jam is a fault.
         state_rate: rate of /shooter_state [Hz] (plus on every change).
+        heat_calibre: the barrel whose heat the shooter keeps under the referee's limit,
+            17 or 42 [mm]; 0: no heat limit (no referee system).
+        heat: how it keeps the heat under the limit (None with heat_calibre 0).
+        referee_timeout: no /referee/robot_status this long: heat's fallback limits [s].
     """
 
     friction_joints: tuple[str, ...]
@@ -57,6 +67,9 @@ class ShooterConfig:
     block_timeout: float
     jam_retries: int
     state_rate: float
+    heat_calibre: int = 0
+    heat: BarrelHeatParams | None = None
+    referee_timeout: float = 1.0
 
     def __post_init__(self) -> None:
         if not self.friction_joints:
@@ -206,4 +219,38 @@ def read_config(p: PluginParams) -> ShooterConfig:
         state_rate=p.double(
             'state_rate', 50.0, description='rate of /shooter_state', unit='Hz', gt=0.0
         ),
+        **_heat_config(p),
     )
+
+
+def _heat_config(p: PluginParams) -> dict[str, Any]:
+    """The barrel heat limit's parameters (``heat.*``), declared whether it is on or not."""
+    calibre = p.integer(
+        'heat.calibre', 0, ge=0, le=42,
+        description='keep the heat of this barrel under the referee limit: 17 or 42 (mm); '
+        '0: no heat limit (no referee system)',
+    )
+    if calibre not in (0, 17, 42):
+        raise ConfigError(f'heat.calibre must be 0, 17 or 42, got {calibre}')
+    per_shot = HEAT_PER_42MM_SHOT if calibre == 42 else HEAT_PER_17MM_SHOT
+    margin = p.double(
+        'heat.margin', per_shot, ge=0.0,
+        description='heat kept free under the limit for shots the referee has not counted yet '
+        '(default: one shot)',
+    )
+    fallback_limit = p.double(
+        'heat.fallback_limit', 5 * per_shot, gt=0.0,
+        description='heat limit while the referee is silent: conservative, never none',
+    )
+    fallback_cooling = p.double(
+        'heat.fallback_cooling', per_shot, ge=0.0, unit='1/s',
+        description='cooling per second assumed while the referee is silent',
+    )
+    timeout = p.double(
+        'heat.referee_timeout', 1.0, gt=0.0, unit='s',
+        description='no /referee/robot_status this long -> the fallback limits',
+    )
+    heat = None
+    if calibre:
+        heat = BarrelHeatParams(per_shot, margin, fallback_limit, fallback_cooling)
+    return {'heat_calibre': calibre, 'heat': heat, 'referee_timeout': timeout}

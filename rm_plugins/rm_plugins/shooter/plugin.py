@@ -12,13 +12,21 @@ from dataclasses import dataclass
 from typing import Any
 
 from rclpy.qos import qos_profile_sensor_data
-from rm_base.control import JamDetector
+from rm_base.control import BarrelHeat, JamDetector
 from rm_base.errors import InputRejectedError
 from rm_base.plugin import JointState, JointTarget, PluginBase
 
-from rm_msgs.msg import GpioState, ShootCmd, ShooterState
+from rm_msgs.msg import (
+    GpioState,
+    RefereePowerHeat,
+    RefereeRobotStatus,
+    RefereeShot,
+    ShootCmd,
+    ShooterState,
+)
 from rm_plugins.shooter.command import ShootCommand, ShooterStage, ShootMode, parse_shoot_cmd
 from rm_plugins.shooter.config import read_config
+from rm_plugins.shooter.heat import RefereeHeatInput
 
 COMMAND_TOPIC = 'shoot_cmd'
 STATE_TOPIC = 'shooter_state'
@@ -28,6 +36,7 @@ STATE_QOS_DEPTH = 10
 _NS_PER_S = 1_000_000_000
 _LOG_PERIOD_NS = _NS_PER_S  # at most one "rejected command" line a second
 _WAIT_FRICTION = 'waiting for the friction wheels to reach speed'
+_REFEREE_QOS_DEPTH = 10
 
 S = ShooterStage
 
@@ -144,6 +153,17 @@ class StandShooter(PluginBase):
         self.state_pub = self.create_publisher(ShooterState, STATE_TOPIC, STATE_QOS_DEPTH)
         self._state_period_ns = round(_NS_PER_S / cfg.state_rate)
         self._detector = JamDetector(cfg.jam)
+        # The barrel's heat, kept under the referee's limit (kept across resets: it is
+        # the barrel's, not the command's)
+        self._heat = BarrelHeat(cfg.heat) if cfg.heat is not None else None
+        self._referee = RefereeHeatInput(cfg.heat_calibre, cfg.referee_timeout)
+        if self._heat is not None:
+            for topic, msg_type, handler in (
+                ('referee/robot_status', RefereeRobotStatus, self._referee.on_robot_status),
+                ('referee/power_heat', RefereePowerHeat, self._referee.on_power_heat),
+                ('referee/shot', RefereeShot, self._referee.on_shot),
+            ):
+                self.subscribe(topic, msg_type, handler, _REFEREE_QOS_DEPTH)
         # A joint state this old is no state: the bridge stopped publishing (it may come
         # back with the trigger's position counted from a new zero).
         self._joint_timeout_ns = round(
@@ -205,6 +225,10 @@ class StandShooter(PluginBase):
         command = self._valid_command(now_ns)
         if command is not None:
             self._follow_command(command)
+        if self._heat is not None:
+            self._referee.apply(self._heat, now_ns)
+            if dt > 0.0:
+                self._heat.step(dt)
         joints = self.joint_states.snapshot(self._joints)
         self._advance(command, joints, self._switch.read(now_ns), now_ns, dt)
         self._publish_state(now)
@@ -412,7 +436,14 @@ class StandShooter(PluginBase):
             self._enter(S.READY, reason)
             return JointTarget.with_position(self._hold)
         hold = JointTarget.with_position(self._hold)
-        if burst.last_step_ns is not None and now_ns - burst.last_step_ns < _NS_PER_S / burst.hz:
+        heat = self._heat
+        hz = burst.hz if heat is None else heat.rate_limit(burst.hz)
+        if heat is not None and hz <= 0.0:
+            self._enter(
+                S.PUSH, f'barrel heat {heat.heat:.0f} of {heat.limit:.0f}: waiting for it to cool'
+            )
+            return hold
+        if burst.last_step_ns is not None and now_ns - burst.last_step_ns < _NS_PER_S / hz:
             self._enter(S.PUSH, self._burst_text(burst))
             return hold
         if not self._friction_ready:
@@ -435,6 +466,8 @@ class StandShooter(PluginBase):
         self._enter(S.PUSH, self._burst_text(burst))
         self._step_target = self._hold + cfg.slot_angle * cfg.trigger_direction
         burst.last_step_ns = self._step_start_ns = now_ns
+        if heat is not None:
+            heat.fired()  # counted as the step starts: the ball leaves within it
         self._detector.reset()
         return JointTarget.with_position(self._hold, cfg.step_speed * cfg.trigger_direction)
 

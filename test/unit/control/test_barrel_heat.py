@@ -86,7 +86,13 @@ def test_a_silent_referee_means_the_fallback_limits_never_none():
     ],
 )
 def test_near_the_limit_the_rate_drops_to_what_cooling_sustains(referee_heat, requested, expected):
-    assert heat_at(referee_heat).rate_limit(requested) == expected
+    smooth = BarrelHeatParams(10.0, 20.0, 50.0, 10.0, steady_headroom=3.0)
+    assert heat_at(referee_heat, params=smooth).rate_limit(requested) == expected
+
+
+def test_by_default_the_whole_headroom_fires_at_the_asked_rate():
+    assert heat_at(195.0).rate_limit(20.0) == 20.0  # 2 shots left
+    assert heat_at(215.0).rate_limit(20.0) == 0.0
 
 
 def test_bad_values_are_refused():
