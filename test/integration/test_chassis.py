@@ -45,7 +45,14 @@ from support.lockstep import LockstepRobot
 from support.robot import CONFIG_DIR, load_parameters
 from support.ros import wait_until
 
-from rm_msgs.msg import ActuatorCmd, ActuatorState, ChassisCmd, ChassisState
+from rm_msgs.msg import (
+    ActuatorCmd,
+    ActuatorState,
+    ChassisCmd,
+    ChassisState,
+    RefereePowerHeat,
+    RefereeRobotStatus,
+)
 
 pytestmark = pytest.mark.ros
 
@@ -883,3 +890,25 @@ def test_when_vel_cmd_is_nan_expect_it_rejected_and_no_motion(fake):
     assert f.wait_until(lambda: len(f.states) > count + 20)
     assert all(s.cmd_vel.linear.x == 0.0 for s in f.states[count:])
     assert all(t == 0.0 for s in f.states[count:] for t in s.wheel_target)
+
+
+def test_with_the_referee_the_power_limit_spends_the_buffer_and_falls_back_when_silent(rig):
+    r = rig(chassis={'power.from_referee': True})  # reserve 20 J, 2 W/J, at most +60 W
+    stage = r.robot.bridge.hardware.power_limits['chassis']
+    status = RefereeRobotStatus(chassis_power_limit=45.0)
+    buffer = RefereePowerHeat(buffer_energy=30.0)
+    r.stream('/referee/robot_status', lambda: status, rate_hz=10.0)
+    r.stream('/referee/power_heat', lambda: buffer, rate_hz=10.0)
+    r.command(ChassisCmd.RAW)
+    r.velocity(vx=0.5)
+    # 10 J above the reserve: 45 + 2 x 10 = 65 W to spend it
+    assert r.wait_until(lambda: stage.limit_w == 65.0), stage.limit_w
+    assert r.wait_until(lambda: r.latest('/chassis_state').power_limit == 65.0)
+    buffer.buffer_energy = 5.0  # 15 J under it: 15 W, so the buffer refills
+    assert r.wait_until(lambda: stage.limit_w == 15.0), stage.limit_w
+    r.command(ChassisCmd.RAW, power_limit=10.0)  # a commanded limit can only lower it
+    assert r.wait_until(lambda: stage.limit_w == 10.0), stage.limit_w
+    r.command(ChassisCmd.RAW)
+    r.robot.stop_publishing('/referee/robot_status')
+    # silent for power.referee_timeout (1 s): the default limit (60 W), never none
+    assert r.wait_until(lambda: stage.limit_w == 60.0, 3.0), stage.limit_w

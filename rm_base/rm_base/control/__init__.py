@@ -7,6 +7,7 @@ construction with a bad value.
 """
 
 from rm_base.control.barrel_heat import BarrelHeat, BarrelHeatParams
+from rm_base.control.buffer_energy import BufferEnergyParams, power_budget
 from rm_base.control.chassis_modes import (
     ChassisModeController,
     ChassisModeParams,
@@ -36,6 +37,7 @@ from rm_base.control.tracking_differentiator import TdParams, TrackingDifferenti
 __all__ = [
     'BarrelHeat',
     'BarrelHeatParams',
+    'BufferEnergyParams',
     'ChassisModeController',
     'ChassisModeParams',
     'ChassisMotionMode',
@@ -62,6 +64,7 @@ __all__ = [
     'fhan',
     'fit_power_model',
     'limit_power',
+    'power_budget',
     'power_limit_scale',
     'ramp_step',
     'twist_waveform',

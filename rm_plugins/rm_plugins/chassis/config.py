@@ -10,8 +10,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from enum import Enum
+from typing import Any
 
 from rm_base.control import (
+    BufferEnergyParams,
     ChassisModeParams,
     ChassisPowerModel,
     FollowParams,
@@ -58,7 +60,11 @@ class ChassisConfig:
         linear_limits: default ramp of vx and vy.
         angular_limits: default ramp of wz.
         power_model: power model of the chassis.
-        power_limit: default chassis power limit [W].
+        power_limit: default chassis power limit [W]; with the referee, the limit while it is
+            silent.
+        referee_power: take the limit from /referee/robot_status and spend the buffer energy
+            of /referee/power_heat this way; None: the configured or commanded limit.
+        referee_timeout: no /referee/robot_status this long: the default limit [s].
         imu_mount: where the IMU on imu_topic is fixed.
         imu_topic: sensor_msgs/Imu topic.
         imu_timeout: an IMU sample older than this is not used [s].
@@ -91,6 +97,9 @@ class ChassisConfig:
     base_frame: str
     publish_tf: bool
     publish_rate: float
+    referee_power: BufferEnergyParams | None = None
+    referee_timeout: float = 1.0
+
 
 
 def _wheels(p: PluginParams, kind: Kinematics, joints: tuple[str, ...]) -> WheelKinematics:
@@ -284,8 +293,10 @@ def read_config(p: PluginParams) -> ChassisConfig:
         angular_limits=_ramp(p, 'angular', 'rad/s', (20.0, 30.0, 40.0, 1.0)),
         power_model=power_model,
         power_limit=p.double('power.default_limit', 60.0,
-                             description='chassis power limit when /chassis_cmd gives none',
+                             description='chassis power limit when /chassis_cmd gives none '
+                             '(with from_referee: while the referee is silent)',
                              unit='W', gt=0.0),
+        **_referee_power(p),
         imu_mount=p.choice('imu.mount', ImuMount, ImuMount.GIMBAL,
                            description='body the IMU is fixed to: gimbal, chassis or none'),
         imu_topic=p.string('imu.topic', 'imu', description='sensor_msgs/Imu topic'),
@@ -305,3 +316,23 @@ def read_config(p: PluginParams) -> ChassisConfig:
                               description='rate of /chassis_state and /odom', unit='Hz',
                               gt=0.0),
     )
+
+
+def _referee_power(p: PluginParams) -> dict[str, Any]:
+    """The power limit from the referee (``power.*``), declared whether it is on or not."""
+    on = p.boolean(
+        'power.from_referee', False,
+        description='take the limit from /referee/robot_status and spend the buffer energy of '
+        '/referee/power_heat (the referee plugin)',
+    )
+    params = BufferEnergyParams(
+        reserve_j=p.double('power.buffer_reserve', 20.0, unit='J', ge=0.0,
+                           description='buffer energy kept; spent above it, refilled below'),
+        gain_w_per_j=p.double('power.buffer_gain', 2.0, unit='W/J', ge=0.0,
+                              description='extra power per joule above the reserve'),
+        max_boost_w=p.double('power.max_boost', 60.0, unit='W', ge=0.0,
+                             description='most power above the referee limit'),
+    )
+    timeout = p.double('power.referee_timeout', 1.0, unit='s', gt=0.0,
+                       description='no /referee/robot_status this long -> default_limit')
+    return {'referee_power': params if on else None, 'referee_timeout': timeout}

@@ -65,7 +65,7 @@ from rm_base.plugin import JointTarget, LatestMessage, LogThrottle, PluginBase, 
 from rm_base.plugin.commands import stamp_ns_of
 from sensor_msgs.msg import Imu
 
-from rm_msgs.msg import ChassisCmd, ChassisState
+from rm_msgs.msg import ChassisCmd, ChassisState, RefereePowerHeat, RefereeRobotStatus
 from rm_plugins.chassis.commands import (
     ChassisMode,
     ChassisRequest,
@@ -82,6 +82,7 @@ from rm_plugins.chassis.motion import (
     held_frame,
 )
 from rm_plugins.chassis.odometry import Odometry
+from rm_plugins.chassis.referee_power import RefereePower
 
 _NS_PER_S = 1_000_000_000
 _LOG_PERIOD_NS = _NS_PER_S  # at most one line per second per kind of rejected input
@@ -142,6 +143,11 @@ class StandChassis(PluginBase):
         self._power_stage = self.power_limit(cfg.wheel_joints, cfg.power_model)
         if self._power_stage is None:
             raise PluginConfigError('no control loop runs the wheels (no power stage)')
+        self._referee_power: RefereePower | None = None
+        if cfg.referee_power is not None:
+            self._referee_power = referee = RefereePower(cfg.referee_power, cfg.referee_timeout)
+            self.subscribe('referee/robot_status', RefereeRobotStatus, referee.on_robot_status, 10)
+            self.subscribe('referee/power_heat', RefereePowerHeat, referee.on_power_heat, 10)
         self._odometry = Odometry(cfg.wheels)
         self._imu = LatestMessage(use_stamp=False)
         if cfg.imu_mount is not ImuMount.NONE:
@@ -183,7 +189,7 @@ class StandChassis(PluginBase):
         speeds = None if wheels is None else [w.velocity for w in wheels]
         decision = self._decide(now_ns, wheel_problem)
         if decision.request is None or speeds is None:
-            self._passive(decision.state, decision.reason, speeds)
+            self._passive(now_ns, decision.state, decision.reason, speeds)
         else:
             self._drive_wheels(now_ns, dt, decision, decision.request, speeds)
         self._maybe_publish(now)
@@ -194,7 +200,7 @@ class StandChassis(PluginBase):
         now_ns = now.nanoseconds
         wheels, _ = self._wheel_states(now_ns)
         self._update_odometry(now_ns, wheels)
-        self._passive(None, '', None if wheels is None else [w.velocity for w in wheels])
+        self._passive(now_ns, None, '', None if wheels is None else [w.velocity for w in wheels])
         self._maybe_publish(now)
 
     # -- commands -----------------------------------------------------------------------
@@ -370,7 +376,9 @@ class StandChassis(PluginBase):
 
     # -- actuation ----------------------------------------------------------------------
 
-    def _passive(self, state: ChassisMode | None, reason: str, speeds: Any) -> None:
+    def _passive(
+        self, now_ns: int, state: ChassisMode | None, reason: str, speeds: Any
+    ) -> None:
         if state is not None:
             self.transition(state, reason)
         self.zero_output()
@@ -381,10 +389,21 @@ class StandChassis(PluginBase):
         self._report.set_output(
             Twist2D(), [0.0] * count, [0.0] * count,
             self._idle_power(speeds),
-            self.config.power_limit if self._request is None or self._request.power_limit is None
-            else self._request.power_limit,
+            self._power_limit(now_ns, self._request),
         )
         self._report.speeds = speeds
+
+    def _power_limit(self, now_ns: int, request: ChassisRequest | None) -> float:
+        """The power limit for this tick [W].
+
+        The referee's budget (if heard), else the default; a commanded limit replaces the
+        default, and can only lower the referee's.
+        """
+        commanded = request.power_limit if request is not None else None
+        if self._referee_power is None:
+            return self.config.power_limit if commanded is None else commanded
+        budget = self._referee_power.budget(now_ns, self.config.power_limit)
+        return budget if commanded is None else min(budget, commanded)
 
     def _idle_power(self, speeds: list[float] | None) -> float:
         """Predicted chassis power with no effort at the measured speeds [W]."""
@@ -433,7 +452,7 @@ class StandChassis(PluginBase):
             mode, frame, command, dt, accel=request.accel,
             yaw_joint=phi, yaw_joint_rate=phi_rate, gimbal_yaw_rate=gimbal_rate,
         )
-        limit = self.config.power_limit if request.power_limit is None else request.power_limit
+        limit = self._power_limit(now_ns, request)
         joints = self.config.wheel_joints
         stage = self._power_stage
         stage.limit_w = limit
