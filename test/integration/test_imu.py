@@ -7,13 +7,10 @@ encoder into the pty's master side and watches the plugin's topics only.
 """
 
 import math
-import threading
 import time
 
 import pytest
-import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
-from rclpy.experimental import EventsExecutor
 from rclpy.parameter import Parameter
 from rm_base.geometry import quaternion_from_rpy
 from rm_base.hardware.protocols import hipnuc
@@ -22,6 +19,7 @@ from rm_base.plugin import STATE_QOS
 from rm_plugins.imu import ImuState
 from sensor_msgs.msg import Imu
 from std_srvs.srv import SetBool
+from support.hosted import HostedPlugins
 from support.ros import wait_until
 from support.serial_port import Pty, Streamer
 
@@ -47,9 +45,9 @@ def imusol_frame():
     )
 
 
-class Harness:
+class Harness(HostedPlugins):
     def __init__(self, context, port, **params):
-        overrides = {
+        super().__init__(context, {
             'plugins': ['imu'],
             'imu.type': 'rm_plugins/Hi220',
             'imu.rate': 100.0,
@@ -59,54 +57,17 @@ class Harness:
             'imu.reopen_backoff_max': 0.2,
             'imu.diagnostics_period': 0.1,
             **{f'imu.{k}': v for k, v in params.items()},
-        }
-        self.host = RobotHost(
-            context=context,
-            parameter_overrides=[Parameter(k, value=v) for k, v in overrides.items()],
-        )
-        self.probe = rclpy.create_node('probe', context=context)
-        self.executor = EventsExecutor(context=context)
+        })
         self.imu = self.collect(Imu, '/imu')
         self.diagnostics = self.collect(DiagnosticArray, '/diagnostics')
         self.states = self.collect(PluginState, '/rm_robot/imu/state', STATE_QOS)
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._spin, daemon=True)
-
-    def collect(self, msg_type, topic, qos=50):
-        received = []
-        self.probe.create_subscription(msg_type, topic, received.append, qos)
-        return received
-
-    def start(self):
-        self.executor.add_node(self.host)
-        self.executor.add_node(self.probe)
-        self._thread.start()
-        return self
 
     def state(self):
         return ImuState(self.states[-1].state) if self.states else None
 
     def imu_status(self):
         """The newest /diagnostics status of the plugin as a dict (plus 'level')."""
-        for array in reversed(self.diagnostics):
-            for status in array.status:
-                if status.name == 'rm_robot: imu':
-                    values = {kv.key: kv.value for kv in status.values}
-                    values['level'] = status.level
-                    values['message'] = status.message
-                    return values
-        return None
-
-    def close(self):
-        self._stop.set()
-        self._thread.join()
-        self.host.destroy_node()
-        self.probe.destroy_node()
-        self.executor.shutdown()
-
-    def _spin(self):
-        while not self._stop.is_set():
-            self.executor.spin_once(timeout_sec=0.02)
+        return self.diagnostic('rm_robot: imu', self.diagnostics)
 
 
 @pytest.fixture

@@ -6,18 +6,16 @@ between, and watches the plugin's topics only.
 """
 
 import math
-import threading
 
 import pytest
-import rclpy
 from diagnostic_msgs.msg import DiagnosticArray
-from rclpy.experimental import EventsExecutor
 from rclpy.parameter import Parameter
 from rm_base.errors import ConfigError
 from rm_base.hardware.protocols import referee as ref
 from rm_base.host import RobotHost
 from rm_base.plugin import STATE_QOS
 from rm_plugins.serial import LinkState
+from support.hosted import HostedPlugins
 from support.ros import wait_until
 from support.serial_port import Pty
 
@@ -40,9 +38,9 @@ F5 = bytes.fromhex('A5 0E 00 05 08 02 02 00 00 00 00 00 00 00 00 3C 00 82 00 00 
 F8 = bytes.fromhex('A5 07 00 08 7B 07 02 01 01 0A 00 00 C4 41 0E A5')
 
 
-class Harness:
+class Harness(HostedPlugins):
     def __init__(self, context, port):
-        overrides = {
+        super().__init__(context, {
             'plugins': ['referee'],
             'referee.type': 'rm_plugins/Referee',
             'referee.rate': 50.0,
@@ -50,13 +48,7 @@ class Harness:
             'referee.protocol_version': 2026,
             'referee.data_timeout': 0.3,
             'referee.diagnostics_period': 0.1,
-        }
-        self.host = RobotHost(
-            context=context,
-            parameter_overrides=[Parameter(k, value=v) for k, v in overrides.items()],
-        )
-        self.probe = rclpy.create_node('probe', context=context)
-        self.executor = EventsExecutor(context=context)
+        })
         self.received = {
             topic: self.collect(msg_type, f'/referee/{topic}')
             for topic, msg_type in (('game_status', RefereeGameStatus),
@@ -65,37 +57,13 @@ class Harness:
         }
         self.diagnostics = self.collect(DiagnosticArray, '/diagnostics')
         self.states = self.collect(PluginState, '/rm_robot/referee/state', STATE_QOS)
-        self._stop = threading.Event()
-        self._thread = threading.Thread(target=self._spin, daemon=True)
-        for node in (self.host, self.probe):
-            self.executor.add_node(node)
-        self._thread.start()
-
-    def collect(self, msg_type, topic, qos=50):
-        received = []
-        self.probe.create_subscription(msg_type, topic, received.append, qos)
-        return received
+        self.start()
 
     def state(self):
         return LinkState(self.states[-1].state) if self.states else None
 
     def status(self):
-        for array in reversed(self.diagnostics):
-            for status in array.status:
-                if status.name == 'rm_robot: referee':
-                    return {kv.key: kv.value for kv in status.values}
-        return None
-
-    def close(self):
-        self._stop.set()
-        self._thread.join()
-        self.host.destroy_node()
-        self.probe.destroy_node()
-        self.executor.shutdown()
-
-    def _spin(self):
-        while not self._stop.is_set():
-            self.executor.spin_once(timeout_sec=0.02)
+        return self.diagnostic('rm_robot: referee', self.diagnostics)
 
 
 @pytest.fixture
