@@ -65,8 +65,18 @@ class RemotePowerLimits:
         self._requests: dict[str, PowerLimitRequest] = {}
 
     def apply(self, request: PowerLimitRequest) -> None:
-        """Add the group's stage, or change its limit (a new joint set or model: a new stage)."""
+        """Add the group's stage, or change its limit (a new joint set or model: a new stage).
+
+        Raises:
+            PowerLimitRejectedError: the group's stage cannot join the loop (a group of
+                that name that is not a /power_limit one, e.g. a plugin's own in this
+                process); the loop stays as it was.
+        """
         old = self._requests.get(request.group)
+        if old is None and request.group in self._hardware.power_limits:
+            raise PowerLimitRejectedError(
+                f'power limit {request.group!r}: the loop has a stage of that group already'
+            )
         if old is None or (old.joints, old.model) != (request.joints, request.model):
             if old is not None:
                 self._hardware.remove_power_limit(request.group)

@@ -91,7 +91,8 @@ class Referee(PluginBase):
     def _on_frame(self, frame: RawFrame) -> None:
         """Decode and publish one frame (called in the reader thread)."""
         now = self._clock.now()
-        record = self._decoder.decode(frame)
+        with self._lock:  # the decoder's counters are read by the diagnostics (tick)
+            record = self._decoder.decode(frame)
         self._link.received(now.nanoseconds)
         entry = self._publishers.get(type(record))
         if entry is None:
@@ -105,21 +106,22 @@ class Referee(PluginBase):
 
     def _publish_diagnostics(self, now: Any, stats: Any) -> None:
         decoder = self._decoder
-        bad = stats.bad_frames + sum(decoder.wrong_length.values()) + sum(
-            decoder.rejected.values()
-        )
-        new_bad, self._report_bad = bad - self._report_bad, bad
         with self._lock:
             published = self._published
+            wrong, ignored, rejected = (
+                dict(decoder.wrong_length), dict(decoder.ignored), dict(decoder.rejected)
+            )
+        bad = stats.bad_frames + sum(wrong.values()) + sum(rejected.values())
+        new_bad, self._report_bad = bad - self._report_bad, bad
         status = link_status(
             f'{self.node.get_name()}: {self.name}', self._settings,
             LinkState(self.state.value), stats, reason=self.reason, new_bad=new_bad,
             values={
                 'protocol_version': decoder.version.value,
                 'published': published,
-                'wrong_length': _counts(decoder.wrong_length),
-                'ignored': _counts(decoder.ignored),
-                'rejected': _counts(decoder.rejected),
+                'wrong_length': _counts(wrong),
+                'ignored': _counts(ignored),
+                'rejected': _counts(rejected),
             },
         )
         msg = DiagnosticArray()

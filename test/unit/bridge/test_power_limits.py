@@ -65,3 +65,11 @@ def test_new_joints_or_model_replace_the_stage():
 def test_a_bad_request_is_rejected_whole(fields, match):
     with pytest.raises(PowerLimitRejectedError, match=match):
         parse_power_limit(request(**fields), WHEELS)
+
+
+def test_a_group_the_loop_has_from_elsewhere_is_not_replaced():
+    hw = hardware()
+    own = hw.add_power_limit('chassis', WHEELS, ChassisPowerModel(1.0, 0.0))  # in-process
+    with pytest.raises(PowerLimitRejectedError, match='has a stage of that group already'):
+        RemotePowerLimits(hw).apply(parse_power_limit(request(), WHEELS))
+    assert hw.power_limits['chassis'] is own
