@@ -264,3 +264,24 @@ def test_an_mit_target_is_moved_so_the_motor_law_gives_the_effort(kp, kd, moved)
     assert kp * (p - 0.2) + kd * (v + 1.0) + ff == pytest.approx(2.0)
     changed = {'position': p != 1.0, 'velocity': v != 3.0, 'feed-forward': ff != 0.5}
     assert [name for name, c in changed.items() if c] == [moved]
+
+
+def test_piper_encodes_torque_over_18_nm_unless_told_8():
+    # 2 N·m on the 8-bit field, truncated as the SDK's float_to_uint does: (2 + 18) / 36 *
+    # 255 = 141.7 -> 141 over ±18, or (2 + 8) / 16 * 255 = 159.4 -> 159 over ±8 (the
+    # firmware's range is not known here: ±18 read as ±8 is 0.44 x the torque, never more)
+    for options, t_max, raw in (({}, 18.0, 141), ({'torque_range': 8}, 8.0, 159)):
+        a = make('piper', id=1, **options)
+        assert a.limits.t_max == t_max
+        piper_feedback(a, T0, 0.0, 0.0, 0.0)
+        a.set_command(Mode.MIT, T0, position=0.0, velocity=0.0, effort=2.0, kp=0.0, kd=0.0)
+        a.update(T0, 0.001)
+        msg = a.pack_command()
+        raw_torque = ((msg.data[6] & 0x0F) << 4) | (msg.data[7] >> 4)
+        assert raw_torque == raw, (options, raw_torque)
+
+
+@pytest.mark.parametrize('value', [10, True, 'eighteen', 18.5])
+def test_piper_refuses_a_torque_range_no_firmware_has(value):
+    with pytest.raises(HardwareConfigError, match='torque_range must be 18 or 8'):
+        make('piper', id=1, torque_range=value)

@@ -9,8 +9,11 @@ not docs/PROTOCOLS.md (UNVERIFIED on an arm).
 This layer does not run the arm's own enable / mode sequence (EnablePiper, MotionCtrl_2
 with MIT mode 0xAD); the arm must be put into MIT mode first.
 
-Family options: ``limits`` (overrides of the SDK's fixed ranges) or
-``legacy_torque_range: true`` for firmware that encodes torque over ±18 N·m.
+Family options: ``limits`` (overrides of the SDK's fixed ranges) and ``torque_range``, the
+torque the 8-bit field spans: 18 (N·m, the default) or 8. Firmware decodes one or the
+other and which one an arm runs is not known from here: a ±18 encoding read as ±8 asks
+0.44 x the torque, a ±8 encoding read as ±18 asks 2.25 x, so the default is the one that
+can never ask more than the joint was commanded (docs/PROTOCOLS.md §3).
 """
 
 from __future__ import annotations
@@ -26,13 +29,15 @@ from rm_base.joints import Mode
 from rm_base.motors.piper import protocol as piper
 
 _ZERO = MitCommand(0.0, 0.0, 0.0, 0.0, 0.0)
+#: torque_range [N·m] -> the command ranges with that torque encoding
+_TORQUE_RANGES = {18: piper.PIPER_MIT_LIMITS_LEGACY, 8: piper.PIPER_MIT_LIMITS}
 
 
 class PiperJoint(Actuator):
     """One Piper joint (``id`` = joint number 1..6)."""
 
     type_name = 'piper'
-    option_keys = frozenset({'limits', 'legacy_torque_range'})
+    option_keys = frozenset({'limits', 'torque_range'})
 
     def __init__(self, config: JointConfig, safety: SafetyConfig | None = None) -> None:
         """Build the joint.
@@ -44,8 +49,13 @@ class PiperJoint(Actuator):
             raise HardwareConfigError(f'joints.{config.name}.id must be a Piper joint 1..6')
         if config.gear_ratio not in (None, 1.0):
             raise HardwareConfigError(f'joints.{config.name}.gear_ratio: Piper joints are 1:1')
-        legacy = bool(config.options.get('legacy_torque_range', False))
-        base = piper.PIPER_MIT_LIMITS_LEGACY if legacy else piper.PIPER_MIT_LIMITS
+        torque_range = config.options.get('torque_range', 18.0)
+        base = _TORQUE_RANGES.get(torque_range) if not isinstance(torque_range, bool) else None
+        if base is None:
+            raise HardwareConfigError(
+                f"joints.{config.name}.torque_range must be 18 or 8 (N·m, what the arm's "
+                f'firmware decodes), got {torque_range!r}'
+            )
         self.limits = limits_from_config(config.name, base, config.options.get('limits'))
         kt = piper.EFFORT_PER_AMP[config.id - 1]
         self.defaults = Defaults(1.0, kt, self.limits.t_max, self.limits.v_max, 80.0)

@@ -9,7 +9,7 @@ velocity, kp, kd (12 each), but torque has only 8 bits and the last nibble is a 
 The check covers bytes 0..6 only (so not t's low nibble). Ranges are fixed by the SDK:
 position ±12.5 rad, velocity ±45 rad/s, kp 0..500, kd −5..5, torque ±8 N·m (SDK since
 2025-07; older SDKs/firmware used ±18 — UNVERIFIED which your arm runs, so the torque
-range is a parameter: :data:`PIPER_MIT_LIMITS_LEGACY`).
+range is a joint option, ±18 by default: :data:`PIPER_MIT_LIMITS_LEGACY`).
 
 Feedback (not in docs/PROTOCOLS.md; from the piper_sdk 0.6.1 message docstrings, UNVERIFIED on
 an arm): joint angles in 0x2A5/0x2A6/0x2A7, two joints per frame as int32 big-endian in
