@@ -126,13 +126,14 @@ def read_bag(bag: Path):
         ]
 
 
-def play(bag: Path, *options) -> list:
-    """Play bag into test subscribers; return (receive time [s], topic, msg) in order."""
+def play(bag: Path, *options, topics=None) -> list:
+    """Play bag into test subscribers of topics (TYPES by default): (receive time [s],
+    topic, msg) in order."""
     received = []
     with rclpy_context() as context:
         graph = Graph(context)
         try:
-            for topic, cls in TYPES.items():
+            for topic, cls in (topics or TYPES).items():
                 graph.node.create_subscription(
                     cls, topic, lambda msg, t=topic: received.append((time.monotonic(), t, msg)), 10
                 )
@@ -223,3 +224,14 @@ def test_record_stops_on_sigterm_with_a_readable_bag(tmp_path):
     with AnyReader([tmp_path / 'bag']) as reader:
         # The counts in metadata.yaml agree with what the storage file holds.
         assert reader.message_count == sum(1 for _ in reader.messages())
+
+
+def test_play_remaps_a_recorded_topic_onto_another(recording):
+    remapped = '/cli_bag/remapped_cmd'
+    received = play(
+        recording['bag'], '--remap', f'{CMD_TOPIC}:={remapped}',
+        topics={remapped: ChassisCmd, TEXT_TOPIC: String},
+    )
+    expected = [(remapped if t == CMD_TOPIC else t, msg) for t, msg in recording['sent']]
+    assert [(topic, msg) for _, topic, msg in received] == expected
+

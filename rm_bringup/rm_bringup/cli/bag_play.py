@@ -9,8 +9,11 @@ every publisher has matched a subscriber, so the first messages are not lost to 
 a new participant can need up to one announcement period of the others (~3 s with Fast
 DDS on localhost) to see them.
 
-Not implemented from ros2 bag play: keyboard controls, --clock, remapping, services,
-QoS override files, --playback-duration/until.
+``--remap FROM:=TO`` publishes a recorded topic under another name (a teleop bag recorded on
+/cmd_vel replayed as /vel_cmd), as ros2 bag play's --remap does for topic names.
+
+Not implemented from ros2 bag play: keyboard controls, --clock, node-name remapping,
+services, QoS override files, --playback-duration/until.
 """
 
 from __future__ import annotations
@@ -72,6 +75,15 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help='Sleep duration before play (each loop), in seconds.',
     )
     parser.add_argument(
+        '-m',
+        '--remap',
+        type=str,
+        default=[],
+        nargs='+',
+        metavar='FROM:=TO',
+        help='publish a recorded topic under another name, e.g. /cmd_vel:=/vel_cmd',
+    )
+    parser.add_argument(
         '--wait-for-subscribers',
         type=nonnegative_float,
         metavar='SECONDS',
@@ -87,8 +99,10 @@ def run(args: argparse.Namespace) -> int:
     from .ros_node import cli_node, stop_on_signals
 
     path = Path(args.bag_path)
+    remaps = parse_remaps(args.remap)
     with open_bag(path) as reader:
         connections = _select(reader.connections, args.topics, path)
+        _check_remaps(remaps, _by_topic(connections))
         with cli_node('bag_play') as node, stop_on_signals() as stop:
             publishers = {}
             for topic, conns in _by_topic(connections).items():
@@ -99,7 +113,7 @@ def run(args: argparse.Namespace) -> int:
                     continue
                 offered = [q for c in conns for q in c.ext.offered_qos_profiles]
                 publishers[topic] = node.create_publisher(
-                    msg_class, topic, offer_for_recorded(offered)
+                    msg_class, remaps.get(topic, topic), offer_for_recorded(offered)
                 )
             if not publishers:
                 raise CliError(f'nothing to play in {path}: no topic has a known message type')
@@ -113,12 +127,51 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _absolute(topic: str) -> str:
+    return topic if topic.startswith('/') else f'/{topic}'
+
+
+def parse_remaps(items: list[str]) -> dict[str, str]:
+    """``['/a:=/b', ...]`` as {recorded topic: published topic}, both absolute.
+
+    Raises:
+        CliError: an item without ``:=``, an empty side, or one topic remapped twice.
+    """
+    remaps: dict[str, str] = {}
+    for item in items:
+        source, sep, target = item.partition(':=')
+        if not sep or not source.strip() or not target.strip():
+            raise CliError(f'--remap {item!r}: write FROM:=TO, e.g. /cmd_vel:=/vel_cmd')
+        source, target = _absolute(source.strip()), _absolute(target.strip())
+        if source in remaps:
+            raise CliError(f'--remap: {source} is remapped twice')
+        remaps[source] = target
+    return remaps
+
+
+def _check_remaps(remaps: dict[str, str], by_topic: dict[str, list]) -> None:
+    missing = sorted(set(remaps) - set(by_topic))
+    if missing:
+        print(f'rmcli: warning: --remap of topics not played: {", ".join(missing)}',
+              file=sys.stderr)
+    published: dict[str, tuple[str, str]] = {}  # published topic -> (recorded topic, type)
+    for topic, conns in by_topic.items():
+        name = remaps.get(topic, topic)
+        other = published.get(name)
+        if other is not None and other[1] != conns[0].msgtype:
+            raise CliError(
+                f'{topic} ({conns[0].msgtype}) and {other[0]} ({other[1]}) would both be '
+                f'published on {name}'
+            )
+        published[name] = (topic, conns[0].msgtype)
+
+
 def _select(connections, topics: list[str], path: Path) -> list:
     if not topics:
         if not connections:
             raise CliError(f'nothing to play in {path}: the bag has no topics')
         return list(connections)
-    wanted = {t if t.startswith('/') else f'/{t}' for t in topics}
+    wanted = {_absolute(t) for t in topics}
     selected = [c for c in connections if c.topic in wanted]
     missing = wanted - {c.topic for c in selected}
     if missing and selected:

@@ -6,8 +6,8 @@ import time
 import pytest
 from rclpy.serialization import deserialize_message
 from rm_bringup.cli.bag_io import open_bag
-from rm_bringup.cli.bag_play import PlayOptions, play
-from rm_bringup.cli.errors import BagError
+from rm_bringup.cli.bag_play import PlayOptions, parse_remaps, play
+from rm_bringup.cli.errors import BagError, CliError
 from rm_bringup.cli.main import main
 from std_msgs.msg import String
 
@@ -172,3 +172,36 @@ def test_delay_waits_before_playing(five_messages):
 def test_stop_ends_playback_at_once(five_messages):
     _, sent = played(five_messages, preset_stop=True)
     assert sent == []
+
+
+# --- --remap ---------------------------------------------------------------------------------
+
+
+def test_remaps_are_absolute_topic_pairs():
+    assert parse_remaps(['/cmd_vel:=/vel_cmd', 'turtle1/cmd_vel:=vel_cmd']) == {
+        '/cmd_vel': '/vel_cmd',
+        '/turtle1/cmd_vel': '/vel_cmd',
+    }
+
+
+@pytest.mark.parametrize(
+    ('items', 'match'),
+    [
+        (['/cmd_vel=/vel_cmd'], 'write FROM:=TO'),
+        ([':=/vel_cmd'], 'write FROM:=TO'),
+        (['/cmd_vel:='], 'write FROM:=TO'),
+        (['/a:=/b', '/a:=/c'], '/a is remapped twice'),
+    ],
+)
+def test_a_malformed_remap_is_one_clear_error(items, match):
+    with pytest.raises(CliError, match=match):
+        parse_remaps(items)
+
+
+def test_remapping_two_types_onto_one_topic_is_refused_before_ros_starts(write_bag, make, capsys):
+    bag = write_bag([
+        ('/a', 'std_msgs/msg/String', S, make('std_msgs/msg/String', data='x')),
+        ('/b', 'geometry_msgs/msg/Twist', S, make('geometry_msgs/msg/Twist')),
+    ])
+    assert main(['bag', 'play', str(bag), '--remap', '/a:=/b']) == 1
+    assert 'would both be published on /b' in error_line(capsys)
