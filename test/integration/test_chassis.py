@@ -96,6 +96,9 @@ def sim_loads(yaw_joint: float) -> dict[str, Any]:
         'joints.yaw.sim.initial_position': yaw_joint,
         # No Hi220 plugin reads the simulated IMU here: fewer frames.
         'sim.imu.rate_hz': 50.0,
+        # The motion tests command their own (non-binding) power limit: a referee that
+        # never cuts (test_lockstep_referee judges the power limit).
+        'sim.referee.chassis_power_limit': 10000.0,
     })
     return loads
 
@@ -123,8 +126,9 @@ class ChassisRig:
             overrides={
                 'can_bridge': sim_loads(yaw_joint),
                 # /chassis_state and /odom at 50 Hz: plenty to watch
-                'rm_robot': {f'chassis.{k}': v
-                             for k, v in {'publish_rate': 50.0, **(chassis or {})}.items()},
+                'rm_robot': {f'chassis.{k}': v for k, v in {
+                    'publish_rate': 50.0, 'power.from_referee': False, **(chassis or {})
+                }.items()},
             },
         )
         self.world = self.robot.world

@@ -14,7 +14,9 @@ runs at the new time (feedback, due plugins, update, pack, send: ``CanBridgeNode
 Commands are handed to the plugins through the same callbacks their subscriptions run
 (``RobotHost.inject``), stamped on the simulated clock; what a plugin publishes reaches
 the plugins subscribed to it at once (outbox loopback); the simulated Hi220's frames
-are decoded as the Hi220 plugin decodes them and handed to /imu's subscribers. No
+are decoded as the Hi220 plugin decodes them and handed to /imu's subscribers, and the
+simulated referee's frames (when the config has one) as the Referee plugin decodes them and
+handed to the subscribers of its topics. No
 executor spins, nothing waits on DDS or a terminal: the same inputs give the same numbers
 on every run, whatever the machine's load.
 """
@@ -33,10 +35,13 @@ from rclpy.context import Context
 from rclpy.time import Time
 from rm_base.bridge import CanBridgeNode
 from rm_base.bridge.messages import state_msgs
+from rm_base.hardware.protocols import referee as ref
 from rm_base.hardware.protocols.hipnuc import decode_frame, decode_payload
 from rm_base.host.node import RobotHost
+from rm_base.sim import SimImu
 from rm_plugins.imu.conversion import Mounting, reading_from_sample
 from rm_plugins.imu.message import imu_message
+from rm_plugins.referee.messages import TOPICS as REFEREE_TOPICS
 
 from support.robot import _parameter, robot_parameters
 
@@ -47,18 +52,15 @@ BASE_NS = 1_700_000_000 * 1_000_000_000
 _IMU_COVARIANCE = (0.0,) * 9
 
 
-def _drop(imu: Any, frame: bytes) -> None:
-    """No IMU plugin: the frames go nowhere (as to a terminal nobody reads)."""
-
-
 class LockstepRobot:
     """The robot of one config, stepped on a simulated clock (see the module docstring).
 
     Args:
         config: robot config name in rm_bringup/config.
-        plugins: plugin instances to run. ``imu`` (the Hi220) is played by the harness:
-            it decodes the simulated IMU's frames as the plugin does and hands them to
-            /imu's subscribers; without it nothing is published on /imu.
+        plugins: plugin instances to run. ``imu`` (the Hi220) and ``referee`` are played
+            by the harness: it decodes the simulated IMU's (referee's) frames as the plugin
+            does and hands them to the subscribers of its topics; without it nothing is
+            published on them.
         overrides: ``{'can_bridge' | 'rm_robot': {flat parameter: value}}`` applied last.
     """
 
@@ -66,11 +68,12 @@ class LockstepRobot:
         self,
         config: str = 'standard',
         *,
-        plugins: tuple[str, ...] = ('imu', 'gpio', 'chassis', 'gimbal', 'shooter'),
+        plugins: tuple[str, ...] = ('imu', 'gpio', 'referee', 'chassis', 'gimbal', 'shooter'),
         overrides: Mapping[str, Mapping[str, Any]] | None = None,
     ) -> None:
         self._tmp = tempfile.mkdtemp(prefix='rm_lockstep_')
-        loaded = [p for p in plugins if p != 'imu']
+        loaded = [p for p in plugins if p not in ('imu', 'referee')]
+        self._played = frozenset(plugins) & {'imu', 'referee'}
         bridge, host = robot_parameters(config, self._tmp, loaded, overrides)
         bridge['sim.timing'] = 'stepped'
         host['use_sim_time'] = True
@@ -97,7 +100,7 @@ class LockstepRobot:
                 parameter_overrides=[_parameter(k, v) for k, v in bridge.items()],
             )
             self.world = self.bridge.sim_world
-            self.world.imu_sink = self._on_imu_frame if 'imu' in plugins else _drop
+            self.world.serial_sink = self._on_serial_frame
             self.host = RobotHost(
                 hardware=self.bridge.hardware,
                 take_from_dds=False,
@@ -207,7 +210,21 @@ class LockstepRobot:
         if self.host.inject(topic, msg) == 0:
             raise LookupError(f'no plugin subscribes {topic}')
 
-    def _on_imu_frame(self, imu: Any, frame: bytes) -> None:
+    def _on_serial_frame(self, device: Any, frame: bytes) -> None:
+        if isinstance(device, SimImu):
+            if 'imu' in self._played:
+                self._on_imu_frame(frame)
+        elif 'referee' in self._played:
+            self._on_referee_frame(device.version, frame)
+
+    def _on_referee_frame(self, version: ref.ProtocolVersion, frame: bytes) -> None:
+        record = ref.StatusDecoder(version).decode(ref.decode_frame(frame))
+        topic, _msg_type, convert = REFEREE_TOPICS[type(record)]
+        msg = convert(record)
+        msg.header.stamp = self._clock.now().to_msg()
+        self.host.inject(topic, msg)
+
+    def _on_imu_frame(self, frame: bytes) -> None:
         reading = reading_from_sample(decode_payload(decode_frame(frame)), self._mounting)
         covariances = (_IMU_COVARIANCE,) * 3
         msg = imu_message(reading, self._clock.now().nanoseconds, self._imu_frame_id, covariances)

@@ -39,6 +39,9 @@ Parameters (units in brackets; typed ones are declared by the node with a descri
                                                ``gimbal.yaw.motor``, ``initial_pose``...)
 ``sim.imu.<key>``                   --         one IMU (``path``, ``mount``, ``rate_hz``,
                                                ``mount_rpy``...; ``${VAR}`` in the path)
+``sim.referee.<key>``               --         the referee system on a pty (``path``,
+                                               ``protocol_version``, limits...:
+                                               ``rm_base.sim.referee``)
 ==================================  =========  ============================================
 
 With ``sim: false`` the ``sim.*`` groups are ignored, so one robot config serves both.
@@ -79,6 +82,7 @@ ROS_OWN_PREFIXES = ('qos_overrides.',)
 HARDWARE_PREFIXES = ('buses.', 'joints.')
 SIM_BODY_PREFIX = 'sim.body.'
 SIM_IMU_PREFIX = 'sim.imu.'
+SIM_REFEREE_PREFIX = 'sim.referee.'
 _JOINT_SIM_KEY = 'sim'
 
 
@@ -91,6 +95,7 @@ class SimSettings:
         seed: random seed of the world.
         body: ``body`` of the world config (nested; empty for none).
         imu: the one IMU's config, or None.
+        referee: the simulated referee's config, or None.
         motors: per joint, overrides of its simulated motor (nested).
     """
 
@@ -98,6 +103,7 @@ class SimSettings:
     seed: int = 0
     body: Mapping[str, Any] = dataclasses.field(default_factory=dict)
     imu: Mapping[str, Any] | None = None
+    referee: Mapping[str, Any] | None = None
     motors: Mapping[str, Mapping[str, Any]] = dataclasses.field(default_factory=dict)
 
 
@@ -198,6 +204,7 @@ def settings_from_parameters(
     motors_flat: dict[str, dict[str, Any]] = {}
     body_flat: dict[str, Any] = {}
     imu_flat: dict[str, Any] = {}
+    referee_flat: dict[str, Any] = {}
     for name, value in open_params.items():
         if name.startswith(HARDWARE_PREFIXES):
             parts = name.split('.')
@@ -214,6 +221,8 @@ def settings_from_parameters(
             body_flat[name.removeprefix(SIM_BODY_PREFIX)] = value
         elif name.startswith(SIM_IMU_PREFIX):
             imu_flat[name.removeprefix(SIM_IMU_PREFIX)] = value
+        elif name.startswith(SIM_REFEREE_PREFIX):
+            referee_flat[name.removeprefix(SIM_REFEREE_PREFIX)] = value
         else:
             raise BridgeConfigError(
                 f'unknown parameter {name!r}; the bridge takes buses.*, joints.*, '
@@ -221,7 +230,7 @@ def settings_from_parameters(
                 'safety.*, '
                 'publish_rate, '
                 'diagnostics_rate, publish_frames, log_file, sim, sim.timing, sim.seed, '
-                'sim.body.*, sim.imu.*'
+                'sim.body.*, sim.imu.*, sim.referee.*'
             )
     hardware = nest(hardware_flat)
     sim_on = bool(typed.get('sim', False))
@@ -262,6 +271,7 @@ def settings_from_parameters(
             seed=int(typed.get('sim.seed', 0)),
             body=nest(body_flat),
             imu=nest(imu_flat) if imu_flat else None,
+            referee=nest(referee_flat) if referee_flat else None,
             motors={joint: nest(keys) for joint, keys in motors_flat.items()},
         )
     return BridgeSettings(

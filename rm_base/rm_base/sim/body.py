@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
 from enum import Enum
 from typing import Any
 
@@ -35,6 +34,15 @@ from rm_base.geometry import (
 )
 from rm_base.sim.devices import SimDevice
 from rm_base.sim.errors import SimConfigError
+from rm_base.sim.joint import (
+    Joint,
+    check_keys,
+    config_number,
+    direction_from_config,
+    joint_from_config,
+    motor_from_config,
+)
+from rm_base.sim.launcher import Launcher, launcher_from_config
 
 
 class Mount(Enum):
@@ -42,31 +50,6 @@ class Mount(Enum):
 
     CHASSIS = 'chassis'
     GIMBAL = 'gimbal'
-
-
-@dataclass(frozen=True)
-class Joint:
-    """A gimbal joint driven by one motor.
-
-    Attributes:
-        device: the motor.
-        direction: +1 or -1, joint angle sign relative to the motor's output angle.
-        zero: motor output angle at which the joint reads 0 [rad].
-    """
-
-    device: SimDevice
-    direction: float = 1.0
-    zero: float = 0.0
-
-    @property
-    def angle(self) -> float:
-        """Joint angle [rad]."""
-        return self.direction * (self.device.model.angle - self.zero)
-
-    @property
-    def velocity(self) -> float:
-        """Joint velocity [rad/s]."""
-        return self.direction * self.device.model.velocity
 
 
 class RobotBody:
@@ -81,6 +64,7 @@ class RobotBody:
         linear_acceleration: chassis acceleration in the world (ax, ay) [m/s²].
         pitch_gravity_torque: gravity torque on the pitch joint at 0 pitch [N·m].
         yaw_world_frame_inertia: feed the chassis' yaw acceleration to the yaw motor.
+        launcher: the shooter's mechanics (which trigger pushes are shots), or None.
     """
 
     def __init__(
@@ -94,6 +78,7 @@ class RobotBody:
         initial_pose: Sequence[float] = (0.0, 0.0, 0.0),
         pitch_gravity_torque: float = 0.0,
         yaw_world_frame_inertia: bool = True,
+        launcher: Launcher | None = None,
     ):
         """Create the body; see :func:`body_from_config` for the parameters.
 
@@ -120,6 +105,7 @@ class RobotBody:
         self.x, self.y, self.yaw = (float(v) for v in initial_pose)
         self.pitch_gravity_torque = float(pitch_gravity_torque)
         self.yaw_world_frame_inertia = yaw_world_frame_inertia
+        self.launcher = launcher
         self.twist = self._chassis_twist()
         self.yaw_acceleration = 0.0
         self.linear_acceleration = (0.0, 0.0)
@@ -216,56 +202,29 @@ class RobotBody:
 # -- config ----------------------------------------------------------------------------------
 
 
-def _number(cfg: Mapping[str, Any], key: str, owner: str, default: float | None = None) -> float:
-    value = cfg.get(key, default)
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise SimConfigError(f'{owner}.{key} must be a finite number, got {value!r}')
-    return float(value)
-
-
-def _check_keys(cfg: Mapping[str, Any], allowed: set[str], owner: str) -> None:
-    if not isinstance(cfg, Mapping):
-        raise SimConfigError(f'{owner} must be a mapping, got {cfg!r}')
-    unknown = sorted(set(cfg) - allowed)
-    if unknown:
-        raise SimConfigError(f'{owner}: unknown key(s) {unknown}; known: {sorted(allowed)}')
-
-
-def _device(devices: Mapping[str, SimDevice], name: Any, owner: str) -> SimDevice:
-    if name not in devices:
-        raise SimConfigError(f'{owner} names motor {name!r}, which is not configured')
-    return devices[name]
-
-
-def _direction(value: Any, owner: str) -> float:
-    if value not in (1, -1) or isinstance(value, bool):
-        raise SimConfigError(f'{owner}.direction must be 1 or -1, got {value!r}')
-    return float(value)
-
-
 def _chassis(
     cfg: Mapping[str, Any], devices: Mapping[str, SimDevice]
 ) -> tuple[WheelKinematics, list[SimDevice], list[float]]:
     kind = cfg.get('type')
     common = {'type', 'motors', 'directions'}
     if kind == 'mecanum':
-        _check_keys(cfg, common | {'wheelbase', 'track', 'wheel_radius', 'roller_signs'}, 'chassis')
+        check_keys(cfg, common | {'wheelbase', 'track', 'wheel_radius', 'roller_signs'}, 'chassis')
         extra = {'roller_signs': cfg['roller_signs']} if 'roller_signs' in cfg else {}
         wheels = mecanum_wheels(
-            _number(cfg, 'wheelbase', 'chassis'),
-            _number(cfg, 'track', 'chassis'),
-            _number(cfg, 'wheel_radius', 'chassis'),
+            config_number(cfg, 'wheelbase', 'chassis'),
+            config_number(cfg, 'track', 'chassis'),
+            config_number(cfg, 'wheel_radius', 'chassis'),
             **extra,
         )
     elif kind == 'omni':
-        _check_keys(cfg, common | {'mounting_angles', 'centre_distance', 'wheel_radius'}, 'chassis')
+        check_keys(cfg, common | {'mounting_angles', 'centre_distance', 'wheel_radius'}, 'chassis')
         wheels = omni_wheels(
             cfg.get('mounting_angles', ()),
-            _number(cfg, 'centre_distance', 'chassis'),
-            _number(cfg, 'wheel_radius', 'chassis'),
+            config_number(cfg, 'centre_distance', 'chassis'),
+            config_number(cfg, 'wheel_radius', 'chassis'),
         )
     elif kind == 'wheels':
-        _check_keys(cfg, {'type', 'wheels'}, 'chassis')
+        check_keys(cfg, {'type', 'wheels'}, 'chassis')
         return _explicit_wheels(cfg.get('wheels'), devices)
     else:
         raise SimConfigError(f"chassis.type must be 'mecanum', 'omni' or 'wheels', got {kind!r}")
@@ -277,8 +236,8 @@ def _chassis(
         raise SimConfigError(f'chassis.directions must be {len(wheels)} of ±1, got {directions!r}')
     return (
         WheelKinematics(wheels),
-        [_device(devices, n, 'chassis.motors') for n in names],
-        [_direction(d, 'chassis') for d in directions],
+        [motor_from_config(devices, n, 'chassis.motors') for n in names],
+        [direction_from_config(d, 'chassis') for d in directions],
     )
 
 
@@ -291,28 +250,19 @@ def _explicit_wheels(
     wheels, motors, directions = [], [], []
     for i, entry in enumerate(entries):
         owner = f'chassis.wheels[{i}]'
-        _check_keys(entry, allowed, owner)
+        check_keys(entry, allowed, owner)
         wheels.append(
             Wheel(
-                _number(entry, 'x', owner),
-                _number(entry, 'y', owner),
-                _number(entry, 'radius', owner),
-                rolling_direction=_number(entry, 'rolling_direction', owner, 0.0),
-                roller_angle=_number(entry, 'roller_angle', owner, 0.0),
+                config_number(entry, 'x', owner),
+                config_number(entry, 'y', owner),
+                config_number(entry, 'radius', owner),
+                rolling_direction=config_number(entry, 'rolling_direction', owner, 0.0),
+                roller_angle=config_number(entry, 'roller_angle', owner, 0.0),
             )
         )
-        motors.append(_device(devices, entry.get('motor'), owner))
-        directions.append(_direction(entry.get('direction', 1), owner))
+        motors.append(motor_from_config(devices, entry.get('motor'), owner))
+        directions.append(direction_from_config(entry.get('direction', 1), owner))
     return WheelKinematics(wheels), motors, directions
-
-
-def _joint(cfg: Any, devices: Mapping[str, SimDevice], owner: str, extra: set[str]) -> Joint:
-    _check_keys(cfg, {'motor', 'direction', 'zero'} | extra, owner)
-    return Joint(
-        _device(devices, cfg.get('motor'), owner),
-        _direction(cfg.get('direction', 1), owner),
-        _number(cfg, 'zero', owner, 0.0),
-    )
 
 
 def body_from_config(config: Mapping[str, Any], devices: Mapping[str, SimDevice]) -> RobotBody:
@@ -335,6 +285,7 @@ def body_from_config(config: Mapping[str, Any], devices: Mapping[str, SimDevice]
         gimbal:
           yaw: {motor: yaw, direction: 1, zero: 0.0, world_frame_inertia: true}
           pitch: {motor: pitch, direction: 1, zero: 0.0, gravity_torque: 0.0}   # N·m
+        shooter: {trigger: ..., friction: [...], ...}   # rm_base.sim.launcher
 
     Args:
         config: the ``body`` dict of a world config.
@@ -346,7 +297,7 @@ def body_from_config(config: Mapping[str, Any], devices: Mapping[str, SimDevice]
     Raises:
         SimConfigError: an unknown key, a missing or unknown motor, bad geometry.
     """
-    _check_keys(config, {'initial_pose', 'chassis', 'gimbal'}, 'body')
+    check_keys(config, {'initial_pose', 'chassis', 'gimbal', 'shooter'}, 'body')
     try:
         kinematics: WheelKinematics | None = None
         wheels: list[SimDevice] = []
@@ -358,17 +309,17 @@ def body_from_config(config: Mapping[str, Any], devices: Mapping[str, SimDevice]
         yaw = pitch = None
         gravity, world_frame = 0.0, True
         gimbal = config.get('gimbal', {})
-        _check_keys(gimbal, {'yaw', 'pitch'}, 'gimbal')
+        check_keys(gimbal, {'yaw', 'pitch'}, 'gimbal')
         if 'yaw' in gimbal:
-            yaw = _joint(gimbal['yaw'], devices, 'gimbal.yaw', {'world_frame_inertia'})
+            yaw = joint_from_config(gimbal['yaw'], devices, 'gimbal.yaw', {'world_frame_inertia'})
             world_frame = gimbal['yaw'].get('world_frame_inertia', True)
             if not isinstance(world_frame, bool):
                 raise SimConfigError(
                     f'gimbal.yaw.world_frame_inertia must be true/false, got {world_frame!r}'
                 )
         if 'pitch' in gimbal:
-            pitch = _joint(gimbal['pitch'], devices, 'gimbal.pitch', {'gravity_torque'})
-            gravity = _number(gimbal['pitch'], 'gravity_torque', 'gimbal.pitch', 0.0)
+            pitch = joint_from_config(gimbal['pitch'], devices, 'gimbal.pitch', {'gravity_torque'})
+            gravity = config_number(gimbal['pitch'], 'gravity_torque', 'gimbal.pitch', 0.0)
         pose = config.get('initial_pose', (0.0, 0.0, 0.0))
         if not isinstance(pose, Sequence) or isinstance(pose, str):
             raise SimConfigError(f'initial_pose must be [x, y, yaw], got {pose!r}')
@@ -381,6 +332,9 @@ def body_from_config(config: Mapping[str, Any], devices: Mapping[str, SimDevice]
             initial_pose=pose,
             pitch_gravity_torque=gravity,
             yaw_world_frame_inertia=world_frame,
+            launcher=launcher_from_config(config['shooter'], devices)
+            if 'shooter' in config
+            else None,
         )
     except SimConfigError:
         raise

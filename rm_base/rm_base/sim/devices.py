@@ -65,6 +65,8 @@ class SimDevice(ABC):
         stats: frame counters.
         overtemp_c: winding temperature above which the driver cuts the output [°C], or
             None for no cut-out.
+        powered: False while the supply port feeding it is off (the referee cut it): it
+            neither receives nor sends and its rotor coasts (:meth:`set_powered`).
     """
 
     #: Several devices take their commands from one frame (DJI groups, a slot each).
@@ -86,6 +88,7 @@ class SimDevice(ABC):
         self.model = model
         self.stats = DeviceStats()
         self.overtemp_c = overtemp_c
+        self.powered = True
         #: The config dict the device was built from, if any.
         self.config: dict[str, Any] | None = None
         self._faults: dict[FaultKind, Fault] = {}
@@ -113,8 +116,14 @@ class SimDevice(ABC):
 
     @property
     def online(self) -> bool:
-        """False while an OFFLINE fault is active."""
-        return FaultKind.OFFLINE not in self._faults
+        """False while unpowered or an OFFLINE fault is active."""
+        return self.powered and FaultKind.OFFLINE not in self._faults
+
+    def set_powered(self, on: bool) -> None:
+        """Switch the device's supply; off, the winding carries no current."""
+        self.powered = on
+        if not on:
+            self.model.command_current(0.0)
 
     def receive(
         self,
@@ -139,7 +148,11 @@ class SimDevice(ABC):
         Returns:
             Reply frames, possibly none.
         """
-        if (self._faults and not self.online) or arbitration_id not in self.listen_ids:
+        if (
+            not self.powered
+            or (self._faults and not self.online)
+            or arbitration_id not in self.listen_ids
+        ):
             return []
         if is_extended_id or is_remote_frame or is_fd:
             self.stats.ignored_frames += 1
@@ -158,7 +171,8 @@ class SimDevice(ABC):
 
     def control(self, now_ns: int, dt: float) -> None:
         """Run the driver's own logic before a physics step (timeouts, internal loops)."""
-        self._control(now_ns, dt)
+        if self.powered:
+            self._control(now_ns, dt)
 
     def step(self, dt: float, stator_acceleration: float = 0.0) -> None:
         """Advance the physics by dt [s] (see :meth:`MotorModel.step`)."""
@@ -167,7 +181,7 @@ class SimDevice(ABC):
     def emit(self, now_ns: int) -> list[Frame]:
         """Return the frames the device sends on its own at this tick (feedback, garbage)."""
         faults = self._faults  # usually empty: skip the enum lookups then
-        if faults and not self.online:
+        if not self.powered or (faults and not self.online):
             return []
         frames = self._periodic(now_ns)
         if frames:

@@ -1,29 +1,15 @@
 """A simulated HiPNUC IMU that writes real 0x91 frames to a pseudo-terminal.
 
-Why one module: the sensor model and the pseudo-terminal it writes to; its plain-float maths
-stays here for speed.
-
 The IMU reads its orientation, angular velocity and specific force from the
 :class:`~rm_base.sim.body.RobotBody` it is mounted on (chassis or gimbal) and sends them
 at a fixed rate as HiPNUC 0x91 (IMUSOL) frames, encoded with
-:mod:`rm_base.hardware.protocols.hipnuc`. The frames go into the master side of a
-pseudo-terminal (``os.openpty``); its slave device is symlinked at a configured path, so
-the driver opens that path with pyserial exactly as it opens ``/dev/ttyUSB0`` on a robot.
-
-Like a real UART nobody reads, the terminal's buffer can fill up; then its stale input is
-flushed and the frame is dropped (counted). pyserial flushes the input when it opens the
-port, so a reader never starts with old frames.
+:mod:`rm_base.hardware.protocols.hipnuc`, on a simulated serial port
+(:class:`~rm_base.sim.pty_port.PtyPort`) the driver opens as it opens ``/dev/ttyUSB0``.
 """
 
 from __future__ import annotations
 
-import contextlib
-import errno
 import math
-import os
-import termios
-import threading
-import tty
 from collections.abc import Mapping, Sequence
 from typing import Any, TypedDict
 
@@ -36,24 +22,13 @@ from rm_base.hardware.protocols import hipnuc
 from rm_base.sim._schedule import RateSchedule
 from rm_base.sim.body import Mount, RobotBody
 from rm_base.sim.errors import SimConfigError
+from rm_base.sim.pty_port import PtyPort
 
 _NS_PER_S = 1_000_000_000
 _NS_PER_MS = 1_000_000
 #: A UART byte is 10 bits on the wire (start, 8 data, stop).
 _BITS_PER_BYTE = 10
 _FRAME_BYTES = hipnuc.HEADER_LENGTH + 76
-
-
-def expand_path(path: str) -> str:
-    """Expand ``~`` and environment variables (``${ROS_DOMAIN_ID}``) in a path.
-
-    Raises:
-        SimConfigError: a variable is not set (the ``$`` would stay in the path).
-    """
-    expanded = os.path.expanduser(os.path.expandvars(path))
-    if '$' in expanded:
-        raise SimConfigError(f'IMU path {path!r} uses an unset environment variable')
-    return expanded
 
 
 Vector3 = tuple[float, float, float]
@@ -136,32 +111,8 @@ class SimImu:
         # float copies for sample()
         self._magnetic_field = tuple(self.magnetic_field.tolist())
         self._mount = _rows(self.mount_rotation.tolist())
-        self.frames_written = 0
-        self.frames_dropped = 0
-        self.path = expand_path(path)
         self._schedule = RateSchedule(rate_hz, first_ns=round(_NS_PER_S / rate_hz))
-        self._closed = False
-        self._io_lock = threading.Lock()  # write vs close (the fds must not be reused)
-
-        if os.path.lexists(self.path) and not os.path.islink(self.path):
-            raise SimConfigError(f'{name}: {self.path} exists and is not a symlink')
-        self._master, self._slave = os.openpty()
-        try:
-            # Raw mode: no echo, no CR/LF translation, no XON/XOFF on 0x11/0x13 bytes.
-            tty.setraw(self._slave)
-            os.set_blocking(self._master, False)
-            self.device_path = os.ttyname(self._slave)
-            directory = os.path.dirname(self.path)
-            if directory:
-                os.makedirs(directory, exist_ok=True)
-            if os.path.islink(self.path):
-                os.unlink(self.path)
-            os.symlink(self.device_path, self.path)
-        except OSError as err:
-            self._close_fds()
-            raise SimConfigError(
-                f'{name}: cannot create the terminal at {self.path}: {err}'
-            ) from err
+        self.port = PtyPort(path, name)
 
     # -- measurement -----------------------------------------------------------------------
 
@@ -227,7 +178,7 @@ class SimImu:
 
         device_ns: the device clock (see :meth:`frame`).
         """
-        if self._closed or not self._schedule.due(now_ns):
+        if self.port.closed or not self._schedule.due(now_ns):
             return None
         return self.frame(now_ns, device_ns)
 
@@ -240,58 +191,37 @@ class SimImu:
         return True
 
     def write(self, data: bytes) -> None:
-        """Write bytes to the terminal; if its buffer is full, flush stale input and retry.
-
-        Safe against a concurrent :meth:`close` (the world writes outside its lock): a
-        frame for a closed terminal is dropped.
-        """
-        with self._io_lock:
-            if self._closed:
-                self.frames_dropped += 1
-                return
-            self._write(data)
-
-    def _write(self, data: bytes) -> None:
-        for attempt in range(2):
-            try:
-                written = os.write(self._master, data)
-            except BlockingIOError:
-                written = 0
-            except OSError as err:  # EIO: the terminal went away
-                if err.errno != errno.EIO:
-                    raise
-                written = 0
-            if written == len(data):
-                self.frames_written += 1
-                return
-            if attempt == 0:
-                with contextlib.suppress(termios.error):
-                    termios.tcflush(self._slave, termios.TCIFLUSH)
-                if written:
-                    # A partial frame went out: the reader's parser resynchronises on it.
-                    data = data[written:]
-        self.frames_dropped += 1
+        """Write a frame to the terminal (see :meth:`PtyPort.write`)."""
+        self.port.write(data)
 
     def close(self) -> None:
         """Close the terminal and remove the symlink (idempotent)."""
-        with self._io_lock:
-            if self._closed:
-                return
-            self._closed = True
-            with contextlib.suppress(OSError):
-                if os.path.islink(self.path) and os.readlink(self.path) == self.device_path:
-                    os.unlink(self.path)
-            self._close_fds()
-
-    def _close_fds(self) -> None:
-        for fd in (self._master, self._slave):
-            with contextlib.suppress(OSError):
-                os.close(fd)
+        self.port.close()
 
     @property
     def closed(self) -> bool:
         """True after :meth:`close`."""
-        return self._closed
+        return self.port.closed
+
+    @property
+    def path(self) -> str:
+        """The configured path (symlink to the terminal), expanded."""
+        return self.port.path
+
+    @property
+    def device_path(self) -> str:
+        """The pseudo-terminal's slave device (``/dev/pts/N``)."""
+        return self.port.device_path
+
+    @property
+    def frames_written(self) -> int:
+        """Frames written to the terminal."""
+        return self.port.frames_written
+
+    @property
+    def frames_dropped(self) -> int:
+        """Frames dropped because nobody read the terminal."""
+        return self.port.frames_dropped
 
     def __enter__(self) -> SimImu:
         return self

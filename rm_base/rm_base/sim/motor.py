@@ -191,6 +191,21 @@ class MotorModel:
         return self.params.torque_constant * self.current
 
     @property
+    def electrical_power(self) -> float:
+        """Power the motor takes from the supply now [W].
+
+        The mechanical power ``torque * velocity`` plus the copper loss ``I**2 * R``;
+        negative while it brakes regeneratively. (``back_emf_constant`` sets only the
+        voltage limit: the model's phase-current and line-voltage constants differ, and
+        ``I * Ke * w`` would count the mechanical power 1.5 times.)
+        """
+        current = self.current
+        return (
+            self.params.torque_constant * current * self.velocity
+            + current * current * self._params.resistance
+        )
+
+    @property
     def rotor_rpm(self) -> float:
         """Rotor speed [rpm], as DJI ESCs report it."""
         return self.rotor_velocity * 60.0 / (2.0 * math.pi)

@@ -37,8 +37,12 @@ from rm_base.sim.devices import SimDevice
 from rm_base.sim.errors import SimConfigError, SimLookupError, SimStateError
 from rm_base.sim.faults import Fault, FaultKind
 from rm_base.sim.imu import SimImu, imu_from_config
+from rm_base.sim.referee import SimReferee, referee_from_config
 
 LOG = logging.getLogger(__name__)
+
+#: A simulated device on a serial port.
+SerialDevice = SimImu | SimReferee
 
 _NS_PER_S = 1_000_000_000
 #: How far the real-time loop may fall behind before it stops catching up [ticks].
@@ -61,11 +65,12 @@ class SimWorld:
     """Everything simulated that shares one clock.
 
     Build one from a config with :meth:`from_config`, or piece by piece with
-    :meth:`add_channel`, :meth:`add_motor`, :meth:`set_body` and :meth:`add_imu`; then
+    :meth:`add_channel`, :meth:`add_motor`, :meth:`set_body`, :meth:`add_imu` and
+    :meth:`set_referee`; then
     either :meth:`start` its real-time thread or drive it with :meth:`step`. (A world that a
     :class:`~rm_base.sim.bus.SimBus` builds is started by the bus.) Use it as a context
-    manager (or call :meth:`close`) so the physics thread stops, the IMU terminals close and
-    the channel names are released.
+    manager (or call :meth:`close`) so the physics thread stops, the serial terminals close
+    and the channel names are released.
 
     Attributes:
         timing: who drives the clock.
@@ -75,9 +80,10 @@ class SimWorld:
         body: the robot body (an empty one until :meth:`set_body`).
         overruns: times the real-time loop fell too far behind and skipped ahead.
         error: the exception that stopped the physics thread, if any.
-        imu_sink: None (default): every IMU frame goes to its terminal; else
-            ``imu_sink(imu, frame)`` takes it instead, in the stepping thread (lockstep:
-            a terminal delivers to its reader asynchronously).
+        referee: the simulated referee system, or None.
+        serial_sink: None (default): every frame of a serial device (IMU, referee) goes
+            to its terminal; else ``serial_sink(device, frame)`` takes it instead, in the
+            stepping thread (lockstep: a terminal delivers to its reader asynchronously).
     """
 
     def __init__(
@@ -115,7 +121,8 @@ class SimWorld:
             raise SimConfigError(f'seed must be an int, got {seed!r}')
         self.period_ns = round(_NS_PER_S / tick_rate_hz)
         self.time_ns = 0
-        self.imu_sink: Callable[[SimImu, bytes], object] | None = None
+        self.serial_sink: Callable[[SerialDevice, bytes], object] | None = None
+        self.referee: SimReferee | None = None
         self.lock = threading.RLock()
         self.body = RobotBody()
         self.overruns = 0
@@ -127,7 +134,7 @@ class SimWorld:
         self._devices: dict[str, SimDevice] = {}
         self._device_channel: dict[str, SimChannel] = {}
         self._imus: dict[str, SimImu] = {}
-        self._imu_frames: list[tuple[SimImu, bytes]] = []
+        self._serial_frames: list[tuple[SerialDevice, bytes]] = []
         self._thread: threading.Thread | None = None
         self._stop = threading.Event()
         self._bus_refs = 0
@@ -150,15 +157,17 @@ class SimWorld:
               can1: [{type: gm6020, id: 1, name: yaw}, {type: dm4310, id: 2, name: pitch}]
             body: {...}                 # see rm_base.sim.body.body_from_config
             imus: [{path: '/tmp/rm_sim_${ROS_DOMAIN_ID}/imu', mount: gimbal, rate_hz: 100}]
+            referee: {path: '/tmp/rm_sim_${ROS_DOMAIN_ID}/referee', chassis_power_limit: 60}
 
         Motor dicts: see :func:`rm_base.sim.device_config.device_from_config`; IMU dicts:
-        :func:`rm_base.sim.imu.imu_from_config`.
+        :func:`rm_base.sim.imu.imu_from_config`; the referee:
+        :func:`rm_base.sim.referee.referee_from_config`.
 
         Raises:
             SimConfigError: anything invalid; the partly built world is closed again.
         """
         config = load_config(config)
-        allowed = {'timing', 'tick_rate_hz', 'seed', 'channels', 'body', 'imus'}
+        allowed = {'timing', 'tick_rate_hz', 'seed', 'channels', 'body', 'imus', 'referee'}
         unknown = sorted(set(config) - allowed)
         if unknown:
             raise SimConfigError(f'world: unknown key(s) {unknown}; known: {sorted(allowed)}')
@@ -180,6 +189,8 @@ class SimWorld:
                 raise SimConfigError(f'imus must be a list, got {imus!r}')
             for imu in imus:
                 world.add_imu(imu)
+            if 'referee' in config:
+                world.set_referee(config['referee'])
         except BaseException:
             world.close()
             raise
@@ -239,6 +250,8 @@ class SimWorld:
         """
         with self.lock:
             self._check_open()
+            if self.referee is not None:
+                raise SimStateError('set the body before the referee (it judges the body)')
             self.body = body_from_config(config, self._devices)
             for imu in self._imus.values():
                 imu.body = self.body
@@ -258,6 +271,27 @@ class SimWorld:
             imu = imu_from_config(config, self.body)
             self._imus[imu.name] = imu
             return imu
+
+    def set_referee(self, config: Mapping[str, Any]) -> SimReferee:
+        """Create the referee system (see :func:`~rm_base.sim.referee.referee_from_config`).
+
+        It judges the body set before: the wheels are its chassis output, yaw and pitch its
+        gimbal output, the body's shooter its shooter output.
+
+        Raises:
+            SimConfigError: invalid config.
+            SimStateError: a referee exists already.
+        """
+        with self.lock:
+            self._check_open()
+            if self.referee is not None:
+                raise SimStateError('the world has a referee already')
+            body = self.body
+            gimbal = [j.device for j in (body.yaw_joint, body.pitch_joint) if j is not None]
+            self.referee = referee_from_config(
+                config, chassis=body.wheels, gimbal=gimbal, launcher=body.launcher
+            )
+            return self.referee
 
     # -- lookup ----------------------------------------------------------------------------
 
@@ -376,8 +410,8 @@ class SimWorld:
                 raise SimStateError('the real-time physics thread owns the clock; stop() it first')
             for _ in range(n):
                 self._tick()
-            imu_frames = self._take_imu_frames()
-        self._write_imu_frames(imu_frames)
+            frames = self._take_serial_frames()
+        self._write_serial_frames(frames)
 
     def advance(self, seconds: float) -> None:
         """Advance the world by ``seconds`` [s], rounded to whole ticks.
@@ -413,24 +447,30 @@ class SimWorld:
         for imu in self._imus.values():
             frame = imu.poll(now, device_ns)
             if frame is not None:
-                self._imu_frames.append((imu, frame))
+                self._serial_frames.append((imu, frame))
+        launcher = body.launcher
+        shots = launcher.update(now) if launcher is not None else ()
+        referee = self.referee
+        if referee is not None:
+            for frame in referee.tick(now, dt, shots):
+                self._serial_frames.append((referee, frame))
         for channel in self._channels.values():
             channel.flush_handed_over()
 
-    # The IMU frames of a tick are built under the lock (they read the body) but written
-    # to their terminals after it is released: a terminal write is a system call that can
-    # take milliseconds on a loaded machine, and every bus send waits for this lock.
-    def _take_imu_frames(self) -> list[tuple[SimImu, bytes]]:
-        frames, self._imu_frames = self._imu_frames, []
+    # The serial frames of a tick are built under the lock (they read the body) but
+    # written to their terminals after it is released: a terminal write is a system call
+    # that can take milliseconds on a loaded machine, and every bus send waits for this lock.
+    def _take_serial_frames(self) -> list[tuple[SerialDevice, bytes]]:
+        frames, self._serial_frames = self._serial_frames, []
         return frames
 
-    def _write_imu_frames(self, frames: list[tuple[SimImu, bytes]]) -> None:
-        sink = self.imu_sink
-        for imu, frame in frames:
+    def _write_serial_frames(self, frames: list[tuple[SerialDevice, bytes]]) -> None:
+        sink = self.serial_sink
+        for device, frame in frames:
             if sink is None:
-                imu.write(frame)
+                device.write(frame)
             else:
-                sink(imu, frame)
+                sink(device, frame)
 
     # -- real time ---------------------------------------------------------------------------
 
@@ -472,8 +512,8 @@ class SimWorld:
             try:
                 with self.lock:
                     self._tick()
-                    imu_frames = self._take_imu_frames()
-                self._write_imu_frames(imu_frames)
+                    frames = self._take_serial_frames()
+                self._write_serial_frames(frames)
             except Exception as error:
                 self.error = error
                 if not self._on_error(error):
@@ -502,7 +542,7 @@ class SimWorld:
         return self._closed
 
     def close(self) -> None:
-        """Stop the thread, close the IMUs and release the channel names (idempotent)."""
+        """Stop the thread, close the terminals and release the channel names (idempotent)."""
         self.stop()
         with self.lock:
             if self._closed:
@@ -510,6 +550,8 @@ class SimWorld:
             self._closed = True
             for imu in self._imus.values():
                 imu.close()
+            if self.referee is not None:
+                self.referee.close()
             for channel in self._channels.values():
                 release_channel(channel)
 

@@ -234,3 +234,55 @@ def test_any_command_and_length_decodes_or_is_counted(cmd, data, version):
         + sum(decoder.ignored.values()) + sum(decoder.rejected.values())
     )
     assert counted == 1
+
+
+# -- encoding: the referee's side (the simulated referee sends these) --------------------------
+
+
+@pytest.mark.parametrize(
+    ('raw', 'version'),
+    [(F1, V.V2024), (F2, V.V2024), (F2, V.V2026), (F3, V.V2026), (F4, V.V2024), (F5, V.V2026),
+     (F6, V.V2025), (F8, V.V2026)],
+)
+def test_a_decoded_vector_encodes_back_to_its_own_bytes(raw, version):
+    parsed = ref.decode_frame(raw)
+    record = ref.StatusDecoder(version).decode(parsed)
+    assert ref.encode_frame(*ref.encode_status(record, version), seq=parsed.seq) == raw
+
+
+@pytest.mark.parametrize('version', list(V))
+@pytest.mark.parametrize(
+    'record',
+    [
+        ref.GameStatus(4, ref.GameProgress.COUNTDOWN, 5, 1_800_000_000),
+        ref.RobotStatus(103, 3, 0, 400, 40, 100, 45.0, False, True, False),
+        ref.PowerHeat(12.0, 95, 200),
+        ref.RobotPosition(1.5, -2.25, math.radians(90.0)),
+        ref.Hurt(3, 0),
+        ref.ShootData(2, 1, 2, 15.5),
+        ref.ProjectileAllowance(200, 10, 350, 0),
+        ref.KeyboardMouse(-3, 7, 1, False, True, 0x8001),
+    ],
+)
+def test_every_record_round_trips_in_every_version(record, version):
+    cmd_id, data = ref.encode_status(record, version)
+    decoded = ref.StatusDecoder(version).decode(ref.RawFrame(cmd_id, data))
+    if isinstance(record, ref.PowerHeat) and version is V.V2025:
+        record = ref.PowerHeat(12.0, 95, 200, 0)  # the second 17 mm heat is sent as 0
+    if isinstance(record, ref.PowerHeat) and version is V.V2024:  # and the electrics as 0
+        record = ref.PowerHeat(12.0, 95, 200, 0, 0.0, 0.0, 0.0)
+    if isinstance(record, ref.ProjectileAllowance) and version is V.V2024:
+        record = ref.ProjectileAllowance(200, 10, 350)  # no fortress field before 2025
+    if isinstance(record, ref.RobotPosition):
+        assert decoded.heading_rad == pytest.approx(record.heading_rad)
+        record = ref.RobotPosition(record.x_m, record.y_m, decoded.heading_rad)
+    assert decoded == record
+
+
+def test_a_record_the_version_cannot_carry_is_refused():
+    with pytest.raises(ValueError, match='only sent in 2026'):
+        ref.encode_status(ref.RobotStatus(3, 1, 1, 1, 1, 1, 1.0, True, True, True, 25.0), V.V2024)
+    with pytest.raises(ValueError):  # 70000 does not fit the u16 heat field
+        ref.encode_status(ref.PowerHeat(1.0, 70000, 0), V.V2026)
+    with pytest.raises(TypeError, match='not a referee status record'):
+        ref.encode_status(object(), V.V2026)

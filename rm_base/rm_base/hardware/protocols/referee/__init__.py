@@ -1,8 +1,9 @@
 """The RoboMaster referee system's serial protocol (pure: bytes in, records out).
 
 ``frame`` (CRCs, frames, the resyncing parser), ``status`` (the status commands by protocol
-version), ``remote`` (the image link's ``A9 53`` remote frame), ``client_ui`` (0x0301 and
-client UI figures). docs/PROTOCOLS.md §6.
+version), ``status_encode`` (the same, encoded: the referee's side), ``remote`` (the image
+link's ``A9 53`` remote frame), ``client_ui`` (0x0301 and client UI figures).
+docs/PROTOCOLS.md §6.
 """
 
 from rm_base.hardware.protocols.referee.client_ui import (
@@ -46,6 +47,7 @@ from rm_base.hardware.protocols.referee.status import (
     ShootData,
     StatusDecoder,
 )
+from rm_base.hardware.protocols.referee.status_encode import encode_status
 
 __all__ = [
     'LAYOUTS',
@@ -82,6 +84,7 @@ __all__ = [
     'draw',
     'encode_figure',
     'encode_frame',
+    'encode_status',
     'interaction',
     'line',
     'number',
