@@ -66,15 +66,20 @@ def test_when_the_robot_is_unknown_expect_one_line_naming_the_installed_ones(tmp
 def test_when_a_motor_is_taken_offline_in_rm_sim_expect_the_robot_to_see_it(
     tmp_path, ros_context
 ):
-    # bringup --sim runs the motors in rm_sim, a process of its own; its fault services
-    # are rm_sim's, and what they do reaches the robot only through the CAN socket.
+    # bringup --sim runs the motors and the referee in rm_sim, a process of its own; its
+    # fault services are rm_sim's, and what they do reaches the robot only through the CAN
+    # socket. The referee's reports reach the Referee plugin through a pseudo-terminal.
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
     from std_srvs.srv import SetBool
 
+    from rm_msgs.msg import RefereeRobotStatus
+
     log = tmp_path / 'stderr.log'
     proc = start_bringup(['--robot', 'standard', '--sim'], log)
     node = rclpy.create_node('fault_probe', context=ros_context)
+    referee = []
+    node.create_subscription(RefereeRobotStatus, '/referee/robot_status', referee.append, 10)
     lines = []
 
     def status(predicate):
@@ -86,11 +91,15 @@ def test_when_a_motor_is_taken_offline_in_rm_sim_expect_the_robot_to_see_it(
     try:
         assert wait_until(lambda: status(lambda s: s.startswith('chassis ')), 60.0, period=0.0)
         assert 'offline -' in lines[-1], lines[-1]
+        executor = SingleThreadedExecutor(context=ros_context)
+        executor.add_node(node)
+        assert wait_until(lambda: executor.spin_once(timeout_sec=0.1) or referee, 20.0)
+        # standard_sim.yaml: robot 3 under a 60 W limit and a 100-heat limit
+        assert (referee[0].robot_id, referee[0].chassis_power_limit) == (3, 60.0)
+        assert referee[0].barrel_heat_limit == 100.0
         client = node.create_client(SetBool, '/rm_sim/wheel_fl/offline')
         assert client.wait_for_service(timeout_sec=20.0)
         future = client.call_async(SetBool.Request(data=True))
-        executor = SingleThreadedExecutor(context=ros_context)
-        executor.add_node(node)
         executor.spin_until_future_complete(future, timeout_sec=20.0)
         executor.shutdown()
         assert future.result().success, future.result().message
