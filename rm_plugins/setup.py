@@ -6,6 +6,7 @@ setup(
     name=package_name,
     version='0.1.0',
     packages=find_packages(exclude=['test']),
+    package_data={'rm_plugins.manual': ['default_mapping.yaml']},
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml', 'plugins.xml']),
@@ -19,7 +20,7 @@ setup(
     zip_safe=True,
     maintainer='rm_ros2 developers',
     maintainer_email='rm-ros2@example.com',
-    description='rm_ros2 mechanism plugins: chassis, gimbal, shooter, gpio, imu',
+    description='rm_ros2 mechanism plugins: chassis, gimbal, shooter, gpio, imu, referee, manual',
     license='Apache-2.0',
     extras_require={'test': ['pytest']},
     entry_points={

@@ -35,6 +35,19 @@ from launch_ros.actions import Node
 DISCOVERY_RANGE_VAR = 'ROS_AUTOMATIC_DISCOVERY_RANGE'
 
 
+#: The operator's commander, started when the robot config has a section for it.
+MANUAL_NODE_NAME = 'rm_manual'
+
+
+def has_section(files: list[str], node: str) -> bool:
+    """Whether a parameter file has a section for node."""
+    for path in files:
+        with open(path) as stream:
+            if node in (yaml.safe_load(stream) or {}):
+                return True
+    return False
+
+
 def parameter_files(robot: str, config: str, sim: bool) -> list[str]:
     """The parameter files of a robot: its config, then (sim) its simulation overlay."""
     if config:
@@ -113,6 +126,18 @@ def _nodes(context, *args, **kwargs):
             emulate_tty=True,
         ),
     ]
+    if has_section(files, MANUAL_NODE_NAME):
+        # the operator's commander: rm_robot's executable as a host of its own
+        nodes.append(
+            Node(
+                package='rm_base',
+                executable='rm_robot',
+                name=MANUAL_NODE_NAME,
+                parameters=files,
+                output='screen',
+                emulate_tty=True,
+            )
+        )
     return nodes
 
 

@@ -28,6 +28,7 @@ import tempfile
 import time
 
 import rclpy
+import yaml
 from rclpy.experimental import EventsExecutor
 from rclpy.utilities import remove_ros_args
 from rm_base.bridge import CanBridgeNode
@@ -40,6 +41,9 @@ from rm_base.ros_logging import forward_package_logging
 
 from rm_bringup.sim_process import SimProcess
 from rm_bringup.status import StatusView
+
+#: The node of the operator's commander, when the robot config has a section for it.
+MANUAL_NODE_NAME = 'rm_manual'
 
 # How long one spin_once may block [s]; bounds the reaction to Ctrl-C.
 _SPIN_TIMEOUT = 0.05
@@ -163,24 +167,33 @@ def main(argv: list[str] | None = None) -> int:
                 sim.stop()  # after the bridge's zero frames
 
 
+def has_section(files: list[pathlib.Path], node: str) -> bool:
+    """Whether a parameter file has a section for node (``rm_manual:``)."""
+    for path in files:
+        with open(path) as stream:
+            if node in (yaml.safe_load(stream) or {}):
+                return True
+    return False
+
+
 def _run(args: argparse.Namespace, files: list[pathlib.Path]) -> int:
-    bridge = host = None
+    bridge = host = manual = None
     try:
         bridge = CanBridgeNode()
         host = RobotHost(hardware=bridge.hardware)
-    except ConfigError as err:
+        # The operator's commander is a node of its own, so the plugins hear it over DDS
+        # beside any other commander (docs/ARCHITECTURE.md, "Manual control").
+        if has_section(files, MANUAL_NODE_NAME):
+            manual = RobotHost(node_name=MANUAL_NODE_NAME)
+    except (ConfigError, KeyboardInterrupt) as err:
+        for node in (manual, host, bridge):
+            if node is not None:
+                node.destroy_node()
+        rclpy.try_shutdown()
+        if isinstance(err, KeyboardInterrupt):
+            return 0
         print(f'[bringup] configuration error: {err}', file=sys.stderr)
-        for node in (host, bridge):
-            if node is not None:
-                node.destroy_node()
-        rclpy.try_shutdown()
         return 1
-    except KeyboardInterrupt:
-        for node in (host, bridge):
-            if node is not None:
-                node.destroy_node()
-        rclpy.try_shutdown()
-        return 0
 
     # One EventsExecutor for both nodes' callbacks (the ROS edge): 4x cheaper per message
     # than the SingleThreadedExecutor (docs/ROS_FROM_WHEELS.md); its spin() ignores
@@ -188,6 +201,8 @@ def _run(args: argparse.Namespace, files: list[pathlib.Path]) -> int:
     executor = EventsExecutor()
     executor.add_node(bridge)
     executor.add_node(host)
+    if manual is not None:
+        executor.add_node(manual)
     raise_edge_priority(bridge.edge_priority)
     printer = None if args.no_status else _StatusPrinter(StatusView(host))
     deadline = None if args.duration is None else time.monotonic() + args.duration
@@ -205,11 +220,14 @@ def _run(args: argparse.Namespace, files: list[pathlib.Path]) -> int:
         if printer is not None:
             printer.finish()
         # Plugins first (zero targets on their joints), then the bridge's zero frames.
+        if manual is not None:
+            manual.shutdown()
         host.shutdown()
         bridge.shutdown()
         executor.shutdown()
-        host.destroy_node()
-        bridge.destroy_node()
+        for node in (manual, host, bridge):
+            if node is not None:
+                node.destroy_node()
         rclpy.try_shutdown()
         print('[bringup] stopped: zero output sent', file=sys.stderr)
     return 0

@@ -22,20 +22,22 @@ from rm_base.host.node import RobotHost
 from rm_base.plugin.params import DeclaredParameter, declared_parameters
 from rm_base.ros_env import prepare_ros_process
 
-from rm_bringup.bringup import parameter_files
+from rm_bringup.bringup import MANUAL_NODE_NAME, parameter_files
 
 ROBOT = 'standard'
 
 _HEADER = f"""# Parameters
 
-Every parameter that can_bridge and rm_robot declare, as declared in the code: type, SI
+Every parameter that can_bridge, rm_robot and rm_manual (the operator's commander)
+declare, as declared in the code: type, SI
 unit, default (or *required*: the robot config must set it), the bounds a value must keep
 and what it is. A value that breaks them stops the node at start-up with a message naming
 the key. Parameters are read once, at start-up, and are read-only. The plugins' parameters
 are listed for the plugins the `{ROBOT}` robot loads, under their instance names.
 
 can_bridge's bus and joint tables (`buses.<bus>.*`, `joints.<joint>.*`) and the simulated
-world (`sim.body`, `sim.imu`, `joints.<joint>.sim`) depend on the robot: see the robot
+world (`sim.body`, `sim.imu`, `sim.referee`, `sim.remote`, `joints.<joint>.sim`) depend
+on the robot: see the robot
 configs (rm_bringup/config/) and docs/ARCHITECTURE.md; the joint types and their options
 are listed after can_bridge's parameters, from the motor family registry.
 
@@ -45,7 +47,7 @@ this file and the code disagree.
 
 
 def collect(robot: str = ROBOT) -> dict[str, list[DeclaredParameter]]:
-    """Build both nodes from robot's config (simulated) and return what each declared."""
+    """Build the nodes from robot's config (simulated) and return what each declared."""
     prepare_ros_process()
     args = ['param_reference', '--ros-args']
     for path in parameter_files(robot, None, True):
@@ -58,9 +60,12 @@ def collect(robot: str = ROBOT) -> dict[str, list[DeclaredParameter]]:
         nodes.append(bridge)
         host = RobotHost(hardware=bridge.hardware, context=context)
         nodes.append(host)
+        manual = RobotHost(node_name=MANUAL_NODE_NAME, context=context)
+        nodes.append(manual)
         return {
             'can_bridge': declared_parameters(bridge),
             'rm_robot': declared_parameters(host),
+            MANUAL_NODE_NAME: declared_parameters(manual),
         }
     finally:
         for node in reversed(nodes):  # plugins off first, then the bridge
@@ -136,7 +141,8 @@ def render(declared: dict[str, list[DeclaredParameter]]) -> str:
         out.append(f'## {node}\n')
         groups: dict[str, list[DeclaredParameter]] = {}
         for p in parameters:
-            prefix = p.key.split('.', 1)[0] if node == 'rm_robot' and '.' in p.key else ''
+            hosted = node in ('rm_robot', MANUAL_NODE_NAME)
+            prefix = p.key.split('.', 1)[0] if hosted and '.' in p.key else ''
             groups.setdefault(prefix, []).append(p)
         for prefix, members in groups.items():
             if prefix:

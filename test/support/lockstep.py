@@ -35,10 +35,11 @@ from rclpy.context import Context
 from rclpy.time import Time
 from rm_base.bridge import CanBridgeNode
 from rm_base.bridge.messages import state_msgs
+from rm_base.hardware.protocols import dbus
 from rm_base.hardware.protocols import referee as ref
 from rm_base.hardware.protocols.hipnuc import decode_frame, decode_payload
 from rm_base.host.node import RobotHost
-from rm_base.sim import SimImu
+from rm_base.sim import SimImu, SimRemote
 from rm_plugins.imu.conversion import Mounting, reading_from_sample
 from rm_plugins.imu.message import imu_message
 from rm_plugins.referee.messages import TOPICS as REFEREE_TOPICS
@@ -68,7 +69,9 @@ class LockstepRobot:
         self,
         config: str = 'standard',
         *,
-        plugins: tuple[str, ...] = ('imu', 'gpio', 'referee', 'chassis', 'gimbal', 'shooter'),
+        plugins: tuple[str, ...] = (
+            'imu', 'gpio', 'referee', 'manual', 'chassis', 'gimbal', 'shooter'
+        ),
         overrides: Mapping[str, Mapping[str, Any]] | None = None,
     ) -> None:
         self._tmp = tempfile.mkdtemp(prefix='rm_lockstep_')
@@ -77,6 +80,11 @@ class LockstepRobot:
         bridge, host = robot_parameters(config, self._tmp, loaded, overrides)
         bridge['sim.timing'] = 'stepped'
         host['use_sim_time'] = True
+        if 'manual' in plugins:
+            # Its DR16 frames come from the harness; its reader holds a port that never
+            # closes (a pty that stays silent would be reopened every silence_reopen).
+            host['manual.dr16.port'] = 'loop://'
+            host['manual.dr16.silence_reopen'] = 0.0
         self.bridge_parameters, self.host_parameters = bridge, host
         self._imu_topic = host.get('imu.topic', 'imu')
         self._imu_frame_id = host.get('imu.frame_id', 'gimbal_imu')
@@ -108,6 +116,7 @@ class LockstepRobot:
                 parameter_overrides=[_parameter(k, v) for k, v in host.items()],
             )
             self._clock = self.host.get_clock()
+            self._manual = self.host.plugin('manual') if 'manual' in plugins else None
             self._set_clock(self.world.time_ns)
         except BaseException:
             self.close()
@@ -214,6 +223,9 @@ class LockstepRobot:
         if isinstance(device, SimImu):
             if 'imu' in self._played:
                 self._on_imu_frame(frame)
+        elif isinstance(device, SimRemote):
+            if self._manual is not None:
+                self._manual.on_remote_frame(dbus.decode(frame), self._clock.now().nanoseconds)
         elif 'referee' in self._played:
             self._on_referee_frame(device.version, frame)
 

@@ -77,13 +77,21 @@ def robot_parameters(
     for key in [k for k in bridge if k.startswith('buses.') and k.endswith('.interface')]:
         bus = key.split('.')[1]
         bridge[f'buses.{bus}.channel'] = f'{bus}-{tag}'
-    imu_path = os.path.join(tmp, 'imu')
-    if 'sim.imu.path' in bridge:
-        bridge['sim.imu.path'] = imu_path
-    if 'imu.port' in host:
-        host['imu.port'] = imu_path
+    # the simulated serial devices' terminals in tmp, as the plugins' ports
+    for device, port in (('imu', 'imu.port'), ('referee', 'referee.port')):
+        path = os.path.join(tmp, device)
+        if f'sim.{device}.path' in bridge:
+            bridge[f'sim.{device}.path'] = path
+        if port in host:
+            host[port] = path
+    if 'sim.remote.path' in bridge:
+        bridge['sim.remote.path'] = os.path.join(tmp, 'dr16')
     if plugins is not None:
         host['plugins'] = list(plugins)
+        if 'manual' in plugins:
+            # rm_manual's plugin, run in rm_robot (a test drives it there, in step)
+            manual = params.get('rm_manual', {})
+            host.update({k: v for k, v in manual.items() if k.startswith('manual.')})
     for node, values in (overrides or {}).items():
         {'can_bridge': bridge, 'rm_robot': host}[node].update(values)
     return bridge, host

@@ -42,6 +42,7 @@ Parameters (units in brackets; typed ones are declared by the node with a descri
 ``sim.referee.<key>``               --         the referee system on a pty (``path``,
                                                ``protocol_version``, limits...:
                                                ``rm_base.sim.referee``)
+``sim.remote.<key>``                --         the DR16 receiver on a pty (``path``)
 ==================================  =========  ============================================
 
 With ``sim: false`` the ``sim.*`` groups are ignored, so one robot config serves both.
@@ -83,6 +84,7 @@ HARDWARE_PREFIXES = ('buses.', 'joints.')
 SIM_BODY_PREFIX = 'sim.body.'
 SIM_IMU_PREFIX = 'sim.imu.'
 SIM_REFEREE_PREFIX = 'sim.referee.'
+SIM_REMOTE_PREFIX = 'sim.remote.'
 _JOINT_SIM_KEY = 'sim'
 
 
@@ -96,6 +98,7 @@ class SimSettings:
         body: ``body`` of the world config (nested; empty for none).
         imu: the one IMU's config, or None.
         referee: the simulated referee's config, or None.
+        remote: the simulated DR16 receiver's config, or None.
         motors: per joint, overrides of its simulated motor (nested).
     """
 
@@ -104,6 +107,7 @@ class SimSettings:
     body: Mapping[str, Any] = dataclasses.field(default_factory=dict)
     imu: Mapping[str, Any] | None = None
     referee: Mapping[str, Any] | None = None
+    remote: Mapping[str, Any] | None = None
     motors: Mapping[str, Mapping[str, Any]] = dataclasses.field(default_factory=dict)
 
 
@@ -205,6 +209,7 @@ def settings_from_parameters(
     body_flat: dict[str, Any] = {}
     imu_flat: dict[str, Any] = {}
     referee_flat: dict[str, Any] = {}
+    remote_flat: dict[str, Any] = {}
     for name, value in open_params.items():
         if name.startswith(HARDWARE_PREFIXES):
             parts = name.split('.')
@@ -223,6 +228,8 @@ def settings_from_parameters(
             imu_flat[name.removeprefix(SIM_IMU_PREFIX)] = value
         elif name.startswith(SIM_REFEREE_PREFIX):
             referee_flat[name.removeprefix(SIM_REFEREE_PREFIX)] = value
+        elif name.startswith(SIM_REMOTE_PREFIX):
+            remote_flat[name.removeprefix(SIM_REMOTE_PREFIX)] = value
         else:
             raise BridgeConfigError(
                 f'unknown parameter {name!r}; the bridge takes buses.*, joints.*, '
@@ -230,7 +237,7 @@ def settings_from_parameters(
                 'safety.*, '
                 'publish_rate, '
                 'diagnostics_rate, publish_frames, log_file, sim, sim.timing, sim.seed, '
-                'sim.body.*, sim.imu.*, sim.referee.*'
+                'sim.body.*, sim.imu.*, sim.referee.*, sim.remote.*'
             )
     hardware = nest(hardware_flat)
     sim_on = bool(typed.get('sim', False))
@@ -272,6 +279,7 @@ def settings_from_parameters(
             body=nest(body_flat),
             imu=nest(imu_flat) if imu_flat else None,
             referee=nest(referee_flat) if referee_flat else None,
+            remote=nest(remote_flat) if remote_flat else None,
             motors={joint: nest(keys) for joint, keys in motors_flat.items()},
         )
     return BridgeSettings(

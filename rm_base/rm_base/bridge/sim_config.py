@@ -9,7 +9,8 @@ the simulator's output-shaft constants are rescaled by ``k = gear_ratio / defaul
 (torque and back-EMF constants and Coulomb friction by ``k``, viscous friction by
 ``k²``). ``joints.<joint>.sim.*`` overrides anything (physics such as ``load_inertia``,
 driver settings such as ``overtemp_c``, or the simulated ``type``). ``sim.body`` and
-``sim.imu`` become the world's ``body`` and its one IMU, ``sim.referee`` its referee.
+``sim.imu`` become the world's ``body`` and its one IMU, ``sim.referee`` its referee,
+``sim.remote`` its DR16 receiver.
 
 Hardware types without a simulated model of their own (``dm4340``, ``dm10010l``, a
 ``damiao`` of another model) are simulated as the model that shares their protocol
@@ -114,7 +115,7 @@ def world_config(hardware: HardwareConfig, sim: SimSettings) -> dict[str, Any]:
         sim: the simulator settings from the parameters.
 
     Returns:
-        A plain dict: timing, seed, channels, and body / imus / referee if configured.
+        A plain dict: timing, seed, channels, and body / imus / referee / remote if configured.
 
     Raises:
         BridgeConfigError: a joint has no simulated model, or two buses share a channel.
@@ -144,4 +145,6 @@ def world_config(hardware: HardwareConfig, sim: SimSettings) -> dict[str, Any]:
         config['imus'] = [dict(sim.imu)]
     if sim.referee is not None:
         config['referee'] = dict(sim.referee)
+    if sim.remote is not None:
+        config['remote'] = dict(sim.remote)
     return config

@@ -76,6 +76,8 @@ class RobotHost(Node):
         take_from_dds: the loop takes the plugins' subscriptions from DDS (an
             ``Inbox``); False for lockstep, where commands come only through ``inject``
             (and what the plugins publish, which always reaches them at once).
+        node_name: ``rm_robot``, or another host of the same robot (``rm_manual``: a
+            commander whose topics the robot's plugins must hear beside other nodes').
         **kwargs: passed to ``rclpy.node.Node`` (``context``, ``parameter_overrides``, ...).
 
     Raises:
@@ -94,14 +96,15 @@ class RobotHost(Node):
         hardware: CanHardware | None = None,
         now: Callable[[], Any] | None = None,
         take_from_dds: bool = True,
+        node_name: str = NODE_NAME,
         **kwargs: Any,
     ) -> None:
-        super().__init__(NODE_NAME, **kwargs)
+        super().__init__(node_name, **kwargs)
         self._fast_logger = FastLogger(super().get_logger())
         shorten_gil_switch_interval()
         self._tasks: dict[str, PluginTask] = {}
         self._shut_down = False
-        self._outbox = Outbox(f'{NODE_NAME}-publish')
+        self._outbox = Outbox(f'{node_name}-publish')
         io: NodeIO
         self.loop: Scheduler | None
         if hardware is not None:
@@ -269,7 +272,7 @@ class RobotHost(Node):
         loop = self.loop
         if loop is None:  # rm_robot as a process of its own
             loop = self.loop = Scheduler(
-                [], [], rate_hz=loop_rate, thread_name=f'{NODE_NAME}-loop',
+                [], [], rate_hz=loop_rate, thread_name=f'{self.get_name()}-loop',
                 priority=loop_priority,
             )
             inputs.time_left = loop.time_left_ns

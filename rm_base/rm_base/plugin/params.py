@@ -116,6 +116,10 @@ class PluginParams:
         """Return the full parameter name of name (``'chassis.' + name``)."""
         return self.prefix + name
 
+    def group(self, name: str) -> PluginParams:
+        """The parameters under ``<prefix><name>.`` (a device's own port settings)."""
+        return PluginParams(self._node, self.plugin, self.plugin_type, prefix=self.key(name + '.'))
+
     # -- scalars ------------------------------------------------------------------------
 
     def double(

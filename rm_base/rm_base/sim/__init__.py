@@ -19,6 +19,7 @@ from rm_base.sim.motor import DJI_ENCODER_COUNTS, DriveMode, MotorModel
 from rm_base.sim.motor_params import MOTOR_DEFAULTS, MotorParams, MotorType, motor_params
 from rm_base.sim.pty_port import PtyPort, expand_path
 from rm_base.sim.referee import SimReferee
+from rm_base.sim.remote import SimRemote
 from rm_base.sim.world import SimWorld, Timing, load_config
 
 __all__ = [
@@ -48,6 +49,7 @@ __all__ = [
     'SimImu',
     'SimLookupError',
     'SimReferee',
+    'SimRemote',
     'SimStateError',
     'SimWorld',
     'Timing',

@@ -38,11 +38,12 @@ from rm_base.sim.errors import SimConfigError, SimLookupError, SimStateError
 from rm_base.sim.faults import Fault, FaultKind
 from rm_base.sim.imu import SimImu, imu_from_config
 from rm_base.sim.referee import SimReferee, referee_from_config
+from rm_base.sim.remote import SimRemote, remote_from_config
 
 LOG = logging.getLogger(__name__)
 
 #: A simulated device on a serial port.
-SerialDevice = SimImu | SimReferee
+SerialDevice = SimImu | SimReferee | SimRemote
 
 _NS_PER_S = 1_000_000_000
 #: How far the real-time loop may fall behind before it stops catching up [ticks].
@@ -65,8 +66,8 @@ class SimWorld:
     """Everything simulated that shares one clock.
 
     Build one from a config with :meth:`from_config`, or piece by piece with
-    :meth:`add_channel`, :meth:`add_motor`, :meth:`set_body`, :meth:`add_imu` and
-    :meth:`set_referee`; then
+    :meth:`add_channel`, :meth:`add_motor`, :meth:`set_body`, :meth:`add_imu`,
+    :meth:`set_referee` and :meth:`set_remote`; then
     either :meth:`start` its real-time thread or drive it with :meth:`step`. (A world that a
     :class:`~rm_base.sim.bus.SimBus` builds is started by the bus.) Use it as a context
     manager (or call :meth:`close`) so the physics thread stops, the serial terminals close
@@ -81,6 +82,7 @@ class SimWorld:
         overruns: times the real-time loop fell too far behind and skipped ahead.
         error: the exception that stopped the physics thread, if any.
         referee: the simulated referee system, or None.
+        remote: the simulated DR16 receiver, or None.
         serial_sink: None (default): every frame of a serial device (IMU, referee) goes
             to its terminal; else ``serial_sink(device, frame)`` takes it instead, in the
             stepping thread (lockstep: a terminal delivers to its reader asynchronously).
@@ -123,6 +125,7 @@ class SimWorld:
         self.time_ns = 0
         self.serial_sink: Callable[[SerialDevice, bytes], object] | None = None
         self.referee: SimReferee | None = None
+        self.remote: SimRemote | None = None
         self.lock = threading.RLock()
         self.body = RobotBody()
         self.overruns = 0
@@ -158,16 +161,20 @@ class SimWorld:
             body: {...}                 # see rm_base.sim.body.body_from_config
             imus: [{path: '/tmp/rm_sim_${ROS_DOMAIN_ID}/imu', mount: gimbal, rate_hz: 100}]
             referee: {path: '/tmp/rm_sim_${ROS_DOMAIN_ID}/referee', chassis_power_limit: 60}
+            remote: {path: '/tmp/rm_sim_${ROS_DOMAIN_ID}/dr16'}
 
         Motor dicts: see :func:`rm_base.sim.device_config.device_from_config`; IMU dicts:
         :func:`rm_base.sim.imu.imu_from_config`; the referee:
-        :func:`rm_base.sim.referee.referee_from_config`.
+        :func:`rm_base.sim.referee.referee_from_config`; the DR16:
+        :func:`rm_base.sim.remote.remote_from_config`.
 
         Raises:
             SimConfigError: anything invalid; the partly built world is closed again.
         """
         config = load_config(config)
-        allowed = {'timing', 'tick_rate_hz', 'seed', 'channels', 'body', 'imus', 'referee'}
+        allowed = {
+            'timing', 'tick_rate_hz', 'seed', 'channels', 'body', 'imus', 'referee', 'remote'
+        }
         unknown = sorted(set(config) - allowed)
         if unknown:
             raise SimConfigError(f'world: unknown key(s) {unknown}; known: {sorted(allowed)}')
@@ -191,6 +198,8 @@ class SimWorld:
                 world.add_imu(imu)
             if 'referee' in config:
                 world.set_referee(config['referee'])
+            if 'remote' in config:
+                world.set_remote(config['remote'])
         except BaseException:
             world.close()
             raise
@@ -292,6 +301,20 @@ class SimWorld:
                 config, chassis=body.wheels, gimbal=gimbal, launcher=body.launcher
             )
             return self.referee
+
+    def set_remote(self, config: Mapping[str, Any]) -> SimRemote:
+        """Create the DR16 receiver (see :func:`~rm_base.sim.remote.remote_from_config`).
+
+        Raises:
+            SimConfigError: invalid config.
+            SimStateError: a receiver exists already.
+        """
+        with self.lock:
+            self._check_open()
+            if self.remote is not None:
+                raise SimStateError('the world has a DR16 receiver already')
+            self.remote = remote_from_config(config)
+            return self.remote
 
     # -- lookup ----------------------------------------------------------------------------
 
@@ -454,6 +477,10 @@ class SimWorld:
         if referee is not None:
             for frame in referee.tick(now, dt, shots):
                 self._serial_frames.append((referee, frame))
+        remote = self.remote
+        if remote is not None:
+            for frame in remote.tick(now):
+                self._serial_frames.append((remote, frame))
         for channel in self._channels.values():
             channel.flush_handed_over()
 
@@ -550,8 +577,9 @@ class SimWorld:
             self._closed = True
             for imu in self._imus.values():
                 imu.close()
-            if self.referee is not None:
-                self.referee.close()
+            for device in (self.referee, self.remote):
+                if device is not None:
+                    device.close()
             for channel in self._channels.values():
                 release_channel(channel)
 

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from enum import IntEnum
 from typing import Any
 
+import serial
 from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 from rm_base.plugin import PluginConfigError, PluginParams
 
@@ -74,17 +75,23 @@ class SerialSettings:
 
 
 def read_serial_settings(
-    p: PluginParams, *, baudrate: int, data_timeout: float, silence_reopen: float
+    p: PluginParams, *, baudrate: int, data_timeout: float, silence_reopen: float,
+    port: str | None = None,
 ) -> SerialSettings:
     """Declare and read the port parameters (defaults as the device wants them).
+
+    port: the port, when the plugin declared ``port`` itself (an optional device).
 
     Raises:
         ParameterError: a parameter is missing or out of bounds.
         PluginConfigError: the port name, or reopen_backoff_max below reopen_backoff_min.
     """
-    port = expand_port(p.string(
-        'port', description='serial port: device path or pyserial URL; ${VAR} and ~ are expanded'
-    ))
+    if port is None:
+        port = p.string(
+            'port',
+            description='serial port: device path or pyserial URL; ${VAR} and ~ are expanded',
+        )
+    port = expand_port(port)
     baud = p.integer('baudrate', baudrate, description='baud rate', unit='bit/s', gt=0)
     timeout = p.double(
         'data_timeout', data_timeout, unit='s', gt=0.0,
@@ -121,15 +128,28 @@ def read_serial_settings(
 
 def make_reader(
     settings: SerialSettings, on_item: Callable[[Any], None], logger: Any, *,
-    parser: FrameStream, name: str, paced: bool,
+    parser: FrameStream, name: str, paced: bool, parity: str = serial.PARITY_NONE,
 ) -> SerialReader:
-    """The reader thread of a device with these settings (not started)."""
+    """The reader thread of a device with these settings (not started).
+
+    parity: pyserial's ``PARITY_*`` (the DR16 sends 8E1). A pseudo-terminal (the
+    simulator's) has no wire to check parity on, and Linux refuses the setting when one is
+    opened again: it is opened without.
+    """
+    def opener(url: str, baudrate: int, timeout: float) -> Any:
+        wire = parity if not _is_pseudo_terminal(url) else serial.PARITY_NONE
+        return serial.serial_for_url(url, baudrate=baudrate, timeout=timeout, parity=wire)
+
     return SerialReader(
         settings.port, settings.baudrate, on_item, logger,
         read_timeout=settings.read_timeout, backoff_min=settings.backoff_min,
         backoff_max=settings.backoff_max, silence_reopen=settings.silence_reopen,
-        paced=paced, parser=parser, name=name,
+        paced=paced, parser=parser, name=name, opener=opener,
     )
+
+
+def _is_pseudo_terminal(url: str) -> bool:
+    return os.path.realpath(url).startswith('/dev/pts/')
 
 
 class DeviceLink:
@@ -137,17 +157,21 @@ class DeviceLink:
 
     The reader thread calls :meth:`received` for every good frame; the plugin's tick asks
     :meth:`decide` for the state. In the control loop the reader reads after the loop's
-    ticks (in their idle time), else at its own pace.
+    ticks (in their idle time), else at its own pace; ``paced=False`` keeps it at its own
+    pace in the loop too (a device framed by the silences between its bursts, the DR16,
+    must be read as the bytes arrive).
     """
 
     def __init__(
         self, plugin: Any, settings: SerialSettings, on_item: Callable[[Any], None], *,
-        parser: FrameStream, name: str,
+        parser: FrameStream, name: str, paced: bool | None = None,
+        parity: str = serial.PARITY_NONE,
     ) -> None:
         self.settings = settings
         self._logger = plugin.logger
         self.reader = make_reader(
-            settings, on_item, plugin.logger, parser=parser, name=name, paced=plugin.in_loop
+            settings, on_item, plugin.logger, parser=parser, name=name,
+            paced=plugin.in_loop if paced is None else paced, parity=parity,
         )
         if self.reader.paced:
             plugin.after_tick(self.reader.wake)

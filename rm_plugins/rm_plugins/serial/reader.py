@@ -21,6 +21,7 @@ recorded in the statistics (``stats()``) and logged, rate-limited. No rclpy here
 from __future__ import annotations
 
 import dataclasses
+import termios
 import threading
 import time
 from collections.abc import Callable
@@ -268,7 +269,7 @@ class SerialReader:
     def _open(self) -> bool:
         try:
             port = self._opener(self.url, self.baudrate, self._read_timeout)
-        except (serial.SerialException, OSError, ValueError) as err:
+        except (serial.SerialException, OSError, ValueError, termios.error) as err:
             message = f'cannot open {self.url}: {err}'
             with self._lock:
                 first = self._stats.last_error != message
@@ -296,7 +297,7 @@ class SerialReader:
             else:
                 waiting = self._port.in_waiting
                 data = self._port.read(min(max(1, waiting), _READ_CHUNK))
-        except (serial.SerialException, OSError, TypeError, ValueError) as err:
+        except (serial.SerialException, OSError, TypeError, ValueError, termios.error) as err:
             # pyserial raises TypeError/ValueError on some ports closed under its feet.
             return f'{self.url} failed: {err}'
         now_ns = self._clock_ns()

@@ -131,8 +131,9 @@ def launch(module, **arguments):
 
 
 def nodes_by_executable(produced):
+    """The nodes by name (rm_manual runs rm_robot's executable)."""
     nodes = [a for a in produced if isinstance(a, Node)]
-    return {n.kwargs['executable']: n.kwargs for n in nodes}
+    return {n.kwargs.get('name', n.kwargs['executable']): n.kwargs for n in nodes}
 
 
 def test_when_launched_with_defaults_expect_the_one_process_robot_on_the_standard_config(
@@ -155,10 +156,12 @@ def test_when_sim_is_true_expect_bringup_to_start_rm_sim(launch_file):
 def test_when_split_expect_bridge_and_host_on_the_standard_config(launch_file):
     _, produced = launch(launch_file, split='true')
     nodes = nodes_by_executable(produced)
-    assert set(nodes) == {'can_bridge', 'rm_robot'}
-    for executable, node in nodes.items():
+    # the operator's commander (rm_manual) is a host of its own: rm_robot's executable
+    assert set(nodes) == {'can_bridge', 'rm_robot', 'rm_manual'}
+    assert nodes['rm_manual']['executable'] == 'rm_robot'
+    for name, node in nodes.items():
         assert node['package'] == 'rm_base'
-        assert node['name'] == executable  # the config's sections are named after the nodes
+        assert node['name'] == name  # the config's sections are named after the nodes
         assert node['parameters'] == [str(CONFIG / 'standard.yaml')]
 
 
@@ -166,7 +169,7 @@ def test_when_split_on_the_sim_expect_rm_sim_and_the_bridge_on_its_socket(launch
     _, produced = launch(launch_file, robot='standard', sim='true', split='true')
     expected = [str(CONFIG / 'standard.yaml'), str(CONFIG / 'standard_sim.yaml')]
     nodes = nodes_by_executable(produced)
-    assert set(nodes) == {'rm_sim', 'can_bridge', 'rm_robot'}
+    assert set(nodes) == {'rm_sim', 'can_bridge', 'rm_robot', 'rm_manual'}
     assert nodes['rm_sim']['arguments'] == [
         '--params-file', expected[0], '--params-file', expected[1],
     ]
@@ -176,6 +179,7 @@ def test_when_split_on_the_sim_expect_rm_sim_and_the_bridge_on_its_socket(launch
          'buses.can1.interface': 'rm_sim_socket'},
     ]
     assert nodes['rm_robot']['parameters'] == expected
+    assert nodes['rm_manual']['parameters'] == expected
     assert all(pathlib.Path(p).is_file() for p in expected)
 
 

@@ -59,16 +59,37 @@ def test_when_length_wrong_expect_error(n):
 
 
 def test_when_channel_out_of_range_expect_rejection():
-    # all-zero frame: channels read 0 raw -> -1024, outside +-660
-    with pytest.raises(ValueRangeError, match='channel 0 -1024 outside ±660'):
+    # all-zero frame: channels read 0 raw -> -1024, beyond +-700
+    with pytest.raises(ValueRangeError, match='channel 0 -1024 beyond ±700'):
         dbus.decode(bytes(18))
+
+
+def with_channel_0(raw: int) -> bytes:
+    """The centred vector with channel 0's 11 bits set to raw."""
+    data = bytearray(h('00 04 20 00 01 F8 00 00 00 00 00 00 00 00 00 00 00 04'))
+    data[0] = raw & 0xFF
+    data[1] = (data[1] & 0xF8) | (raw >> 8)
+    return bytes(data)
+
+
+@pytest.mark.parametrize(('offset', 'reads'), [(661, 660), (700, 660), (-700, -660), (-1, -1)])
+def test_a_stick_up_to_700_is_accepted_and_clamped_to_660_as_djis_decoder_does(offset, reads):
+    assert dbus.decode(with_channel_0(1024 + offset)).channels[0] == reads
+
+
+@pytest.mark.parametrize('offset', [701, -701])
+def test_a_stick_beyond_700_rejects_the_frame(offset):
+    with pytest.raises(ValueRangeError, match='beyond ±700'):
+        dbus.decode(with_channel_0(1024 + offset))
 
 
 def test_when_wheel_out_of_range_expect_rejection():
     data = bytearray(h('00 04 20 00 01 F8 00 00 00 00 00 00 00 00 00 00 00 04'))
-    data[16:18] = (1700).to_bytes(2, 'little')
-    with pytest.raises(ValueRangeError, match='wheel 676'):
+    data[16:18] = (1680 + 50).to_bytes(2, 'little')
+    with pytest.raises(ValueRangeError, match='wheel 706'):
         dbus.decode(bytes(data))
+    data[16:18] = (1700).to_bytes(2, 'little')
+    assert dbus.decode(bytes(data)).wheel == 660
 
 
 def test_when_switch_reads_zero_expect_rejection():
@@ -113,3 +134,41 @@ def test_round_trip(channels, sa, sb, mouse, left, right, keys, wheel):
     data = dbus.encode(frame)
     assert len(data) == 18
     assert dbus.decode(data) == frame
+
+
+CENTRED = h('00 04 20 00 01 F8 00 00 00 00 00 00 00 00 00 00 00 04')
+
+
+class Clock:
+    def __init__(self) -> None:
+        self.ns = 0
+
+    def __call__(self) -> int:
+        return self.ns
+
+
+def test_the_stream_splits_frames_at_the_silences_between_them():
+    clock = Clock()
+    stream = dbus.DbusStream(clock)
+    assert stream.feed(CENTRED[:5]) == []
+    clock.ns += 1_000_000  # the rest of the burst, 1 ms later
+    assert stream.feed(CENTRED[5:]) == [DbusFrame()]
+    clock.ns += 14_000_000
+    assert stream.feed(CENTRED + CENTRED) == [DbusFrame(), DbusFrame()]  # two, read late
+    assert (stream.frames_ok, stream.length_errors, stream.bytes_discarded) == (3, 0, 0)
+
+
+def test_a_frame_cut_short_by_a_silence_is_dropped_and_the_next_one_read_whole():
+    clock = Clock()
+    stream = dbus.DbusStream(clock)
+    assert stream.feed(CENTRED[7:]) == []  # opened mid-frame: its last 11 bytes
+    clock.ns += 12_000_000
+    assert stream.feed(CENTRED) == [DbusFrame()]
+    assert (stream.length_errors, stream.bytes_discarded) == (1, 11)
+
+
+def test_an_invalid_frame_is_counted_and_dropped():
+    stream = dbus.DbusStream(Clock())
+    assert stream.feed(bytes(18)) == []
+    assert (stream.decode_errors, stream.bytes_discarded, stream.frames_ok) == (1, 18, 0)
+

@@ -9,9 +9,14 @@ docs/PROTOCOLS.md §5 (DJI Dev-Board-C ``remote_control.c``, rm_control ``rm_dbu
     bytes 14..15 keyboard bitmap uint16 LE (bit 0 W ... bit 15 B)
     bytes 16..17 wheel (dial), uint16 LE, raw 364..1684, centre 1024
 
-Channels and the wheel are reported centred (−660..660). A frame with a channel outside
-±660 or a switch value other than 1/2/3 is rejected, as DJI's and rm_control's decoders
-do (a glitch on the UART must never become a stick command).
+Channels and the wheel are reported centred and clamped to −660..660. Like DJI's decoder,
+a frame with a channel up to ±700 is accepted (a worn stick overshoots 660) and clamped; one
+beyond ±700, or with a switch value other than 1/2/3, is rejected (a glitch on the UART must
+never become a stick command).
+
+The frame has no header or checksum: the receiver sends its 18 bytes in one burst every
+14 ms, and a frame is the bytes between two silences (:class:`DbusStream`, as DJI's DMA
+idle-line interrupt does).
 
 UNVERIFIED: which physical switch is on bits 44–45. rm_control and RoboRTS say the
 right one, DJI's example comment says the left; the fields are therefore named
@@ -23,14 +28,22 @@ from __future__ import annotations
 import dataclasses
 import enum
 import struct
+import time
+from collections.abc import Callable
 
 from rm_base.hardware.errors import FrameLengthError, ValueRangeError
 
 FRAME_LENGTH = 18
 CHANNEL_OFFSET = 1024
 CHANNEL_RANGE = 660
+#: Channels up to this far from centre are accepted and clamped to CHANNEL_RANGE (DJI).
+CHANNEL_ACCEPT = 700
 CHANNEL_MASK = 0x7FF
 BAUD_RATE = 100_000
+#: The receiver's frame period [s].
+FRAME_PERIOD_S = 0.014
+#: Silence that ends a frame [s]: the 18 bytes take 2 ms at 100 kbaud, frames are 14 ms apart.
+FRAME_GAP_S = 0.004
 
 _TAIL = struct.Struct('<3hBBHH')  # bytes 6..17
 
@@ -95,7 +108,7 @@ def decode(data: bytes | bytearray) -> DbusFrame:
 
     Raises:
         FrameLengthError: not 18 bytes.
-        ValueRangeError: a channel or the wheel is outside ±660, or a switch reads 0.
+        ValueRangeError: a channel or the wheel is beyond ±700, or a switch reads 0.
     """
     if len(data) != FRAME_LENGTH:
         raise FrameLengthError(f'DBUS frame must be 18 bytes, got {len(data)}')
@@ -115,16 +128,22 @@ def decode(data: bytes | bytearray) -> DbusFrame:
     mx, my, mz, left, right, keys, wheel_raw = _TAIL.unpack_from(data, 6)
     wheel = wheel_raw - CHANNEL_OFFSET
     for i, c in enumerate((*channels, wheel)):
-        if not -CHANNEL_RANGE <= c <= CHANNEL_RANGE:
+        if not -CHANNEL_ACCEPT <= c <= CHANNEL_ACCEPT:
             name = f'channel {i}' if i < 4 else 'wheel'
-            raise ValueRangeError(f'DBUS {name} {c} outside ±{CHANNEL_RANGE}')
+            raise ValueRangeError(f'DBUS {name} {c} beyond ±{CHANNEL_ACCEPT}')
+    c0, c1, c2, c3 = (_clamp(c) for c in channels)
     s_a = (b5 >> 4) & 0x3
     s_b = (b5 >> 6) & 0x3
     if s_a == 0 or s_b == 0:
         raise ValueRangeError(f'DBUS switch value 0 (switch_a {s_a}, switch_b {s_b})')
     return DbusFrame(
-        channels, Switch(s_a), Switch(s_b), (mx, my, mz), bool(left), bool(right), keys, wheel
+        (c0, c1, c2, c3), Switch(s_a), Switch(s_b), (mx, my, mz), bool(left), bool(right), keys,
+        _clamp(wheel),
     )
+
+
+def _clamp(value: int) -> int:
+    return max(-CHANNEL_RANGE, min(CHANNEL_RANGE, value))
 
 
 def encode(frame: DbusFrame) -> bytes:
@@ -157,3 +176,50 @@ def encode(frame: DbusFrame) -> bytes:
     except struct.error as err:
         raise ValueRangeError(f'DBUS mouse {frame.mouse!r} does not fit int16: {err}') from err
     return bits.to_bytes(6, 'little') + tail
+
+
+class DbusStream:
+    """Splits a DBUS byte stream into frames at the silences between them.
+
+    Bytes that arrive within ``FRAME_GAP_S`` of the previous ones belong to the same frame;
+    after a silence a new frame begins and an incomplete one is dropped. Complete frames
+    are decoded; an invalid one is counted and dropped. The reader's counters
+    (``rm_plugins.serial.reader.FrameStream``): there is no CRC, so ``crc_errors`` stays 0.
+
+    Args:
+        clock: monotonic time [ns] of the bytes being fed (``time.monotonic_ns``).
+    """
+
+    crc_errors = 0
+
+    def __init__(self, clock: Callable[[], int] = time.monotonic_ns) -> None:
+        self._clock = clock
+        self._gap_ns = round(FRAME_GAP_S * 1e9)
+        self._buffer = bytearray()
+        self._last_ns: int | None = None
+        self.frames_ok = 0
+        self.length_errors = 0
+        self.decode_errors = 0
+        self.bytes_discarded = 0
+
+    def feed(self, data: bytes) -> list[DbusFrame]:
+        """Add the bytes of one read; return the frames they completed."""
+        now = self._clock()
+        if self._last_ns is not None and now - self._last_ns > self._gap_ns and self._buffer:
+            self.length_errors += 1  # a frame cut short (or bytes from mid-frame at start)
+            self.bytes_discarded += len(self._buffer)
+            self._buffer.clear()
+        self._last_ns = now
+        self._buffer += data
+        frames = []
+        while len(self._buffer) >= FRAME_LENGTH:
+            chunk = bytes(self._buffer[:FRAME_LENGTH])
+            del self._buffer[:FRAME_LENGTH]
+            try:
+                frames.append(decode(chunk))
+            except ValueRangeError:
+                self.decode_errors += 1
+                self.bytes_discarded += FRAME_LENGTH
+                continue
+            self.frames_ok += 1
+        return frames

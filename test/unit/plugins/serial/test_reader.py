@@ -282,3 +282,42 @@ def test_a_paced_reader_lets_the_wakes_pass_until_the_next_data_is_due(reader_fa
     reader.wake()
     assert wait(lambda: len(got.samples) == 21)
     assert len(port.reads) == reads + 1 and reader.wakes_passed == 1
+
+
+def test_a_terminal_that_refuses_its_settings_is_retried_not_fatal(reader_factory):
+    # pyserial's tcsetattr on a pseudo-terminal whose other side just closed raises
+    # termios.error (not an OSError): the thread must count it and retry, not die.
+    import termios
+
+    attempts = []
+
+    def opener(url, baudrate, timeout):
+        attempts.append(url)
+        if len(attempts) < 3:
+            raise termios.error(22, 'Invalid argument')
+        return serial.serial_for_url('loop://', baudrate=baudrate, timeout=timeout)
+
+    collected = Collector()
+    reader = reader_factory('/dev/pts/none', collected, opener=opener)
+    reader.start()
+    assert wait(lambda: reader.stats().port_open)
+    assert reader.stats().open_failures == 2 and 'Invalid argument' in reader.stats().last_error
+
+
+def test_a_device_with_parity_on_a_pseudo_terminal_is_reopened_without_it(tmp_path):
+    # Linux refuses PARENB on a pty opened a second time (EINVAL); a pty has no wire.
+    from types import SimpleNamespace
+
+    from rm_plugins.serial.device import make_reader
+
+    pty = Pty(str(tmp_path / 'dr16'))
+    try:
+        settings = SimpleNamespace(port=pty.path, baudrate=100000, read_timeout=0.01,
+                                   backoff_min=0.01, backoff_max=0.02, silence_reopen=0.0)
+        reader = make_reader(settings, lambda item: None, Log(), parser=HipnucParser(),
+                             name='dr16', paced=False, parity=serial.PARITY_EVEN)
+        for _ in range(3):
+            port = reader._opener(pty.path, 100000, 0.01)
+            port.close()
+    finally:
+        pty.close()

@@ -1,0 +1,117 @@
+"""Manual control in lockstep: the simulated DR16 -> the ManualControl plugin -> the robot.
+
+rm_sim's DR16 receiver (rm_base.sim.remote) sends what the test's "operator" holds as DBUS
+frames every 14 ms; the harness hands each frame to the plugin as its reader would, and
+the plugin's commands reach the chassis, gimbal and shooter in-process. The default
+mapping (rm_plugins/manual/default_mapping.yaml): right switch down PASSIVE, middle the
+sticks, up the keyboard and mouse; left switch down/middle/up the shooter
+PASSIVE/READY/PUSH.
+"""
+
+from __future__ import annotations
+
+import pytest
+from rm_base.hardware.protocols.dbus import Key, Switch
+from support.lockstep import LockstepRobot
+
+pytestmark = [pytest.mark.ros]
+
+FULL = 660  # a full stick [counts]
+
+
+def states(robot: LockstepRobot) -> tuple[str, str, str]:
+    return tuple(robot.plugin(name).state.name for name in ('chassis', 'gimbal', 'shooter'))
+
+
+def world_yaw(robot: LockstepRobot) -> float:
+    return robot.world.body.yaw + robot.world.body.gimbal_yaw
+
+
+@pytest.fixture(scope='module')
+def robot():
+    with LockstepRobot() as r:
+        yield r
+
+
+def test_until_the_remote_is_heard_nothing_is_commanded(robot):
+    robot.run(0.5)
+    assert states(robot) == ('PASSIVE', 'PASSIVE', 'PASSIVE')
+    assert robot.plugin('manual').state.name == 'NO_DATA'
+
+
+def test_right_switch_down_keeps_everything_passive(robot):
+    remote = robot.world.remote
+    remote.hold(switch_a=Switch.DOWN, switch_b=Switch.UP, channels=(FULL, FULL, FULL, FULL))
+    remote.switch_on()
+    robot.run(0.5)
+    assert robot.plugin('manual').state.name == 'STREAMING'
+    assert states(robot) == ('PASSIVE', 'PASSIVE', 'PASSIVE')
+    assert abs(robot.world.body.x) < 1e-3
+
+
+def test_sticks_drive_the_chassis_and_aim_the_gimbal_left_switch_middle_spins_up(robot):
+    remote = robot.world.remote
+    # left stick up half: 1 m/s forward
+    remote.hold(switch_a=Switch.MID, switch_b=Switch.MID, channels=(0, 0, 0, FULL // 2))
+    x0 = robot.world.body.x
+    robot.run(2.0)
+    assert states(robot) == ('FOLLOW', 'RATE', 'READY')
+    assert robot.world.body.x - x0 > 1.6  # 1 m/s less the ramp, in 2 s
+    # right stick right a quarter: the gimbal turns right at 1 rad/s
+    remote.hold(channels=(FULL // 4, 0, 0, 0))
+    yaw0 = world_yaw(robot)
+    robot.run(1.0)
+    assert world_yaw(robot) - yaw0 < -0.8
+    remote.hold(channels=(0, 0, 0, 0))
+    robot.run(0.5)
+
+
+def test_left_switch_up_fires(robot):
+    remote = robot.world.remote
+    shots = robot.world.body.launcher.shots
+    remote.hold(switch_b=Switch.UP)
+    robot.run(1.0)
+    assert robot.plugin('shooter').state.name == 'PUSH'
+    assert robot.world.body.launcher.shots - shots >= 5  # 10 shots/s, heat allowing
+    remote.hold(switch_b=Switch.DOWN)
+    robot.run(0.5)
+    assert robot.plugin('shooter').state.name == 'PASSIVE'
+
+
+def test_keyboard_w_drives_the_mouse_aims_r_and_a_click_fire_f_spins(robot):
+    remote = robot.world.remote
+    remote.hold(switch_a=Switch.UP, switch_b=Switch.MID, keys=Key.W, mouse=(-50, 0, 0))
+    x0, yaw0 = robot.world.body.x, world_yaw(robot)
+    robot.run(1.5)
+    assert robot.world.body.x - x0 > 1.5  # keyboard speed 2 m/s
+    assert world_yaw(robot) - yaw0 > 1.0  # mouse left: 1 rad/s left
+    assert robot.plugin('shooter').state.name == 'PASSIVE'  # friction off until R
+    remote.hold(keys=Key.R, mouse=(0, 0, 0))  # R: friction on
+    robot.run(0.1)
+    remote.hold(keys=0)
+    robot.run(1.0)
+    assert robot.plugin('shooter').state.name == 'READY'
+    shots = robot.world.body.launcher.shots
+    remote.hold(mouse_left=True)
+    robot.run(0.6)
+    assert robot.world.body.launcher.shots > shots
+    remote.hold(mouse_left=False, keys=Key.F)  # F: GYRO
+    robot.run(0.1)
+    remote.hold(keys=0)
+    robot.run(1.5)
+    assert states(robot)[0] == 'GYRO'
+    assert robot.world.body.twist[2] > 3.0
+
+
+def test_the_remote_going_silent_stops_everything_within_one_command_timeout(robot):
+    remote = robot.world.remote
+    remote.hold(switch_a=Switch.MID, keys=0, channels=(0, 0, 0, FULL))
+    robot.run(1.0)
+    assert states(robot) == ('FOLLOW', 'RATE', 'READY')
+    remote.switch_off()
+    # the link is lost after 0.1 s; PASSIVE commands follow at the plugin's next tick
+    robot.run(0.1 + 0.05)
+    assert states(robot) == ('PASSIVE', 'PASSIVE', 'PASSIVE')
+    assert robot.plugin('manual').state.name == 'NO_DATA'
+    robot.run(1.0)
+    assert states(robot) == ('PASSIVE', 'PASSIVE', 'PASSIVE')
