@@ -7,8 +7,8 @@ image link forwards (``image_link.port``: 0x0304 frames up to 2026 V1.1, the 202
 remote frame). What each switch, stick, key and mouse button does is the mapping file's
 (``mapping_file``; the default is ``rm_plugins/manual/default_mapping.yaml``).
 
-States are the DR16 link's (``LinkState``); both links are reported on /diagnostics every
-``dr16.diagnostics_period``. Until the remote is first heard it publishes
+States are the DR16 link's (``LinkState``); each link is reported on /diagnostics at its
+``diagnostics_period``. Until the remote is first heard it publishes
 nothing, so a robot driven by other nodes (or `ros2 topic pub`) is not disturbed by a
 receiver nobody transmits to. Once heard, it streams the operator's commands; without a
 good DR16 frame for ``dr16.data_timeout`` (100 ms) every command it publishes is PASSIVE,
