@@ -10,6 +10,8 @@ PASSIVE/READY/PUSH.
 
 from __future__ import annotations
 
+import math
+
 import pytest
 from rm_base.hardware.protocols.dbus import Key, Switch
 from support.lockstep import LockstepRobot
@@ -115,3 +117,24 @@ def test_the_remote_going_silent_stops_everything_within_one_command_timeout(rob
     assert robot.plugin('manual').state.name == 'NO_DATA'
     robot.run(1.0)
     assert states(robot) == ('PASSIVE', 'PASSIVE', 'PASSIVE')
+
+
+def test_the_image_links_keyboard_and_mouse_drive_as_the_remotes_do(robot):
+    remote, link = robot.world.remote, robot.world.image_link
+    remote.switch_on()
+    remote.hold(switch_a=Switch.UP, switch_b=Switch.MID, channels=(0, 0, 0, 0), keys=0,
+                mouse=(0, 0, 0), mouse_left=False)
+    robot.run(0.5)
+    link.hold(keys=int(Key.A), mouse_x=50)  # strafe left, the mouse turns the gimbal right
+    link.connect()
+    x0, y0, yaw0 = robot.world.body.x, robot.world.body.y, world_yaw(robot)
+    robot.run(1.0)
+    assert states(robot)[:2] == ('FOLLOW', 'RATE')
+    # 2 m/s to the gimbal's left, on an arc as the gimbal turns right at 1 rad/s
+    assert math.hypot(robot.world.body.x - x0, robot.world.body.y - y0) > 1.0
+    assert world_yaw(robot) - yaw0 < -0.6
+    link.disconnect()  # its keys stop counting after image_link.data_timeout
+    robot.run(1.0)
+    y1 = robot.world.body.y
+    robot.run(0.5)
+    assert abs(robot.world.body.y - y1) < 0.05

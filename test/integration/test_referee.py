@@ -22,6 +22,7 @@ from support.serial_port import Pty
 from rm_msgs.msg import (
     PluginState,
     RefereeGameStatus,
+    RefereeKeyboardMouse,
     RefereePowerHeat,
     RefereeRobotStatus,
     RefereeShot,
@@ -36,10 +37,12 @@ F2 = bytes.fromhex('A5 0D 00 02 6F 01 02 03 02 B4 00 C8 00 28 00 F0 00 3C 00 07 
 F4 = bytes.fromhex('A5 10 00 04 E8 02 02 C0 5D C4 09 00 00 70 42 39 00 78 00 00 00 00 00 11 DC')
 F5 = bytes.fromhex('A5 0E 00 05 08 02 02 00 00 00 00 00 00 00 00 3C 00 82 00 00 00 14 3F')
 F8 = bytes.fromhex('A5 07 00 08 7B 07 02 01 01 0A 00 00 C4 41 0E A5')
+F6 = bytes.fromhex('A5 0C 00 06 A5 04 03 64 00 CE FF 00 00 01 00 91 00 00 00 97 DE')
+V1 = bytes.fromhex('A9 53 94 06 20 AF D8 A2 60 19 F9 FF 0F 00 00 00 01 20 02 DE 1C')
 
 
 class Harness(HostedPlugins):
-    def __init__(self, context, port):
+    def __init__(self, context, port, **overrides):
         super().__init__(context, {
             'plugins': ['referee'],
             'referee.type': 'rm_plugins/Referee',
@@ -48,6 +51,7 @@ class Harness(HostedPlugins):
             'referee.protocol_version': 2026,
             'referee.data_timeout': 0.3,
             'referee.diagnostics_period': 0.1,
+            **overrides,
         })
         self.received = {
             topic: self.collect(msg_type, f'/referee/{topic}')
@@ -55,6 +59,7 @@ class Harness(HostedPlugins):
                                     ('robot_status', RefereeRobotStatus),
                                     ('power_heat', RefereePowerHeat), ('shot', RefereeShot))
         }
+        self.keyboard = self.collect(RefereeKeyboardMouse, '/referee/keyboard_mouse')
         self.diagnostics = self.collect(DiagnosticArray, '/diagnostics')
         self.states = self.collect(PluginState, '/rm_robot/referee/state', STATE_QOS)
         self.start()
@@ -121,3 +126,34 @@ def test_a_protocol_the_plugin_does_not_know_is_refused_naming_the_key(ros_conte
             context=ros_context,
             parameter_overrides=[Parameter(k, value=v) for k, v in overrides.items()],
         )
+
+
+def test_the_image_links_keyboard_and_mouse_are_published_from_both_frame_kinds(
+    ros_context, tmp_path
+):
+    # the Referee plugin on the image link's port: its 0x0304 and A9 53 frames
+    pty = Pty(str(tmp_path / 'image_link'))
+    h = Harness(ros_context, pty.path, **{'referee.image_link': True})
+    try:
+        _keyboard_and_mouse(h, pty)
+    finally:
+        h.close()
+        pty.close()
+
+
+def _keyboard_and_mouse(h, pty):
+    assert wait_until(lambda: h.state() is LinkState.NO_DATA, WAIT)  # open, nothing yet
+
+    def sent(frame):
+        # again until the subscription has matched: what came before it is not replayed
+        pty.write(frame)
+        return h.keyboard and h.keyboard[-1].keys == keys
+
+    keys = 0x0091
+    assert wait_until(lambda: sent(F6), WAIT)  # 0x0304: mouse (100, -50, 0), left, W SHIFT E
+    k = h.keyboard[-1]
+    assert (k.mouse_x, k.mouse_y, k.left, k.right, k.keys) == (100, -50, True, False, 0x0091)
+    keys = 0x0220
+    assert wait_until(lambda: sent(V1), WAIT)  # A9 53: mouse (-7, 15, 0), left, CTRL + F
+    k = h.keyboard[-1]
+    assert (k.mouse_x, k.mouse_y, k.left, k.keys) == (-7, 15, True, 0x0220)

@@ -39,9 +39,10 @@ from rm_base.hardware.protocols import dbus
 from rm_base.hardware.protocols import referee as ref
 from rm_base.hardware.protocols.hipnuc import decode_frame, decode_payload
 from rm_base.host.node import RobotHost
-from rm_base.sim import SimImu, SimRemote
+from rm_base.sim import SimImageLink, SimImu, SimRemote
 from rm_plugins.imu.conversion import Mounting, reading_from_sample
 from rm_plugins.imu.message import imu_message
+from rm_plugins.manual.driver import Keyboard
 from rm_plugins.referee.messages import TOPICS as REFEREE_TOPICS
 
 from support.robot import _parameter, robot_parameters
@@ -85,6 +86,9 @@ class LockstepRobot:
             # closes (a pty that stays silent would be reopened every silence_reopen).
             host['manual.dr16.port'] = 'loop://'
             host['manual.dr16.silence_reopen'] = 0.0
+            if host.get('manual.image_link.port'):
+                host['manual.image_link.port'] = 'loop://'
+                host['manual.image_link.silence_reopen'] = 0.0
         self.bridge_parameters, self.host_parameters = bridge, host
         self._imu_topic = host.get('imu.topic', 'imu')
         self._imu_frame_id = host.get('imu.frame_id', 'gimbal_imu')
@@ -226,6 +230,13 @@ class LockstepRobot:
         elif isinstance(device, SimRemote):
             if self._manual is not None:
                 self._manual.on_remote_frame(dbus.decode(frame), self._clock.now().nanoseconds)
+        elif isinstance(device, SimImageLink):
+            if self._manual is not None:
+                k = ref.StatusDecoder(ref.ProtocolVersion.V2025).decode(ref.decode_frame(frame))
+                self._manual.on_keyboard(
+                    Keyboard(k.mouse_x, k.mouse_y, k.left, k.right, k.keys),
+                    self._clock.now().nanoseconds,
+                )
         elif 'referee' in self._played:
             self._on_referee_frame(device.version, frame)
 

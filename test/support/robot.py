@@ -84,8 +84,9 @@ def robot_parameters(
             bridge[f'sim.{device}.path'] = path
         if port in host:
             host[port] = path
-    if 'sim.remote.path' in bridge:
-        bridge['sim.remote.path'] = os.path.join(tmp, 'dr16')
+    for device in ('remote', 'image_link'):
+        if f'sim.{device}.path' in bridge:
+            bridge[f'sim.{device}.path'] = os.path.join(tmp, device)
     if plugins is not None:
         host['plugins'] = list(plugins)
         if 'manual' in plugins:

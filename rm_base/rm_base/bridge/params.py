@@ -43,6 +43,7 @@ Parameters (units in brackets; typed ones are declared by the node with a descri
                                                ``protocol_version``, limits...:
                                                ``rm_base.sim.referee``)
 ``sim.remote.<key>``                --         the DR16 receiver on a pty (``path``)
+``sim.image_link.<key>``            --         the image link's keyboard/mouse on a pty
 ==================================  =========  ============================================
 
 With ``sim: false`` the ``sim.*`` groups are ignored, so one robot config serves both.
@@ -85,6 +86,7 @@ SIM_BODY_PREFIX = 'sim.body.'
 SIM_IMU_PREFIX = 'sim.imu.'
 SIM_REFEREE_PREFIX = 'sim.referee.'
 SIM_REMOTE_PREFIX = 'sim.remote.'
+SIM_IMAGE_LINK_PREFIX = 'sim.image_link.'
 _JOINT_SIM_KEY = 'sim'
 
 
@@ -99,6 +101,7 @@ class SimSettings:
         imu: the one IMU's config, or None.
         referee: the simulated referee's config, or None.
         remote: the simulated DR16 receiver's config, or None.
+        image_link: the simulated image link's config, or None.
         motors: per joint, overrides of its simulated motor (nested).
     """
 
@@ -108,6 +111,7 @@ class SimSettings:
     imu: Mapping[str, Any] | None = None
     referee: Mapping[str, Any] | None = None
     remote: Mapping[str, Any] | None = None
+    image_link: Mapping[str, Any] | None = None
     motors: Mapping[str, Mapping[str, Any]] = dataclasses.field(default_factory=dict)
 
 
@@ -210,6 +214,7 @@ def settings_from_parameters(
     imu_flat: dict[str, Any] = {}
     referee_flat: dict[str, Any] = {}
     remote_flat: dict[str, Any] = {}
+    image_link_flat: dict[str, Any] = {}
     for name, value in open_params.items():
         if name.startswith(HARDWARE_PREFIXES):
             parts = name.split('.')
@@ -230,6 +235,8 @@ def settings_from_parameters(
             referee_flat[name.removeprefix(SIM_REFEREE_PREFIX)] = value
         elif name.startswith(SIM_REMOTE_PREFIX):
             remote_flat[name.removeprefix(SIM_REMOTE_PREFIX)] = value
+        elif name.startswith(SIM_IMAGE_LINK_PREFIX):
+            image_link_flat[name.removeprefix(SIM_IMAGE_LINK_PREFIX)] = value
         else:
             raise BridgeConfigError(
                 f'unknown parameter {name!r}; the bridge takes buses.*, joints.*, '
@@ -237,7 +244,7 @@ def settings_from_parameters(
                 'safety.*, '
                 'publish_rate, '
                 'diagnostics_rate, publish_frames, log_file, sim, sim.timing, sim.seed, '
-                'sim.body.*, sim.imu.*, sim.referee.*, sim.remote.*'
+                'sim.body.*, sim.imu.*, sim.referee.*, sim.remote.*, sim.image_link.*'
             )
     hardware = nest(hardware_flat)
     sim_on = bool(typed.get('sim', False))
@@ -280,6 +287,7 @@ def settings_from_parameters(
             imu=nest(imu_flat) if imu_flat else None,
             referee=nest(referee_flat) if referee_flat else None,
             remote=nest(remote_flat) if remote_flat else None,
+            image_link=nest(image_link_flat) if image_link_flat else None,
             motors={joint: nest(keys) for joint, keys in motors_flat.items()},
         )
     return BridgeSettings(

@@ -10,7 +10,7 @@ the simulator's output-shaft constants are rescaled by ``k = gear_ratio / defaul
 ``k²``). ``joints.<joint>.sim.*`` overrides anything (physics such as ``load_inertia``,
 driver settings such as ``overtemp_c``, or the simulated ``type``). ``sim.body`` and
 ``sim.imu`` become the world's ``body`` and its one IMU, ``sim.referee`` its referee,
-``sim.remote`` its DR16 receiver.
+``sim.remote`` its DR16 receiver, ``sim.image_link`` its image link.
 
 Hardware types without a simulated model of their own (``dm4340``, ``dm10010l``, a
 ``damiao`` of another model) are simulated as the model that shares their protocol
@@ -115,7 +115,8 @@ def world_config(hardware: HardwareConfig, sim: SimSettings) -> dict[str, Any]:
         sim: the simulator settings from the parameters.
 
     Returns:
-        A plain dict: timing, seed, channels, and body / imus / referee / remote if configured.
+        A plain dict: timing, seed, channels, and body / imus / referee / remote /
+        image_link if configured.
 
     Raises:
         BridgeConfigError: a joint has no simulated model, or two buses share a channel.
@@ -147,4 +148,6 @@ def world_config(hardware: HardwareConfig, sim: SimSettings) -> dict[str, Any]:
         config['referee'] = dict(sim.referee)
     if sim.remote is not None:
         config['remote'] = dict(sim.remote)
+    if sim.image_link is not None:
+        config['image_link'] = dict(sim.image_link)
     return config

@@ -11,6 +11,7 @@ from rm_base.sim.device_config import check_channel, device_from_config
 from rm_base.sim.devices import DeviceStats, SimDevice
 from rm_base.sim.errors import SimConfigError, SimError, SimLookupError, SimStateError
 from rm_base.sim.faults import Fault, FaultKind
+from rm_base.sim.image_link import SimImageLink
 from rm_base.sim.imu import SimImu, imu_from_config
 from rm_base.sim.joint import Joint
 from rm_base.sim.launcher import Launcher, Shot
@@ -46,6 +47,7 @@ __all__ = [
     'SimConfigError',
     'SimDevice',
     'SimError',
+    'SimImageLink',
     'SimImu',
     'SimLookupError',
     'SimReferee',

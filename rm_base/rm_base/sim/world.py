@@ -36,6 +36,7 @@ from rm_base.sim.device_config import check_channel, device_from_config
 from rm_base.sim.devices import SimDevice
 from rm_base.sim.errors import SimConfigError, SimLookupError, SimStateError
 from rm_base.sim.faults import Fault, FaultKind
+from rm_base.sim.image_link import SimImageLink, image_link_from_config
 from rm_base.sim.imu import SimImu, imu_from_config
 from rm_base.sim.referee import SimReferee, referee_from_config
 from rm_base.sim.remote import SimRemote, remote_from_config
@@ -43,7 +44,7 @@ from rm_base.sim.remote import SimRemote, remote_from_config
 LOG = logging.getLogger(__name__)
 
 #: A simulated device on a serial port.
-SerialDevice = SimImu | SimReferee | SimRemote
+SerialDevice = SimImu | SimReferee | SimRemote | SimImageLink
 
 _NS_PER_S = 1_000_000_000
 #: How far the real-time loop may fall behind before it stops catching up [ticks].
@@ -67,7 +68,7 @@ class SimWorld:
 
     Build one from a config with :meth:`from_config`, or piece by piece with
     :meth:`add_channel`, :meth:`add_motor`, :meth:`set_body`, :meth:`add_imu`,
-    :meth:`set_referee` and :meth:`set_remote`; then
+    :meth:`set_referee`, :meth:`set_remote` and :meth:`set_image_link`; then
     either :meth:`start` its real-time thread or drive it with :meth:`step`. (A world that a
     :class:`~rm_base.sim.bus.SimBus` builds is started by the bus.) Use it as a context
     manager (or call :meth:`close`) so the physics thread stops, the serial terminals close
@@ -83,6 +84,7 @@ class SimWorld:
         error: the exception that stopped the physics thread, if any.
         referee: the simulated referee system, or None.
         remote: the simulated DR16 receiver, or None.
+        image_link: the simulated image link (keyboard and mouse), or None.
         serial_sink: None (default): every frame of a serial device (IMU, referee) goes
             to its terminal; else ``serial_sink(device, frame)`` takes it instead, in the
             stepping thread (lockstep: a terminal delivers to its reader asynchronously).
@@ -126,6 +128,7 @@ class SimWorld:
         self.serial_sink: Callable[[SerialDevice, bytes], object] | None = None
         self.referee: SimReferee | None = None
         self.remote: SimRemote | None = None
+        self.image_link: SimImageLink | None = None
         self.lock = threading.RLock()
         self.body = RobotBody()
         self.overruns = 0
@@ -162,18 +165,21 @@ class SimWorld:
             imus: [{path: '/tmp/rm_sim_${ROS_DOMAIN_ID}/imu', mount: gimbal, rate_hz: 100}]
             referee: {path: '/tmp/rm_sim_${ROS_DOMAIN_ID}/referee', chassis_power_limit: 60}
             remote: {path: '/tmp/rm_sim_${ROS_DOMAIN_ID}/dr16'}
+            image_link: {path: '/tmp/rm_sim_${ROS_DOMAIN_ID}/image_link'}
 
         Motor dicts: see :func:`rm_base.sim.device_config.device_from_config`; IMU dicts:
         :func:`rm_base.sim.imu.imu_from_config`; the referee:
         :func:`rm_base.sim.referee.referee_from_config`; the DR16:
-        :func:`rm_base.sim.remote.remote_from_config`.
+        :func:`rm_base.sim.remote.remote_from_config`; the image link:
+        :func:`rm_base.sim.image_link.image_link_from_config`.
 
         Raises:
             SimConfigError: anything invalid; the partly built world is closed again.
         """
         config = load_config(config)
         allowed = {
-            'timing', 'tick_rate_hz', 'seed', 'channels', 'body', 'imus', 'referee', 'remote'
+            'timing', 'tick_rate_hz', 'seed', 'channels', 'body', 'imus', 'referee', 'remote',
+            'image_link',
         }
         unknown = sorted(set(config) - allowed)
         if unknown:
@@ -200,6 +206,8 @@ class SimWorld:
                 world.set_referee(config['referee'])
             if 'remote' in config:
                 world.set_remote(config['remote'])
+            if 'image_link' in config:
+                world.set_image_link(config['image_link'])
         except BaseException:
             world.close()
             raise
@@ -315,6 +323,20 @@ class SimWorld:
                 raise SimStateError('the world has a DR16 receiver already')
             self.remote = remote_from_config(config)
             return self.remote
+
+    def set_image_link(self, config: Mapping[str, Any]) -> SimImageLink:
+        """Create the image link (see :func:`~rm_base.sim.image_link.image_link_from_config`).
+
+        Raises:
+            SimConfigError: invalid config.
+            SimStateError: an image link exists already.
+        """
+        with self.lock:
+            self._check_open()
+            if self.image_link is not None:
+                raise SimStateError('the world has an image link already')
+            self.image_link = image_link_from_config(config)
+            return self.image_link
 
     # -- lookup ----------------------------------------------------------------------------
 
@@ -477,10 +499,10 @@ class SimWorld:
         if referee is not None:
             for frame in referee.tick(now, dt, shots):
                 self._serial_frames.append((referee, frame))
-        remote = self.remote
-        if remote is not None:
-            for frame in remote.tick(now):
-                self._serial_frames.append((remote, frame))
+        for operator in (self.remote, self.image_link):
+            if operator is not None:
+                for frame in operator.tick(now):
+                    self._serial_frames.append((operator, frame))
         for channel in self._channels.values():
             channel.flush_handed_over()
 
@@ -577,7 +599,7 @@ class SimWorld:
             self._closed = True
             for imu in self._imus.values():
                 imu.close()
-            for device in (self.referee, self.remote):
+            for device in (self.referee, self.remote, self.image_link):
                 if device is not None:
                     device.close()
             for channel in self._channels.values():

@@ -78,7 +78,8 @@ class ManualControl(PluginBase):
                 port=link_port,
             )
             self._image_link = DeviceLink(
-                self, settings, self._on_image_link, parser=ref.FrameParser(), name='image link'
+                self, settings, self._on_image_link, parser=ref.FrameParser(image_link=True),
+                name='image link',
             )
         self._keyboard_decoder = ref.StatusDecoder(ref.ProtocolVersion.V2025)
         self._publishers = {

@@ -16,6 +16,7 @@ from rm_base.hardware.protocols import referee as ref
 from rm_msgs.msg import (
     RefereeGameStatus,
     RefereeHurt,
+    RefereeKeyboardMouse,
     RefereePowerHeat,
     RefereeProjectiles,
     RefereeRobotStatus,
@@ -79,6 +80,22 @@ def hurt(r: ref.Hurt) -> RefereeHurt:
     return RefereeHurt(armor_id=r.armor_id, cause=r.cause)
 
 
+def keyboard_mouse(r: ref.KeyboardMouse) -> RefereeKeyboardMouse:
+    """0x0304 as a message."""
+    return RefereeKeyboardMouse(
+        mouse_x=r.mouse_x, mouse_y=r.mouse_y, mouse_wheel=r.mouse_wheel, left=r.left,
+        right=r.right, keys=r.keys,
+    )
+
+
+def remote_keyboard_mouse(r: ref.RemoteFrame) -> RefereeKeyboardMouse:
+    """The keyboard and mouse of an A9 53 remote frame (its sticks are the DR16's job)."""
+    return RefereeKeyboardMouse(
+        mouse_x=r.mouse_x, mouse_y=r.mouse_y, mouse_wheel=r.mouse_wheel, left=r.mouse_left,
+        right=r.mouse_right, keys=r.keys,
+    )
+
+
 #: Record type -> (topic, message type, converter).
 TOPICS: dict[type, tuple[str, type, Callable[[Any], Any]]] = {
     ref.GameStatus: ('referee/game_status', RefereeGameStatus, game_status),
@@ -87,4 +104,6 @@ TOPICS: dict[type, tuple[str, type, Callable[[Any], Any]]] = {
     ref.ShootData: ('referee/shot', RefereeShot, shot),
     ref.ProjectileAllowance: ('referee/projectiles', RefereeProjectiles, projectiles),
     ref.Hurt: ('referee/hurt', RefereeHurt, hurt),
+    ref.KeyboardMouse: ('referee/keyboard_mouse', RefereeKeyboardMouse, keyboard_mouse),
+    ref.RemoteFrame: ('referee/keyboard_mouse', RefereeKeyboardMouse, remote_keyboard_mouse),
 }

@@ -5,7 +5,9 @@ pyserial URL, ``~`` and ``${VAR}`` expanded) while the plugin is enabled. It spl
 byte stream into frames (resyncing on bad CRCs and split reads), decodes them for the
 configured ``protocol_version`` and publishes each report at once on
 ``referee/game_status``, ``referee/robot_status``, ``referee/power_heat``,
-``referee/shot``, ``referee/projectiles`` and ``referee/hurt`` (rm_msgs Referee*). The
+``referee/shot``, ``referee/projectiles``, ``referee/hurt`` and ``referee/keyboard_mouse``
+(rm_msgs Referee*; the image link's 0x0304 or ``A9 53`` frames: run a second instance on
+that port, 921600 baud, ``image_link: true``, to hear the operator's keyboard and mouse). The
 robot's other plugins get them in-process with no DDS hop (the outbox's loopback). A frame
 whose length fits no layout of the version, or a command this plugin does not read, is
 counted on /diagnostics and dropped.
@@ -36,6 +38,7 @@ class Referee(PluginBase):
     """The referee system's serial link, published as rm_msgs Referee* reports.
 
     Parameters (under ``<name>.``): ``port`` (required), ``baudrate`` (115200),
+    ``image_link`` (the port is the image link's: also its ``A9 53`` frames; false),
     ``protocol_version`` (``2024``, ``2025``, ``2026``), ``data_timeout`` (no good frame this
     long: the link is lost, 0.5 s), the reader's ``read_timeout``, ``reopen_backoff_min`` /
     ``_max``, ``silence_reopen`` and ``diagnostics_period``.
@@ -53,10 +56,12 @@ class Referee(PluginBase):
             'protocol_version', 2026, ge=2024, le=2026,
             description="the season's referee protocol (its frames' layouts): 2024, 2025, 2026",
         )))
-        self._publishers = {
-            record: (self.create_publisher(msg_type, topic, _QOS_DEPTH), convert)
-            for record, (topic, msg_type, convert) in TOPICS.items()
-        }
+        by_topic: dict[str, Any] = {}
+        self._publishers = {}
+        for record, (topic, msg_type, convert) in TOPICS.items():
+            if topic not in by_topic:
+                by_topic[topic] = self.create_publisher(msg_type, topic, _QOS_DEPTH)
+            self._publishers[record] = (by_topic[topic], convert)
         self._diagnostics = self.create_publisher(DiagnosticArray, '/diagnostics', 10)
         self._decoder = StatusDecoder(version)
         self._clock = self.node.get_clock()
@@ -64,8 +69,13 @@ class Referee(PluginBase):
         self._published = 0
         self._next_diagnostics_ns: int | None = None
         self._report_bad = 0
+        image_link = p.boolean(
+            'image_link', False,
+            description="the port is the image link's: also read its A9 53 remote frames",
+        )
         self._link = DeviceLink(
-            self, settings, self._on_frame, parser=FrameParser(), name='referee'
+            self, settings, self._on_frame, parser=FrameParser(image_link=image_link),
+            name='referee',
         )
         self.reader = self._link.reader
 
