@@ -235,3 +235,41 @@ def test_play_remaps_a_recorded_topic_onto_another(recording):
     expected = [(remapped if t == CMD_TOPIC else t, msg) for t, msg in recording['sent']]
     assert [(topic, msg) for _, topic, msg in received] == expected
 
+
+
+def test_play_with_clock_publishes_the_bag_time_while_it_plays(recording):
+    # --clock 50: the bag's time on /clock every 20 ms of playback, between messages too
+    from rosgraph_msgs.msg import Clock
+
+    recorded = read_bag(recording['bag'])
+    first, last = recorded[0][2], recorded[-1][2]
+    clocks, commands = [], []
+    with rclpy_context() as context:
+        graph = Graph(context)
+        try:
+            graph.node.create_subscription(
+                Clock, '/clock',
+                lambda m: clocks.append(m.clock.sec + m.clock.nanosec * 1e-9), 100)
+            graph.node.create_subscription(
+                ChassisCmd, CMD_TOPIC, lambda m: commands.append(clocks[-1] if clocks else None),
+                10)
+            player = rmcli('bag', 'play', str(recording['bag']), '--clock', '50',
+                           '--topics', CMD_TOPIC, '--wait-for-subscribers', str(TIMEOUT_S))
+            try:
+                graph.wait(lambda: player.poll() is not None)
+                graph.wait(lambda: False, timeout=0.2)  # the last messages in flight
+            finally:
+                out, err = (stop_process(player, timeout=TIMEOUT_S) if player.poll() is None
+                            else player.communicate())
+            assert player.returncode == 0, f'{out}\n{err}'
+        finally:
+            graph.close()
+    # ~1.15 s at 50 Hz is ~58 ticks; generous for a loaded machine
+    assert len(clocks) >= 20, clocks
+    assert clocks == sorted(clocks)
+    assert first - 0.001 <= clocks[0] and clocks[-1] <= last + 0.1
+    # each command arrived with the clock at about its recording time
+    cmd_times = [t for topic, _, t in recorded if topic == CMD_TOPIC]
+    assert len(commands) == len(cmd_times)
+    for clock_then, stamp in zip(commands, cmd_times, strict=True):
+        assert clock_then is not None and abs(clock_then - stamp) < 0.1

@@ -12,8 +12,12 @@ DDS on localhost) to see them.
 ``--remap FROM:=TO`` publishes a recorded topic under another name (a teleop bag recorded on
 /cmd_vel replayed as /vel_cmd), as ros2 bag play's --remap does for topic names.
 
-Not implemented from ros2 bag play: keyboard controls, --clock, node-name remapping,
-services, QoS override files, --playback-duration/until.
+``--clock [HZ]`` also publishes the bag's time on /clock (rosgraph_msgs/Clock, 40 Hz by
+default, as ros2 bag play), advancing at ``--rate``, so nodes run with ``use_sim_time``
+see the time the messages were recorded at: a stamped command replayed stays fresh.
+
+Not implemented from ros2 bag play: keyboard controls, node-name remapping, services, QoS
+override files, --playback-duration/until.
 """
 
 from __future__ import annotations
@@ -30,6 +34,8 @@ from .interfaces import get_message_class
 from .options import nonnegative_float, positive_float
 
 DEFAULT_WAIT_FOR_SUBSCRIBERS_S = 5.0
+DEFAULT_CLOCK_HZ = 40.0
+CLOCK_TOPIC = '/clock'
 _ACK_TIMEOUT_S = 2.0
 _POLL_S = 0.02
 
@@ -84,6 +90,16 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         help='publish a recorded topic under another name, e.g. /cmd_vel:=/vel_cmd',
     )
     parser.add_argument(
+        '--clock',
+        type=positive_float,
+        nargs='?',
+        const=DEFAULT_CLOCK_HZ,
+        default=None,
+        metavar='HZ',
+        help=f'publish the bag time on {CLOCK_TOPIC} at HZ (default {DEFAULT_CLOCK_HZ:g}) '
+        'for nodes with use_sim_time',
+    )
+    parser.add_argument(
         '--wait-for-subscribers',
         type=nonnegative_float,
         metavar='SECONDS',
@@ -118,9 +134,14 @@ def run(args: argparse.Namespace) -> int:
             if not publishers:
                 raise CliError(f'nothing to play in {path}: no topic has a known message type')
             playable = [c for c in connections if c.topic in publishers]
+            clock = None
+            if args.clock is not None:
+                clock = ClockPublisher(node, args.clock)
             _wait_for_subscribers(publishers.values(), args.wait_for_subscribers, stop)
             options = PlayOptions(args.rate, args.loop, args.start_offset, args.delay)
-            played = play(reader, path, playable, publishers, options=options, stop=stop)
+            played = play(
+                reader, path, playable, publishers, options=options, stop=stop, clock=clock
+            )
             for publisher in publishers.values():
                 _flush(publisher)
     print(f'Played {played} messages on {len(publishers)} topics')
@@ -202,6 +223,25 @@ def _wait_for_subscribers(publishers, timeout_s: float, stop) -> None:
         time.sleep(_POLL_S)
 
 
+class ClockPublisher:
+    """Publishes a time on /clock (rosgraph_msgs/Clock) every ``period_ns`` of wall time."""
+
+    def __init__(self, node, rate_hz: float) -> None:
+        from rclpy.qos import QoSProfile
+        from rosgraph_msgs.msg import Clock
+
+        self._msg_type = Clock
+        # reliable, depth 1: matches rclpy's best-effort /clock subscription and a reliable one
+        self._publisher = node.create_publisher(Clock, CLOCK_TOPIC, QoSProfile(depth=1))
+        self.period_ns = round(1e9 / rate_hz)
+
+    def publish(self, bag_ns: int) -> None:
+        """Say that it is bag_ns [ns since the epoch]."""
+        msg = self._msg_type()
+        msg.clock.sec, msg.clock.nanosec = divmod(int(bag_ns), 1_000_000_000)
+        self._publisher.publish(msg)
+
+
 @dataclass(frozen=True)
 class PlayOptions:
     """How to play: speed, repetition and where to start."""
@@ -212,7 +252,9 @@ class PlayOptions:
     delay_s: float = 0.0  # wait before each pass [s]
 
 
-def play(reader, path: Path, connections, publishers, *, options: PlayOptions, stop) -> int:
+def play(
+    reader, path: Path, connections, publishers, *, options: PlayOptions, stop, clock=None
+) -> int:
     """Publish the bag's messages with their relative timing; return how many were sent.
 
     Args:
@@ -222,6 +264,7 @@ def play(reader, path: Path, connections, publishers, *, options: PlayOptions, s
         publishers: topic -> object with ``publish(bytes)`` (an rclpy publisher).
         options: rate, loop, start offset and delay.
         stop: threading.Event that ends playback at once when set.
+        clock: a ClockPublisher to give the bag time to (``--clock``), or None.
 
     Raises:
         BagError: the bag is damaged part-way.
@@ -239,23 +282,47 @@ def play(reader, path: Path, connections, publishers, *, options: PlayOptions, s
             start_ns=start_ns,
             rate=options.rate,
             stop=stop,
+            clock=clock,
         )
         if not options.loop:
             break
     return played
 
 
-def _play_once(reader, path, connections, *, publishers, start_ns: int, rate: float, stop) -> int:
-    """Publish every message from start_ns on at its relative time; return how many."""
+def _play_once(
+    reader, path, connections, *, publishers, start_ns: int, rate: float, stop, clock=None
+) -> int:
+    """Publish every message from start_ns on at its relative time; return how many.
+
+    With a clock, the bag time (start_ns plus the time played, times rate) also goes out
+    every clock period, between messages too.
+    """
     count = 0
     t0 = time.monotonic_ns()
+    next_tick = t0
+
+    def tick(now: int) -> int:
+        """Publish the clock if due; return when it is next due."""
+        nonlocal next_tick
+        if now >= next_tick:
+            clock.publish(start_ns + round((now - t0) * rate))
+            next_tick = max(next_tick + clock.period_ns, now)
+        return next_tick
+
     for connection, stamp_ns, raw in read_messages(reader, path, connections, start=start_ns):
         due_ns = t0 + (stamp_ns - start_ns) / rate
-        remaining_s = (due_ns - time.monotonic_ns()) * 1e-9
-        if remaining_s > 0 and stop.wait(remaining_s):
-            break
-        if stop.is_set():
-            break
+        while True:
+            now = time.monotonic_ns()
+            wake = due_ns if clock is None else min(due_ns, tick(now))
+            remaining_s = (wake - now) * 1e-9
+            if remaining_s > 0 and stop.wait(remaining_s):
+                return count
+            if stop.is_set():
+                return count
+            if time.monotonic_ns() >= due_ns:
+                break
+        if clock is not None:
+            tick(time.monotonic_ns())
         publishers[connection.topic].publish(bytes(raw))
         count += 1
     return count

@@ -205,3 +205,38 @@ def test_remapping_two_types_onto_one_topic_is_refused_before_ros_starts(write_b
     ])
     assert main(['bag', 'play', str(bag), '--remap', '/a:=/b']) == 1
     assert 'would both be published on /b' in error_line(capsys)
+
+
+# --- --clock -----------------------------------------------------------------------------------
+
+
+class FakeClock:
+    period_ns = 10_000_000  # 100 Hz
+
+    def __init__(self, sent):
+        self.sent = sent
+
+    def publish(self, bag_ns):
+        self.sent.append((time.monotonic(), 'clock', bag_ns))
+
+
+def test_with_a_clock_the_bag_time_goes_out_between_messages_and_keeps_up_with_them(
+    five_messages
+):
+    sent = []
+    stop = threading.Event()
+    with open_bag(five_messages) as reader:
+        publishers = {'/chatter': FakePublisher(sent, stop, 100)}
+        play(reader, five_messages, reader.connections, publishers,
+             options=PlayOptions(rate=2.0), stop=stop, clock=FakeClock(sent))
+    clocks = [entry[2] for entry in sent if len(entry) == 3]
+    assert clocks == sorted(clocks) and S <= clocks[0] < S + 5_000_000
+    assert len(clocks) >= 5  # 80 ms of playback at 100 Hz (wall-time: a loose bound)
+    # the message i (recorded at S + 40 ms * i) goes out when the clock has reached it
+    last_clock = None
+    for entry in sent:
+        if len(entry) == 3:
+            last_clock = entry[2]
+        else:
+            index = int(entry[1][1])
+            assert last_clock >= S + index * 40_000_000
