@@ -115,7 +115,11 @@ def joint_types() -> list[str]:
         f'({", ".join(f"`{k}`" for k in sorted(COMMON_JOINT_KEYS - {"name"}))}) and the '
         "options of its type's family (docs/PROTOCOLS.md has what they mean). With "
         '`sim: true` a joint is simulated as the model below, unless `joints.<joint>.sim.type` '
-        'says otherwise.\n',
+        "says otherwise. A joint's `velocity_pid` and `position_pid` take the fields of "
+        '`rm_base.control.PidGains` (`kp`, `ki`, `kd`, `output_limit`, `integral_limit`, '
+        '`integral_separation`, `deadband`, `derivative_tau_s`), or with `form: incremental` '
+        "the incremental PID's (`kp`, `ki`, `kd`, `output_limit`) and an optional tracking "
+        'differentiator on the setpoint (`td_acceleration_limit`, `td_filter_factor`).\n',
         '| type | family | options | simulated as |',
         '|---|---|---|---|',
     ]

@@ -23,6 +23,7 @@ from rm_base.control.incremental_pid import IncrementalPid, IncrementalPidGains
 from rm_base.control.jam_detector import JamDetector, JamDetectorParams
 from rm_base.control.lookup import LookupTable
 from rm_base.control.pid import Pid, PidGains
+from rm_base.control.pid_form import IncrementalPidConfig, PidConfig, build_pid, pid_config
 from rm_base.control.power_limit import (
     ChassisPowerModel,
     PowerLimitResult,
@@ -45,6 +46,7 @@ __all__ = [
     'FollowParams',
     'GyroParams',
     'IncrementalPid',
+    'IncrementalPidConfig',
     'IncrementalPidGains',
     'JamDetector',
     'JamDetectorParams',
@@ -52,6 +54,7 @@ __all__ = [
     'LowPassFilter',
     'MovingAverage',
     'Pid',
+    'PidConfig',
     'PidGains',
     'PowerLimitResult',
     'RampLimiter',
@@ -60,10 +63,12 @@ __all__ = [
     'TrackingDifferentiator',
     'TwistParams',
     'TwistWaveform',
+    'build_pid',
     'estimate_power',
     'fhan',
     'fit_power_model',
     'limit_power',
+    'pid_config',
     'power_budget',
     'power_limit_scale',
     'ramp_step',

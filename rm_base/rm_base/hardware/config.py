@@ -48,7 +48,8 @@ The schema, with units (every key optional unless marked *required*)::
 
 PID sub-dicts take the fields of :class:`rm_base.control.PidGains` (``kp``, ``ki``, ``kd``,
 ``output_limit``, ``integral_limit``, ``integral_separation``, ``deadband``,
-``derivative_tau_s``).
+``derivative_tau_s``), or with ``form: incremental`` those of the incremental PID with a
+tracking differentiator (:mod:`rm_base.control.pid_form`).
 """
 
 from __future__ import annotations
@@ -59,7 +60,7 @@ from collections.abc import Mapping
 from types import MappingProxyType
 from typing import Any
 
-from rm_base.control import PidGains
+from rm_base.control import PidConfig, PidGains, pid_config
 from rm_base.errors import ConfigError
 from rm_base.hardware.errors import HardwareConfigError
 
@@ -96,18 +97,19 @@ def _mapping(where: str, value: Any) -> Mapping[str, Any]:
     return value
 
 
-def pid_gains(where: str, data: Any) -> PidGains:
-    """Build :class:`PidGains` from a dict, with a clear error naming ``where``.
+def pid_gains(where: str, data: Any) -> PidConfig:
+    """A loop's PID config from a dict (``form``: positional or incremental).
+
+    The error names ``where``.
 
     Raises:
-        HardwareConfigError: not a mapping, unknown field or invalid value.
+        HardwareConfigError: not a mapping, unknown form or field, or an invalid value.
     """
     if data is None:
         return PidGains()
     data = _mapping(where, data)
-    _check_keys(where, data, {f.name for f in dataclasses.fields(PidGains)})
     try:
-        return PidGains(**data)
+        return pid_config(data)
     except (ConfigError, TypeError) as err:
         raise HardwareConfigError(f'{where}: {err}') from err
 
@@ -238,8 +240,8 @@ class JointConfig:
     max_velocity: float | None = None
     torque_constant: float | None = None
     temperature_limit: float | None = None
-    velocity_pid: PidGains = dataclasses.field(default_factory=PidGains)
-    position_pid: PidGains = dataclasses.field(default_factory=PidGains)
+    velocity_pid: PidConfig = dataclasses.field(default_factory=PidGains)
+    position_pid: PidConfig = dataclasses.field(default_factory=PidGains)
     options: Mapping[str, Any] = dataclasses.field(default_factory=lambda: _EMPTY)
 
     @classmethod

@@ -39,7 +39,7 @@ from typing import Any, ClassVar, NamedTuple
 
 import can
 
-from rm_base.control import Pid
+from rm_base.control import build_pid
 from rm_base.hardware.config import JointConfig, SafetyConfig
 from rm_base.hardware.errors import CommandRejectedError, HardwareConfigError, ProtocolError
 from rm_base.joints import InvalidTargetError, JointState, JointTarget, Mode, check_target
@@ -240,8 +240,8 @@ class Actuator(abc.ABC):
         self._feedback_timeout_ns = int(safety.feedback_timeout_s * 1e9)
         self._command_timeout_ns = int(safety.command_timeout_s * 1e9)
         self._temperature_resume = self.temperature_limit - safety.temperature_hysteresis_c
-        self._velocity_pid = Pid(config.velocity_pid)
-        self._position_pid = Pid(config.position_pid)
+        self._velocity_pid = build_pid(config.velocity_pid)
+        self._position_pid = build_pid(config.position_pid)
         # shared state (single assignment each)
         self._feedback: Feedback | None = None
         self._command: JointCommand | None = None
