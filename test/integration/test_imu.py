@@ -280,9 +280,12 @@ def test_euler_only_legacy_frames_give_an_orientation(run, tmp_path):
     try:
         assert wait_until(lambda: h.state() is ImuState.NO_DATA, WAIT)
         # Legacy 0xD0 Euler (0.01 deg pitch/roll, 0.1 deg yaw) + 0xB0 gyro (0.1 deg/s).
-        payload = hipnuc.encode_legacy(euler=(0.0, 0.0, math.radians(30.0)), gyr=(0, 0, 0.1))
+        payload = hipnuc.encode_legacy(euler=(0.0, 0.0, math.radians(30.0)), gyr=(0, 0, 0.1),
+                                       user_id=7)
         port.write(hipnuc.encode_frame(payload))
         assert wait_until(lambda: len(h.imu) == 1, WAIT)
+        # the unit's user id (0x90) is reported on /diagnostics
+        assert wait_until(lambda: (s := h.imu_status()) is not None and s['user_id'] == '7', WAIT)
         o = h.imu[0].orientation
         assert (o.z, o.w) == pytest.approx((math.sin(math.radians(15)), math.cos(math.radians(15))))
         assert h.imu[0].linear_acceleration_covariance[0] == -1.0  # not provided

@@ -128,6 +128,7 @@ class Hi220(PluginBase):
         self._lock = threading.Lock()
         self._device_clock = DeviceClock()
         self._published = 0
+        self._user_id: int | None = None  # the unit's user id (0x90), when it sends it
         self._next_diagnostics_ns: int | None = None
         self._report_published = 0
         self._report_ns: int | None = None
@@ -164,6 +165,9 @@ class Hi220(PluginBase):
 
     def _on_sample(self, sample: ImuSample) -> None:
         """Convert and publish one sample (called in the reader thread)."""
+        if sample.user_id is not None and sample.user_id != self._user_id:
+            with self._lock:
+                self._user_id = sample.user_id
         reading = reading_from_sample(sample, self.mounting)
         if (
             reading.orientation is None
@@ -190,7 +194,7 @@ class Hi220(PluginBase):
     def _publish_diagnostics(self, now, stats: ReaderStats) -> None:
         state = LinkState(self.state.value)
         with self._lock:
-            published = self._published
+            published, user_id = self._published, self._user_id
         now_ns = now.nanoseconds
         rate = math.nan
         if self._report_ns is not None and now_ns > self._report_ns:
@@ -201,7 +205,10 @@ class Hi220(PluginBase):
         status = link_status(
             f'{self.node.get_name()}: {self.name}', self._settings, state, stats,
             reason=self.reason, new_bad=new_bad,
-            values={'published': published, 'rate [Hz]': f'{rate:.1f}'},
+            values={
+                'published': published, 'rate [Hz]': f'{rate:.1f}',
+                'user_id': 'not sent' if user_id is None else user_id,
+            },
         )
         msg = DiagnosticArray()
         msg.header.stamp = now.to_msg()
