@@ -14,9 +14,11 @@ runs at the new time (feedback, due plugins, update, pack, send: ``CanBridgeNode
 Commands are handed to the plugins through the same callbacks their subscriptions run
 (``RobotHost.inject``), stamped on the simulated clock; what a plugin publishes reaches
 the plugins subscribed to it at once (outbox loopback); the simulated Hi220's frames
-are decoded as the Hi220 plugin decodes them and handed to /imu's subscribers, and the
+are decoded as the Hi220 plugin decodes them and handed to /imu's subscribers, the
 simulated referee's frames (when the config has one) as the Referee plugin decodes them and
-handed to the subscribers of its topics. No
+handed to the subscribers of its topics, and the simulated DR16's and image link's frames
+decoded and handed to the manual-control plugin as its readers would (rm_manual's plugin,
+run inside rm_robot here so it steps with the loop). No
 executor spins, nothing waits on DDS or a terminal: the same inputs give the same numbers
 on every run, whatever the machine's load.
 """
@@ -62,7 +64,8 @@ class LockstepRobot:
         plugins: plugin instances to run. ``imu`` (the Hi220) and ``referee`` are played
             by the harness: it decodes the simulated IMU's (referee's) frames as the plugin
             does and hands them to the subscribers of its topics; without it nothing is
-            published on them.
+            published on them. ``manual`` (rm_manual's plugin) runs in rm_robot, fed the
+            simulated DR16's and image link's frames.
         overrides: ``{'can_bridge' | 'rm_robot': {flat parameter: value}}`` applied last.
     """
 
