@@ -126,14 +126,14 @@ def test_the_image_links_keyboard_and_mouse_drive_as_the_remotes_do(robot):
                 mouse=(0, 0, 0), mouse_left=False)
     robot.run(0.5)
     link.hold(keys=int(Key.A), mouse_x=50)  # strafe left, the mouse turns the gimbal right
-    link.connect()
+    link.switch_on()
     x0, y0, yaw0 = robot.world.body.x, robot.world.body.y, world_yaw(robot)
     robot.run(1.0)
     assert states(robot)[:2] == ('FOLLOW', 'RATE')
     # 2 m/s to the gimbal's left, on an arc as the gimbal turns right at 1 rad/s
     assert math.hypot(robot.world.body.x - x0, robot.world.body.y - y0) > 1.0
     assert world_yaw(robot) - yaw0 < -0.6
-    link.disconnect()  # its keys stop counting after image_link.data_timeout
+    link.switch_off()  # its keys stop counting after image_link.data_timeout
     robot.run(1.0)
     y1 = robot.world.body.y
     robot.run(0.5)

@@ -116,6 +116,8 @@ class SimReferee:
             if device.powered:
                 power += device.model.electrical_power
         self._energy_j += max(0.0, power) * dt
+        if not shots and now_ns < self._next_step_ns:
+            return []  # most ticks: the rules (and so the outputs) only change on these
         records: list[Any] = [self.rules.shot(shot.time_ns, shot.speed_mps) for shot in shots]
         if now_ns >= self._next_step_ns:
             period_s = (now_ns - self._next_step_ns + STEP_NS) / _NS_PER_S

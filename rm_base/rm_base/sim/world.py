@@ -1,7 +1,8 @@
-"""The simulated world: CAN channels with their motors, the robot body, IMUs, and the clock.
+"""The simulated world: CAN channels with their motors, the robot body, serial devices, the clock.
 
 Why one module: the clock and its stepping, which every part of the world shares; channels,
-devices and the body are modules of their own.
+devices, the body and the serial devices (rm_base.sim.serial_devices) are modules of their
+own.
 
 One :class:`SimWorld` owns everything that moves together. It advances in fixed ticks
 (1 kHz by default), either
@@ -36,15 +37,13 @@ from rm_base.sim.device_config import check_channel, device_from_config
 from rm_base.sim.devices import SimDevice
 from rm_base.sim.errors import SimConfigError, SimLookupError, SimStateError
 from rm_base.sim.faults import Fault, FaultKind
-from rm_base.sim.image_link import SimImageLink, image_link_from_config
-from rm_base.sim.imu import SimImu, imu_from_config
-from rm_base.sim.referee import SimReferee, referee_from_config
-from rm_base.sim.remote import SimRemote, remote_from_config
+from rm_base.sim.image_link import SimImageLink
+from rm_base.sim.imu import SimImu
+from rm_base.sim.referee import SimReferee
+from rm_base.sim.remote import SimRemote
+from rm_base.sim.serial_devices import SerialDevice, SerialDevices
 
 LOG = logging.getLogger(__name__)
-
-#: A simulated device on a serial port.
-SerialDevice = SimImu | SimReferee | SimRemote | SimImageLink
 
 _NS_PER_S = 1_000_000_000
 #: How far the real-time loop may fall behind before it stops catching up [ticks].
@@ -82,12 +81,8 @@ class SimWorld:
         body: the robot body (an empty one until :meth:`set_body`).
         overruns: times the real-time loop fell too far behind and skipped ahead.
         error: the exception that stopped the physics thread, if any.
-        referee: the simulated referee system, or None.
-        remote: the simulated DR16 receiver, or None.
-        image_link: the simulated image link (keyboard and mouse), or None.
-        serial_sink: None (default): every frame of a serial device (IMU, referee) goes
-            to its terminal; else ``serial_sink(device, frame)`` takes it instead, in the
-            stepping thread (lockstep: a terminal delivers to its reader asynchronously).
+        serial: the devices on serial ports (:mod:`rm_base.sim.serial_devices`); also as
+            :attr:`referee`, :attr:`remote`, :attr:`image_link`, :attr:`serial_sink`.
     """
 
     def __init__(
@@ -125,10 +120,7 @@ class SimWorld:
             raise SimConfigError(f'seed must be an int, got {seed!r}')
         self.period_ns = round(_NS_PER_S / tick_rate_hz)
         self.time_ns = 0
-        self.serial_sink: Callable[[SerialDevice, bytes], object] | None = None
-        self.referee: SimReferee | None = None
-        self.remote: SimRemote | None = None
-        self.image_link: SimImageLink | None = None
+        self.serial = SerialDevices()
         self.lock = threading.RLock()
         self.body = RobotBody()
         self.overruns = 0
@@ -139,8 +131,6 @@ class SimWorld:
         self._channels: dict[str, SimChannel] = {}
         self._devices: dict[str, SimDevice] = {}
         self._device_channel: dict[str, SimChannel] = {}
-        self._imus: dict[str, SimImu] = {}
-        self._serial_frames: list[tuple[SerialDevice, bytes]] = []
         self._thread: threading.Thread | None = None
         self._stop = threading.Event()
         self._bus_refs = 0
@@ -170,8 +160,8 @@ class SimWorld:
         Motor dicts: see :func:`rm_base.sim.device_config.device_from_config`; IMU dicts:
         :func:`rm_base.sim.imu.imu_from_config`; the referee:
         :func:`rm_base.sim.referee.referee_from_config`; the DR16:
-        :func:`rm_base.sim.remote.remote_from_config`; the image link:
-        :func:`rm_base.sim.image_link.image_link_from_config`.
+        the DR16 (``remote``) and the image link: ``{path}``
+        (:func:`rm_base.sim.operator_link.link_from_config`).
 
         Raises:
             SimConfigError: anything invalid; the partly built world is closed again.
@@ -264,15 +254,14 @@ class SimWorld:
 
         Raises:
             SimConfigError: invalid config or unknown motor names.
+            SimStateError: a referee judges the body already.
         """
         with self.lock:
             self._check_open()
-            if self.referee is not None:
-                raise SimStateError('set the body before the referee (it judges the body)')
-            self.body = body_from_config(config, self._devices)
-            for imu in self._imus.values():
-                imu.body = self.body
-            return self.body
+            body = body_from_config(config, self._devices)
+            self.serial.set_body(body)
+            self.body = body
+            return body
 
     def add_imu(self, config: Mapping[str, Any]) -> SimImu:
         """Create an IMU on a pseudo-terminal (see :func:`~rm_base.sim.imu.imu_from_config`).
@@ -282,61 +271,56 @@ class SimWorld:
         """
         with self.lock:
             self._check_open()
-            name = config.get('name', 'imu') if isinstance(config, Mapping) else None
-            if name in self._imus:
-                raise SimConfigError(f'two IMUs are named {name!r}')
-            imu = imu_from_config(config, self.body)
-            self._imus[imu.name] = imu
-            return imu
+            return self.serial.add_imu(config, self.body)
 
     def set_referee(self, config: Mapping[str, Any]) -> SimReferee:
-        """Create the referee system (see :func:`~rm_base.sim.referee.referee_from_config`).
+        """Create the referee system, judging the body set before.
 
-        It judges the body set before: the wheels are its chassis output, yaw and pitch its
-        gimbal output, the body's shooter its shooter output.
-
-        Raises:
-            SimConfigError: invalid config.
-            SimStateError: a referee exists already.
+        See :meth:`rm_base.sim.serial_devices.SerialDevices.set_referee`.
         """
         with self.lock:
             self._check_open()
-            if self.referee is not None:
-                raise SimStateError('the world has a referee already')
-            body = self.body
-            gimbal = [j.device for j in (body.yaw_joint, body.pitch_joint) if j is not None]
-            self.referee = referee_from_config(
-                config, chassis=body.wheels, gimbal=gimbal, launcher=body.launcher
-            )
-            return self.referee
+            return self.serial.set_referee(config, self.body)
 
     def set_remote(self, config: Mapping[str, Any]) -> SimRemote:
-        """Create the DR16 receiver (see :func:`~rm_base.sim.remote.remote_from_config`).
-
-        Raises:
-            SimConfigError: invalid config.
-            SimStateError: a receiver exists already.
-        """
+        """Create the DR16 receiver (:class:`~rm_base.sim.remote.SimRemote`) from ``{path}``."""
         with self.lock:
             self._check_open()
-            if self.remote is not None:
-                raise SimStateError('the world has a DR16 receiver already')
-            self.remote = remote_from_config(config)
-            return self.remote
+            return self.serial.set_remote(config)
 
     def set_image_link(self, config: Mapping[str, Any]) -> SimImageLink:
-        """Create the image link (see :func:`~rm_base.sim.image_link.image_link_from_config`).
-
-        Raises:
-            SimConfigError: invalid config.
-            SimStateError: an image link exists already.
-        """
+        """Create the image link (:class:`~rm_base.sim.image_link.SimImageLink`), ``{path}``."""
         with self.lock:
             self._check_open()
-            if self.image_link is not None:
-                raise SimStateError('the world has an image link already')
-            self.image_link = image_link_from_config(config)
-            return self.image_link
+            return self.serial.set_image_link(config)
+
+    @property
+    def referee(self) -> SimReferee | None:
+        """The simulated referee system, or None."""
+        return self.serial.referee
+
+    @property
+    def remote(self) -> SimRemote | None:
+        """The simulated DR16 receiver, or None."""
+        return self.serial.remote
+
+    @property
+    def image_link(self) -> SimImageLink | None:
+        """The simulated image link (keyboard and mouse), or None."""
+        return self.serial.image_link
+
+    @property
+    def serial_sink(self) -> Callable[[SerialDevice, bytes], object] | None:
+        """Who takes the serial devices' frames.
+
+        None (default): their terminals; else ``serial_sink(device, frame)``, in the
+        stepping thread (lockstep).
+        """
+        return self.serial.sink
+
+    @serial_sink.setter
+    def serial_sink(self, sink: Callable[[SerialDevice, bytes], object] | None) -> None:
+        self.serial.sink = sink
 
     # -- lookup ----------------------------------------------------------------------------
 
@@ -382,10 +366,7 @@ class SimWorld:
         Raises:
             SimLookupError: no such IMU.
         """
-        try:
-            return self._imus[name]
-        except KeyError:
-            raise SimLookupError(f'no IMU {name!r}; IMUs: {sorted(self._imus)}') from None
+        return self.serial.imu(name)
 
     # -- faults ------------------------------------------------------------------------------
 
@@ -455,8 +436,8 @@ class SimWorld:
                 raise SimStateError('the real-time physics thread owns the clock; stop() it first')
             for _ in range(n):
                 self._tick()
-            frames = self._take_serial_frames()
-        self._write_serial_frames(frames)
+            frames = self.serial.take()
+        self.serial.write(frames)
 
     def advance(self, seconds: float) -> None:
         """Advance the world by ``seconds`` [s], rounded to whole ticks.
@@ -489,37 +470,10 @@ class SimWorld:
             channel._emit(now)
         # a device's counter runs on real time while the physics runs in real time
         device_ns = time.perf_counter_ns() if self.running else now
-        for imu in self._imus.values():
-            frame = imu.poll(now, device_ns)
-            if frame is not None:
-                self._serial_frames.append((imu, frame))
         launcher = body.launcher
-        shots = launcher.update(now) if launcher is not None else ()
-        referee = self.referee
-        if referee is not None:
-            for frame in referee.tick(now, dt, shots):
-                self._serial_frames.append((referee, frame))
-        for operator in (self.remote, self.image_link):
-            if operator is not None:
-                for frame in operator.tick(now):
-                    self._serial_frames.append((operator, frame))
+        self.serial.tick(now, device_ns, dt, launcher.update(now) if launcher else ())
         for channel in self._channels.values():
             channel.flush_handed_over()
-
-    # The serial frames of a tick are built under the lock (they read the body) but
-    # written to their terminals after it is released: a terminal write is a system call
-    # that can take milliseconds on a loaded machine, and every bus send waits for this lock.
-    def _take_serial_frames(self) -> list[tuple[SerialDevice, bytes]]:
-        frames, self._serial_frames = self._serial_frames, []
-        return frames
-
-    def _write_serial_frames(self, frames: list[tuple[SerialDevice, bytes]]) -> None:
-        sink = self.serial_sink
-        for device, frame in frames:
-            if sink is None:
-                device.write(frame)
-            else:
-                sink(device, frame)
 
     # -- real time ---------------------------------------------------------------------------
 
@@ -561,8 +515,8 @@ class SimWorld:
             try:
                 with self.lock:
                     self._tick()
-                    frames = self._take_serial_frames()
-                self._write_serial_frames(frames)
+                    frames = self.serial.take()
+                self.serial.write(frames)
             except Exception as error:
                 self.error = error
                 if not self._on_error(error):
@@ -597,11 +551,7 @@ class SimWorld:
             if self._closed:
                 return
             self._closed = True
-            for imu in self._imus.values():
-                imu.close()
-            for device in (self.referee, self.remote, self.image_link):
-                if device is not None:
-                    device.close()
+            self.serial.close()
             for channel in self._channels.values():
                 release_channel(channel)
 

@@ -1,4 +1,4 @@
-"""The simulated image link: silent until the client connects, then 0x0304 at 30 Hz."""
+"""The simulated image link: silent until switched on (a client), then 0x0304 at 30 Hz."""
 
 import pytest
 from rm_base.hardware.protocols import referee as ref
@@ -21,13 +21,13 @@ def test_it_sends_what_the_operator_does_30_times_a_second_once_connected(world)
     world.advance(0.5)
     assert frames == []
     held = world.image_link.hold(mouse_x=-12, keys=0x0221, left=True)
-    world.image_link.connect()
+    world.image_link.switch_on()
     world.advance(1.0)
     assert len(frames) == 30
     parser, decoder = ref.FrameParser(), ref.StatusDecoder(ref.ProtocolVersion.V2025)
     records = [decoder.decode(f) for f in parser.feed(b''.join(frames))]
     assert set(records) == {held}
-    world.image_link.disconnect()
+    world.image_link.switch_off()
     world.advance(0.5)
     assert len(frames) == 30
 
