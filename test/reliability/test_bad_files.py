@@ -167,8 +167,8 @@ BRIDGE_OK = {
     ('change', 'match'),
     [
         ({'joints.w.bus': None}, r'joints\.w\.bus is required'),  # missing key
-        ({'joints.w.id': 'one'}, r'joints\.w\.id must be an integer'),
-        ({'joints.w.max_effort': 'lots'}, r'joints\.w\.max_effort must be a finite number'),
+        ({'joints.w.id': 'one'}, r"joints\.w\.id must be integer; got str 'one'"),
+        ({'joints.w.max_effort': 'lots'}, r'joints\.w\.max_effort must be double \[N·m\]; got str'),
         ({'safety.command_timeout_s': 'soon'}, r"'safety\.command_timeout_s' must be double"),
         ({'sim': False, 'buses.can0.interface': None}, r'buses\.can0\.interface is required'),
     ],

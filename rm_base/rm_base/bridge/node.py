@@ -6,6 +6,7 @@ and its ROS edges; the work is in the modules it imports.
 
 from __future__ import annotations
 
+import dataclasses
 import threading
 import time
 from collections.abc import Callable
@@ -44,8 +45,10 @@ from rm_base.bridge.params import (
 from rm_base.bridge.power_limits import RemotePowerLimits, parse_power_limit
 from rm_base.bridge.sim_config import world_config
 from rm_base.bridge.sim_services import SimFaultServices
+from rm_base.config_schema import Schema
 from rm_base.hardware import CanHardware
 from rm_base.hardware.bus import BusFactory
+from rm_base.hardware.config import SAFETY_SCHEMA, SCHEDULER_SCHEMA
 from rm_base.node_main import inbox_node
 from rm_base.plugin.inbox import Inbox
 from rm_base.plugin.node_io import POWER_LIMIT_QOS, POWER_LIMIT_TOPIC
@@ -235,6 +238,13 @@ class CanBridgeNode(Node):
                 self.undeclare_parameter(name)
             typed[name] = read(name, *args, **kwargs)
 
+        def declare_schema(prefix: str, schema: Schema, **defaults: Any) -> None:
+            group = params.group(prefix)
+            for key in schema.keys:
+                if key.name in defaults:
+                    key = dataclasses.replace(key, default=defaults[key.name])  # noqa: PLW2901
+                declare(f'{prefix}.{key.name}', lambda _name, k=key: group.declare_key(k))
+
         declare(
             'publish_rate',
             params.double,
@@ -266,31 +276,8 @@ class CanBridgeNode(Node):
             description='python-can log of every frame (.asc/.blf/.log/...); empty: none; '
             'with several buses <stem>_<bus><suffix>',
         )
-        declare(
-            'scheduler.rate_hz',
-            params.double,
-            1000.0,
-            unit='Hz',
-            gt=0.0,
-            le=10000.0,
-            description='control loop rate: update every joint, pack, send',
-        )
-        declare(
-            'scheduler.receive_in_loop',
-            params.boolean,
-            True,
-            description='the control loop takes the received feedback each tick (no receive '
-            'thread per bus)',
-        )
-        declare(
-            'scheduler.priority',
-            params.integer,
-            LOOP_PRIORITY,
-            ge=0,
-            le=99,
-            description='real-time (SCHED_FIFO) priority of the control loop thread; 0: '
-            'normal scheduling; without the right to it the loop runs on, with a warning',
-        )
+        # a robot's loop runs at real-time priority
+        declare_schema('scheduler', SCHEDULER_SCHEMA, priority=LOOP_PRIORITY)
         declare(
             'scheduler.edge_priority',
             params.integer,
@@ -301,30 +288,7 @@ class CanBridgeNode(Node):
             'threads, below the loop (a thread holding the GIL must not be preempted); 0: '
             'normal scheduling',
         )
-        declare(
-            'safety.feedback_timeout_s',
-            params.double,
-            0.1,
-            unit='s',
-            gt=0.0,
-            description='a joint without feedback this long is offline and held at zero',
-        )
-        declare(
-            'safety.command_timeout_s',
-            params.double,
-            0.1,
-            unit='s',
-            gt=0.0,
-            description='a joint without a command this long is held at zero',
-        )
-        declare(
-            'safety.temperature_hysteresis_c',
-            params.double,
-            5.0,
-            unit='degC',
-            ge=0.0,
-            description='after over-temperature, resume below temperature_limit minus this',
-        )
+        declare_schema('safety', SAFETY_SCHEMA)
         declare(
             'sim',
             params.boolean,

@@ -6,45 +6,23 @@ hardware keys are exactly the schema of :mod:`rm_base.hardware.config`; this mod
 them back into the dict :class:`~rm_base.hardware.CanHardware` takes, and lets that
 schema's own validation name any bad key (its names are the parameter names).
 
-Parameters (units in brackets; typed ones are declared by the node with a descriptor):
+The node declares its flat parameters (``publish_rate``, ``scheduler.*``, ``safety.*``,
+``sim``, ``sim.timing``...) with descriptors; the open groups below are read here. Every
+key, with type, unit, bounds and default, is in docs/PARAMETERS.md, generated from the
+declarations and the schemas named here:
 
-==================================  =========  ============================================
-``buses.<bus>.<key>``               --         a bus of the hardware schema (``interface``,
-                                               ``channel``, ``bitrate``, ``options.*``...)
-``joints.<joint>.<key>``            --         a joint of the hardware schema (``type``,
-                                               ``bus``, ``id``, ``velocity_pid.kp``...)
-``joints.<joint>.sim.<key>``        --         simulated-motor overrides (sim only): any
-                                               key of ``rm_base.sim.device_from_config``
-                                               (``load_inertia``, ``overtemp_c``, ``type``)
-``scheduler.rate_hz``               [Hz]       control loop rate, 1000
-``scheduler.receive_in_loop``       bool       the loop takes the feedback (no receive
-                                               thread per bus), true
-``scheduler.priority``              0-99       SCHED_FIFO priority of the loop thread,
-                                               50; 0 = normal scheduling
-``scheduler.edge_priority``         0-99       SCHED_FIFO priority of the process's other
-                                               threads (set by the executable), 10
-``safety.feedback_timeout_s``       [s]        offline after no feedback this long, 0.1
-``safety.command_timeout_s``        [s]        zero output after no command this long, 0.1
-``safety.temperature_hysteresis_c`` [°C]       resume below limit - this, 5
-``publish_rate``                    [Hz]       /joint_states and /actuator_states, 200
-``diagnostics_rate``                [Hz]       /diagnostics, 1
-``publish_frames``                  bool       every CAN frame on ``~/frames``, false
-``log_file``                        path       python-can log of every frame, '' = none;
-                                               several buses: ``<stem>_<bus><suffix>``
-``sim``                             bool       run on the simulator ``rm_sim``, false
-``sim.timing``                      --         ``realtime`` (default) or ``stepped``
-``sim.seed``                        --         random seed of the world (garbage faults), 0
-``sim.body.<key>``                  --         robot body (``rm_base.sim.body_from_config``:
-                                               ``chassis.type``, ``chassis.motors``,
-                                               ``gimbal.yaw.motor``, ``initial_pose``...)
-``sim.imu.<key>``                   --         one IMU (``path``, ``mount``, ``rate_hz``,
-                                               ``mount_rpy``...; ``${VAR}`` in the path)
-``sim.referee.<key>``               --         the referee system on a pty (``path``,
-                                               ``protocol_version``, limits...:
-                                               ``rm_base.sim.referee``)
-``sim.remote.<key>``                --         the DR16 receiver on a pty (``path``)
-``sim.image_link.<key>``            --         the image link's keyboard/mouse on a pty
-==================================  =========  ============================================
+==============================  =============================================================
+``buses.<bus>.*``               a bus: ``hardware.config.BUS_SCHEMA``
+``joints.<joint>.*``            a joint: ``hardware.config.JOINT_SCHEMA`` and its family's
+                                options
+``joints.<joint>.sim.*``        simulated-motor overrides (sim only): the keys of
+                                ``rm_base.sim.device_from_config``
+``sim.body.*``                  robot body: ``rm_base.sim.body_from_config``
+``sim.imu.*``                   one IMU: ``sim.imu.IMU_SCHEMA``
+``sim.referee.*``               the referee system: ``sim.referee.REFEREE_SCHEMA``
+``sim.remote.*``                the DR16 receiver: ``sim.operator_link.link_schema``
+``sim.image_link.*``            the image link's keyboard/mouse: the same
+==============================  =============================================================
 
 With ``sim: false`` the ``sim.*`` groups are ignored, so one robot config serves both.
 In a params file ``sim`` and its group cannot both be YAML keys named ``sim`` (rcl reads

@@ -1,50 +1,11 @@
 """Configuration of the CAN hardware layer, built from plain dicts (YAML, ROS parameters).
 
-The schema, with units (every key optional unless marked *required*)::
-
-    {
-      'buses': {                       # *required*, one entry per CAN bus
-        'can0': {
-          'interface': 'socketcan',    # *required*: any python-can interface
-                                       # (socketcan, gs_usb, slcan, pcan, virtual, rm_sim...)
-          'channel': 'can0',           # default: the bus name
-          'bitrate': 1000000,          # [bit/s]; also used for the bus-load estimate
-          'fd': False,                 # CAN FD
-          'data_bitrate': None,        # [bit/s], CAN FD data phase
-          'options': {},               # extra keyword arguments for can.Bus(...)
-          'log_file': None,            # python-can log (.asc/.blf/.log/.csv/.trc/.txt)
-          'send_timeout_s': 0.001,     # [s] timeout of one send
-          'receive_timeout_s': 0.05,   # [s] how long the receive thread blocks per call
-          'reconnect_initial_s': 0.05, # [s] first reopen delay after an error
-          'reconnect_max_s': 2.0,      # [s] cap of the exponential back-off
-          'send_failures_to_reopen': 20,   # consecutive failed sends that mean "bus gone"
-        },
-      },
-      'joints': {                      # *required*: name -> joint (or a list with 'name')
-        'yaw': {
-          'type': 'gm6020',            # *required*: see rm_base.motors.joint_types()
-          'bus': 'can0',               # *required*
-          'id': 1,                     # *required*: ESC / motor / joint id
-          'direction': 1,              # +1 or -1: sign between motor and joint
-          'gear_ratio': None,          # motor turns per joint turn (type default)
-          'zero_offset': 0.0,          # [rad] output-shaft angle that is joint zero
-          'max_effort': None,          # [N·m] output clamp (type default)
-          'max_velocity': None,        # [rad/s] velocity target clamp (type default)
-          'torque_constant': None,     # [N·m/A] at the joint (type default)
-          'temperature_limit': None,   # [°C] above it the joint is held at zero
-          'velocity_pid': {'kp': ..., 'ki': ..., 'kd': ..., ...},   # rad/s -> N·m
-          'position_pid': {'kp': ..., ...},                          # rad -> rad/s
-          ...                          # family options (model, limits, master_id...)
-        },
-      },
-      'scheduler': {'rate_hz': 1000.0,
-                    'receive_in_loop': True},  # feedback taken by the loop, no rx threads
-      'safety': {
-        'feedback_timeout_s': 0.1,     # no feedback this long -> offline, zero output
-        'command_timeout_s': 0.1,      # no command this long -> zero output
-        'temperature_hysteresis_c': 5.0,   # resume below limit - hysteresis
-      },
-    }
+The config is ``{'buses': {name: bus}, 'joints': {name: joint} (or a list of joints with a
+'name'), 'scheduler': {...}, 'safety': {...}}``. Each table's keys, with type, unit, bounds,
+default and description, are declared once below (``BUS_SCHEMA``, ``JOINT_SCHEMA``,
+``SCHEDULER_SCHEMA``, ``SAFETY_SCHEMA``); the same declarations validate a config (errors
+name the key) and give the tables of docs/PARAMETERS.md. A joint's keys beyond
+``JOINT_SCHEMA`` are its motor family's options, checked by the family.
 
 PID sub-dicts take the fields of :class:`rm_base.control.PidGains` (``kp``, ``ki``, ``kd``,
 ``output_limit``, ``integral_limit``, ``integral_separation``, ``deadband``,
@@ -55,40 +16,16 @@ tracking differentiator (:mod:`rm_base.control.pid_form`).
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Mapping
 from types import MappingProxyType
 from typing import Any
 
+from rm_base.config_schema import Key, Schema, boolean, integer, mapping, number, one_of, string
 from rm_base.control import PidConfig, PidGains, pid_config
 from rm_base.errors import ConfigError
 from rm_base.hardware.errors import HardwareConfigError
 
 _EMPTY: Mapping[str, Any] = MappingProxyType({})
-
-
-def _check_keys(where: str, data: Mapping[str, Any], allowed: set[str]) -> None:
-    unknown = set(data) - allowed
-    if unknown:
-        raise HardwareConfigError(
-            f'{where}: unknown key(s) {sorted(unknown)}; allowed: {sorted(allowed)}'
-        )
-
-
-def _number(where: str, value: Any, *, positive: bool = False, allow_none: bool = False) -> Any:
-    if value is None and allow_none:
-        return None
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise HardwareConfigError(f'{where} must be a finite number, got {value!r}')
-    if positive and value <= 0:
-        raise HardwareConfigError(f'{where} must be > 0, got {value!r}')
-    return float(value)
-
-
-def _integer(where: str, value: Any, low: int, high: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
-        raise HardwareConfigError(f'{where} must be an integer in {low}..{high}, got {value!r}')
-    return value
 
 
 def _mapping(where: str, value: Any) -> Mapping[str, Any]:
@@ -114,9 +51,34 @@ def pid_gains(where: str, data: Any) -> PidConfig:
         raise HardwareConfigError(f'{where}: {err}') from err
 
 
+#: ``buses.<bus>``: one CAN bus.
+BUS_SCHEMA = Schema((
+    string('interface', nonempty=True, description='python-can interface: socketcan on a robot, '
+           'rm_sim_socket on the simulator (gs_usb, slcan, pcan, virtual... work too)'),
+    Key('channel', 'any', lambda v: v, 'the interface channel (can0, a USB serial...); '
+        'default: the bus name', default=None),
+    integer('bitrate', 1_000_000, unit='bit/s', ge=1, le=10_000_000,
+            description='bus bitrate; also used for the bus-load estimate'),
+    boolean('fd', False, description='CAN FD'),
+    integer('data_bitrate', None, unit='bit/s', ge=1, le=20_000_000,
+            description='CAN FD data-phase bitrate'),
+    mapping('options', {}, description='extra keyword arguments of can.Bus(...)'),
+    string('log_file', None, description='python-can log of this bus (.asc/.blf/.log/...)'),
+    number('send_timeout_s', 0.001, unit='s', gt=0.0, description='timeout of one send'),
+    number('receive_timeout_s', 0.05, unit='s', gt=0.0,
+           description='how long a receive thread blocks per call'),
+    number('reconnect_initial_s', 0.05, unit='s', gt=0.0,
+           description='first reopen delay after an error'),
+    number('reconnect_max_s', 2.0, unit='s', gt=0.0,
+           description='cap of the exponential reopen back-off (>= reconnect_initial_s)'),
+    integer('send_failures_to_reopen', 20, ge=1, le=1_000_000,
+            description='consecutive failed sends that mean "bus gone": close and reopen'),
+))
+
+
 @dataclasses.dataclass(frozen=True)
 class BusConfig:
-    """One CAN bus (see the module docstring for the keys and units)."""
+    """One CAN bus (keys, units and defaults: ``BUS_SCHEMA``)."""
 
     name: str
     interface: str
@@ -140,72 +102,47 @@ class BusConfig:
             HardwareConfigError: a missing, unknown or invalid key.
         """
         where = f'buses.{name}'
-        data = _mapping(where, data)
-        _check_keys(where, data, {f.name for f in dataclasses.fields(cls)} - {'name'})
-        interface = data.get('interface')
-        if not isinstance(interface, str) or not interface:
-            raise HardwareConfigError(f'{where}.interface is required (e.g. socketcan, rm_sim)')
-        bitrate = data.get('bitrate', 1_000_000)
-        if bitrate is not None:
-            bitrate = _integer(f'{where}.bitrate', bitrate, 1, 10_000_000)
-        data_bitrate = data.get('data_bitrate')
-        if data_bitrate is not None:
-            data_bitrate = _integer(f'{where}.data_bitrate', data_bitrate, 1, 20_000_000)
-        log_file = data.get('log_file')
-        if log_file is not None and not isinstance(log_file, str):
-            raise HardwareConfigError(f'{where}.log_file must be a path string, got {log_file!r}')
-        initial = _number(
-            f'{where}.reconnect_initial_s', data.get('reconnect_initial_s', 0.05), positive=True
-        )
-        maximum = _number(
-            f'{where}.reconnect_max_s', data.get('reconnect_max_s', 2.0), positive=True
-        )
-        if maximum < initial:
+        values = BUS_SCHEMA.read(where, data, HardwareConfigError)
+        if values['reconnect_max_s'] < values['reconnect_initial_s']:
             raise HardwareConfigError(f'{where}.reconnect_max_s must be >= reconnect_initial_s')
-        return cls(
-            name=name,
-            interface=interface,
-            channel=data.get('channel', name),
-            bitrate=bitrate,
-            fd=bool(data.get('fd', False)),
-            data_bitrate=data_bitrate,
-            options=MappingProxyType(dict(_mapping(f'{where}.options', data.get('options', {})))),
-            log_file=log_file,
-            send_timeout_s=_number(
-                f'{where}.send_timeout_s', data.get('send_timeout_s', 0.001), positive=True
-            ),
-            receive_timeout_s=_number(
-                f'{where}.receive_timeout_s', data.get('receive_timeout_s', 0.05), positive=True
-            ),
-            reconnect_initial_s=initial,
-            reconnect_max_s=maximum,
-            send_failures_to_reopen=_integer(
-                f'{where}.send_failures_to_reopen',
-                data.get('send_failures_to_reopen', 20),
-                1,
-                1_000_000,
-            ),
-        )
+        if values['channel'] is None:
+            values['channel'] = name
+        values['options'] = MappingProxyType(values['options'])
+        return cls(name=name, **values)
 
+
+#: ``joints.<joint>``: the keys every joint takes; the rest are its family's options.
+JOINT_SCHEMA = Schema(
+    (
+        string('type', lower=True, nonempty=True,
+               description="joint type (m3508, gm6020, dm4310...: 'can_bridge joint types')"),
+        string('bus', nonempty=True,
+               description='name of the bus (a key of buses) the joint is on'),
+        integer('id', ge=0, le=0x1FFFFFFF, description='ESC / motor / joint id on its bus'),
+        one_of('direction', (1, -1), 1, description='sign between the motor and the joint'),
+        number('gear_ratio', None, gt=0.0,
+               description="motor turns per joint turn (> 0: direction gives the sign); "
+               "default: the type's"),
+        number('zero_offset', 0.0, unit='rad',
+               description='output-shaft angle that is the joint zero'),
+        number('max_effort', None, unit='N·m', gt=0.0,
+               description="output clamp; default: the type's"),
+        number('max_velocity', None, unit='rad/s', gt=0.0,
+               description="velocity target clamp; default: the type's"),
+        number('torque_constant', None, unit='N·m/A', gt=0.0,
+               description="torque per ampere at the joint; default: the type's"),
+        number('temperature_limit', None, unit='degC',
+               description="above it the joint is held at zero; default: the type's"),
+        mapping('velocity_pid', None,
+                description='velocity loop (rad/s -> N·m): PidGains fields, or form: incremental'),
+        mapping('position_pid', None,
+                description='position loop (rad -> rad/s): PidGains fields, or form: incremental'),
+    ),
+    open=True,
+)
 
 #: Keys every joint understands; the rest go to the family as ``options``.
-COMMON_JOINT_KEYS = frozenset(
-    {
-        'name',
-        'type',
-        'bus',
-        'id',
-        'direction',
-        'gear_ratio',
-        'zero_offset',
-        'max_effort',
-        'max_velocity',
-        'torque_constant',
-        'temperature_limit',
-        'velocity_pid',
-        'position_pid',
-    }
-)
+COMMON_JOINT_KEYS = JOINT_SCHEMA.names | {'name'}
 
 
 @dataclasses.dataclass(frozen=True)
@@ -246,48 +183,38 @@ class JointConfig:
 
     @classmethod
     def from_dict(cls, name: str, data: Mapping[str, Any]) -> JointConfig:
-        """Parse one joint entry.
+        """Parse one joint entry (keys: ``JOINT_SCHEMA``; the rest are options).
 
         Raises:
             HardwareConfigError: a missing or invalid key.
         """
         where = f'joints.{name}'
-        data = _mapping(where, data)
-        for key in ('type', 'bus'):
-            if not isinstance(data.get(key), str) or not data.get(key):
-                raise HardwareConfigError(f'{where}.{key} is required and must be a string')
-        if 'id' not in data:
-            raise HardwareConfigError(f'{where}.id is required')
-        direction = data.get('direction', 1)
-        if direction not in (1, -1) or isinstance(direction, bool):
-            raise HardwareConfigError(f'{where}.direction must be +1 or -1, got {direction!r}')
-        gear = _number(f'{where}.gear_ratio', data.get('gear_ratio'), allow_none=True)
-        if gear is not None and gear <= 0:
-            raise HardwareConfigError(
-                f'{where}.gear_ratio must be > 0 (use direction for the sign), got {gear}'
-            )
-        optional_positive = {}
-        for key in ('max_effort', 'max_velocity', 'torque_constant'):
-            value = _number(f'{where}.{key}', data.get(key), allow_none=True)
-            if value is not None and value <= 0:
-                raise HardwareConfigError(f'{where}.{key} must be > 0, got {value}')
-            optional_positive[key] = value
-        return cls(
-            name=name,
-            type=data['type'].lower(),
-            bus=data['bus'],
-            id=_integer(f'{where}.id', data['id'], 0, 0x1FFFFFFF),
-            direction=int(direction),
-            gear_ratio=gear,
-            zero_offset=_number(f'{where}.zero_offset', data.get('zero_offset', 0.0)),
-            temperature_limit=_number(
-                f'{where}.temperature_limit', data.get('temperature_limit'), allow_none=True
-            ),
-            velocity_pid=pid_gains(f'{where}.velocity_pid', data.get('velocity_pid')),
-            position_pid=pid_gains(f'{where}.position_pid', data.get('position_pid')),
-            options=MappingProxyType({k: v for k, v in data.items() if k not in COMMON_JOINT_KEYS}),
-            **optional_positive,
-        )
+        values = JOINT_SCHEMA.read(where, data, HardwareConfigError)
+        for key in ('velocity_pid', 'position_pid'):
+            values[key] = pid_gains(f'{where}.{key}', values[key])
+        options = {k: v for k, v in JOINT_SCHEMA.extras(data).items() if k != 'name'}
+        return cls(name=name, options=MappingProxyType(options), **values)
+
+
+#: ``safety``: rules every joint follows, whatever the plugins do.
+SAFETY_SCHEMA = Schema((
+    number('feedback_timeout_s', 0.1, unit='s', gt=0.0,
+           description='a joint without feedback this long is offline and held at zero'),
+    number('command_timeout_s', 0.1, unit='s', gt=0.0,
+           description='a joint without a command this long is held at zero'),
+    number('temperature_hysteresis_c', 5.0, unit='degC', ge=0.0,
+           description='after over-temperature, resume below temperature_limit minus this'),
+))
+
+#: ``scheduler``: the control loop.
+SCHEDULER_SCHEMA = Schema((
+    number('rate_hz', 1000.0, unit='Hz', gt=0.0, le=10_000.0, description='control loop rate'),
+    boolean('receive_in_loop', True,
+            description='the loop takes the received feedback (no receive thread per bus)'),
+    integer('priority', 0, ge=0, le=99,
+            description='real-time (SCHED_FIFO) priority of the loop thread; 0: normal '
+            'scheduling; without the right to it the loop runs on, with a warning'),
+))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -312,14 +239,7 @@ class SafetyConfig:
         Raises:
             HardwareConfigError: unknown or invalid key.
         """
-        data = _mapping('safety', data or {})
-        _check_keys('safety', data, {f.name for f in dataclasses.fields(cls)})
-        return cls(
-            **{
-                k: _number(f'safety.{k}', v, positive=k != 'temperature_hysteresis_c')
-                for k, v in data.items()
-            }
-        )
+        return cls(**SAFETY_SCHEMA.read('safety', data or {}, HardwareConfigError))
 
 
 @dataclasses.dataclass(frozen=True)
@@ -335,13 +255,18 @@ class HardwareConfig:
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> HardwareConfig:
-        """Parse the whole config dict (schema in the module docstring).
+        """Parse the whole config dict (see the module docstring).
 
         Raises:
             HardwareConfigError: anything missing, unknown or invalid, naming where.
         """
         data = _mapping('config', data)
-        _check_keys('config', data, {'buses', 'joints', 'scheduler', 'safety'})
+        unknown = set(data) - {'buses', 'joints', 'scheduler', 'safety'}
+        if unknown:
+            raise HardwareConfigError(
+                f'config: unknown key(s) {sorted(unknown)}; '
+                'allowed: buses, joints, scheduler, safety'
+            )
         buses_data = _mapping('buses', data.get('buses'))
         if not buses_data:
             raise HardwareConfigError('buses: at least one bus is required')
@@ -368,21 +293,11 @@ class HardwareConfig:
                 raise HardwareConfigError(
                     f'joints.{j.name}.bus {j.bus!r} is not a configured bus {sorted(bus_names)}'
                 )
-        scheduler = _mapping('scheduler', data.get('scheduler') or {})
-        _check_keys('scheduler', scheduler, {'rate_hz', 'receive_in_loop', 'priority'})
-        rate = _number('scheduler.rate_hz', scheduler.get('rate_hz', 1000.0), positive=True)
-        if rate > 10_000:
-            raise HardwareConfigError(f'scheduler.rate_hz {rate} above 10000 Hz')
-        in_loop = scheduler.get('receive_in_loop', True)
-        if not isinstance(in_loop, bool):
-            raise HardwareConfigError(
-                f'scheduler.receive_in_loop must be true or false, got {in_loop!r}'
-            )
-        priority = scheduler.get('priority', 0)
-        if isinstance(priority, bool) or not isinstance(priority, int) or not 0 <= priority <= 99:
-            raise HardwareConfigError(
-                f'scheduler.priority must be an integer 0-99 (0: normal scheduling), '
-                f'got {priority!r}'
-            )
+        scheduler = SCHEDULER_SCHEMA.read(
+            'scheduler', data.get('scheduler') or {}, HardwareConfigError
+        )
         safety = SafetyConfig.from_dict(data.get('safety'))
-        return cls(buses, joints, rate, safety, in_loop, priority)
+        return cls(
+            buses, joints, scheduler['rate_hz'], safety, scheduler['receive_in_loop'],
+            scheduler['priority'],
+        )

@@ -16,37 +16,31 @@ with a reason instead of silently doing nothing.
 
 from __future__ import annotations
 
-import math
 import weakref
 from collections.abc import Callable, Sequence
 from enum import Enum
-from typing import Any, NamedTuple, TypeVar
+from typing import Any, TypeVar
 
 from rcl_interfaces.msg import ParameterDescriptor
 
+from rm_base import config_schema as schema
+from rm_base.config_schema import (
+    REQUIRED,
+    Bounds,
+    DeclaredParameter,
+    InvalidValueError,
+    Key,
+    WrongTypeError,
+    array_of,
+    describe_value,
+    to_bool,
+    to_float,
+    to_int,
+    to_str,
+)
 from rm_base.plugin.errors import ParameterError
 
 E = TypeVar('E', bound=Enum)
-
-
-class DeclaredParameter(NamedTuple):
-    """One parameter as declared (for the generated reference, docs/PARAMETERS.md).
-
-    Attributes:
-        key: full name (``chassis.wheel_radius``).
-        type_name: ``double``, ``integer[]``...
-        unit: SI unit, '' if none.
-        default: the default, None if required.
-        constraint: bounds, choices, length; '' if none.
-        description: what it is.
-    """
-
-    key: str
-    type_name: str
-    unit: str
-    default: Any
-    constraint: str
-    description: str
 
 
 # Every declaration through PluginParams, per node, in declaration order.
@@ -56,37 +50,6 @@ _DECLARED: weakref.WeakKeyDictionary[Any, list[DeclaredParameter]] = weakref.Wea
 def declared_parameters(node: Any) -> list[DeclaredParameter]:
     """The parameters declared on node through PluginParams, in declaration order."""
     return list(_DECLARED.get(node, ()))
-
-
-class _Required:
-    """Marker for "no default: the config must set this parameter"."""
-
-    def __repr__(self) -> str:
-        return 'REQUIRED'
-
-
-REQUIRED: Any = _Required()
-"""Default of a parameter that has none: a missing value is a start-up error."""
-
-
-def _is_number(value: object) -> bool:
-    return isinstance(value, int | float) and not isinstance(value, bool)
-
-
-def _as_sequence(value: object) -> list | None:
-    # rclpy hands arrays over as list or array.array; a str is not an array here.
-    if isinstance(value, str | bytes) or value is None:
-        return None
-    try:
-        return list(value)  # type: ignore[call-overload]
-    except TypeError:
-        return None
-
-
-def _describe_value(value: object) -> str:
-    if value is None:
-        return 'nothing'
-    return f'{type(value).__name__} {value!r}'
 
 
 class PluginParams:
@@ -154,11 +117,9 @@ class PluginParams:
         Raises:
             ParameterError: missing, not a number, not finite, or out of bounds.
         """
-        bounds = _Bounds(gt, ge, lt, le)
-        return self._declare(
-            name, default=default, type_name='double', description=description, unit=unit,
-            constraint=bounds.text(), convert=lambda v: bounds.check(self._to_float(v)),
-        )
+        return self.declare_key(schema.number(
+            name, default, description=description, unit=unit, gt=gt, ge=ge, lt=lt, le=le
+        ))
 
     def integer(
         self,
@@ -173,18 +134,13 @@ class PluginParams:
         le: int | None = None,
     ) -> int:
         """Declare and read an integer parameter (see ``double`` for the arguments)."""
-        bounds = _Bounds(gt, ge, lt, le)
-        return self._declare(
-            name, default=default, type_name='integer', description=description, unit=unit,
-            constraint=bounds.text(), convert=lambda v: bounds.check(self._to_int(v)),
-        )
+        return self.declare_key(schema.integer(
+            name, default, description=description, unit=unit, gt=gt, ge=ge, lt=lt, le=le
+        ))
 
     def boolean(self, name: str, default: bool = REQUIRED, *, description: str) -> bool:
         """Declare and read a boolean parameter (``true``/``false`` in YAML)."""
-        return self._declare(
-            name, default=default, type_name='bool', description=description, unit='',
-            constraint='', convert=self._to_bool,
-        )
+        return self.declare_key(schema.boolean(name, default, description=description))
 
     def string(
         self,
@@ -195,17 +151,8 @@ class PluginParams:
         choices: Sequence[str] | None = None,
     ) -> str:
         """Declare and read a string parameter, optionally one of choices."""
-        constraint = f'one of: {", ".join(choices)}' if choices else ''
-
-        def convert(value: object) -> str:
-            text = self._to_str(value)
-            if choices is not None and text not in choices:
-                raise _InvalidValueError(f'must be one of {", ".join(choices)}, got {text!r}')
-            return text
-
-        return self._declare(
-            name, default=default, type_name='string', description=description, unit='',
-            constraint=constraint, convert=convert,
+        return self.declare_key(
+            schema.string(name, default, description=description, choices=choices)
         )
 
     def choice(
@@ -220,15 +167,29 @@ class PluginParams:
         by_name = {member.name.lower(): member for member in options}
 
         def convert(value: object) -> E:
-            text = self._to_str(value)
+            text = to_str(value)
             if text.lower() not in by_name:
-                raise _InvalidValueError(f'must be one of {", ".join(names)}, got {text!r}')
+                raise InvalidValueError(f'must be one of {", ".join(names)}, got {text!r}')
             return by_name[text.lower()]
 
         default_text = default if default is REQUIRED else default.name.lower()
         return self._declare(
             name, default=default_text, type_name='string', description=description, unit='',
             constraint=f'one of: {", ".join(names)}', convert=convert,
+        )
+
+    def declare_key(self, key: Key) -> Any:
+        """Declare and read a key of a config schema (:mod:`rm_base.config_schema`).
+
+        The parameter takes the key's type, unit, bounds, default and description, which
+        are declared once, in the schema.
+        """
+        if key.default is None:
+            raise TypeError(f'{key.name}: an optional schema key has no ROS parameter form')
+        return self._declare(
+            key.name, default=key.default, type_name=key.type_name,
+            description=key.description, unit=key.unit, constraint=key.constraint,
+            convert=key.convert,
         )
 
     # -- arrays -------------------------------------------------------------------------
@@ -247,11 +208,11 @@ class PluginParams:
         le: float | None = None,
     ) -> tuple[float, ...]:
         """Declare and read an array of floats; bounds apply to every element."""
-        bounds = _Bounds(gt, ge, lt, le)
+        bounds = Bounds(gt, ge, lt, le)
         return self._declare_array(
             name, default=default, type_name='double[]', description=description, unit=unit,
             length=length, constraint=bounds.text(),
-            convert_item=lambda v: bounds.check(self._to_float(v)),
+            convert_item=lambda v: bounds.check(to_float(v)),
         )
 
     def vector3(
@@ -283,11 +244,11 @@ class PluginParams:
         le: int | None = None,
     ) -> tuple[int, ...]:
         """Declare and read an array of integers; bounds apply to every element."""
-        bounds = _Bounds(gt, ge, lt, le)
+        bounds = Bounds(gt, ge, lt, le)
         return self._declare_array(
             name, default=default, type_name='integer[]', description=description, unit=unit,
             length=length, constraint=bounds.text(),
-            convert_item=lambda v: bounds.check(self._to_int(v)),
+            convert_item=lambda v: bounds.check(to_int(v)),
         )
 
     def string_array(
@@ -302,7 +263,7 @@ class PluginParams:
         """Declare and read an array of strings (e.g. joint names), optionally unique."""
         values = self._declare_array(
             name, default=default, type_name='string[]', description=description, unit='',
-            length=length, constraint='unique' if unique else '', convert_item=self._to_str,
+            length=length, constraint='unique' if unique else '', convert_item=to_str,
         )
         if unique and len(set(values)) != len(values):
             duplicates = sorted({v for v in values if values.count(v) > 1})
@@ -320,7 +281,7 @@ class PluginParams:
         """Declare and read an array of booleans."""
         return self._declare_array(
             name, default=default, type_name='bool[]', description=description, unit='',
-            length=length, constraint='', convert_item=self._to_bool,
+            length=length, constraint='', convert_item=to_bool,
         )
 
     # -- machinery ----------------------------------------------------------------------
@@ -339,27 +300,11 @@ class PluginParams:
     ) -> tuple:
         constraints = [c for c in (constraint, f'length {length}' if length else '') if c]
 
-        def convert(value: object) -> tuple:
-            items = _as_sequence(value)
-            if items is None:
-                raise _WrongTypeError()
-            if length is not None and len(items) != length:
-                raise _InvalidValueError(f'must have {length} entries, has {len(items)}')
-            out = []
-            for index, item in enumerate(items):
-                try:
-                    out.append(convert_item(item))
-                except _WrongTypeError:
-                    raise _WrongTypeError(f'entry [{index}] is {_describe_value(item)}') from None
-                except _InvalidValueError as err:
-                    raise _InvalidValueError(f'entry [{index}] {err}') from None
-            return tuple(out)
-
         if default is not REQUIRED:
             default = list(default)  # type: ignore[call-overload]
         return self._declare(
             name, default=default, type_name=type_name, description=description, unit=unit,
-            constraint='; '.join(constraints), convert=convert,
+            constraint='; '.join(constraints), convert=array_of(convert_item, length),
         )
 
     def _declare(
@@ -379,7 +324,7 @@ class PluginParams:
             # A wrong default is a bug in the plugin, not in the config.
             try:
                 convert(default)
-            except _InvalidValueError as err:
+            except InvalidValueError as err:
                 raise TypeError(
                     f'default of parameter {key!r} is not a valid {type_name}: {default!r} {err}'
                 ) from None
@@ -420,11 +365,11 @@ class PluginParams:
             )
         try:
             return convert(value)
-        except _WrongTypeError as err:
+        except WrongTypeError as err:
             unit_text = f' [{unit}]' if unit else ''
-            got = str(err) or f'got {_describe_value(value)}'
+            got = str(err) or f'got {describe_value(value)}'
             raise self._error(name, f'must be {type_name}{unit_text}; {got}') from None
-        except _InvalidValueError as err:
+        except InvalidValueError as err:
             raise self._error(name, str(err)) from None
 
     def _error(self, name: str, problem: str) -> ParameterError:
@@ -436,63 +381,3 @@ class PluginParams:
         else:
             message = f"parameter '{key}' {problem}"
         return ParameterError(message, plugin=self.plugin, key=key)
-
-    @staticmethod
-    def _to_float(value: object) -> float:
-        if not _is_number(value):
-            raise _WrongTypeError()
-        number = float(value)  # type: ignore[arg-type]
-        if not math.isfinite(number):
-            raise _InvalidValueError(f'must be finite, got {number}')
-        return number
-
-    @staticmethod
-    def _to_int(value: object) -> int:
-        if not isinstance(value, int) or isinstance(value, bool):
-            raise _WrongTypeError()
-        return int(value)
-
-    @staticmethod
-    def _to_bool(value: object) -> bool:
-        if not isinstance(value, bool):
-            raise _WrongTypeError()
-        return value
-
-    @staticmethod
-    def _to_str(value: object) -> str:
-        if not isinstance(value, str):
-            raise _WrongTypeError()
-        return value
-
-
-class _InvalidValueError(Exception):
-    """A value failed a check; the text completes "parameter 'x' ..."."""
-
-
-class _WrongTypeError(_InvalidValueError):
-    """A value is of the wrong type; the text (optional) says which part."""
-
-
-class _Bounds:
-    """Optional gt/ge/lt/le bounds of a number."""
-
-    def __init__(self, gt: float | None, ge: float | None, lt: float | None, le: float | None):
-        self._checks = [
-            (bound, op, test)
-            for bound, op, test in (
-                (gt, '>', lambda v, b: v > b),
-                (ge, '>=', lambda v, b: v >= b),
-                (lt, '<', lambda v, b: v < b),
-                (le, '<=', lambda v, b: v <= b),
-            )
-            if bound is not None
-        ]
-
-    def text(self) -> str:
-        return ', '.join(f'{op} {bound}' for bound, op, _ in self._checks)
-
-    def check(self, value: float) -> Any:
-        for bound, op, test in self._checks:
-            if not test(value, bound):
-                raise _InvalidValueError(f'must be {op} {bound}, got {value}')
-        return value

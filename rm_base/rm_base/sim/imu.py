@@ -15,6 +15,7 @@ from typing import Any, TypedDict
 
 import numpy as np
 
+from rm_base.config_schema import Schema, integer, number, numbers, string
 from rm_base.geometry import (
     rotation_matrix_from_rpy,
 )
@@ -288,62 +289,30 @@ def _quaternion_from_matrix(r: Matrix) -> tuple[float, float, float, float]:
     return x / norm, y / norm, z / norm, w / norm
 
 
-_IMU_KEYS = frozenset(
-    {
-        'name',
-        'path',
-        'mount',
-        'rate_hz',
-        'baudrate',
-        'mount_rpy',
-        'temperature',
-        'pressure',
-        'magnetic_field',
-    }
-)
+#: ``sim.imu``: one simulated HiPNUC IMU on a pty.
+IMU_SCHEMA = Schema((
+    string('path', nonempty=True,
+           description="the pty's link, e.g. /tmp/rm_sim_${ROS_DOMAIN_ID}/imu "
+           '(${VAR} expanded)'),
+    string('name', 'imu', description='name in logs'),
+    string('mount', 'gimbal', choices=('gimbal', 'chassis'),
+           description='the body the IMU sits on'),
+    number('rate_hz', 100.0, unit='Hz', gt=0.0, description='frames per second'),
+    integer('baudrate', 115200, ge=1, description="the port's baud rate"),
+    numbers('mount_rpy', (0.0, 0.0, 0.0), unit='rad', length=3,
+            description='roll, pitch, yaw of the IMU on its body'),
+    integer('temperature', 25, unit='degC', description='temperature it reports'),
+    number('pressure', 101325.0, unit='Pa', description='air pressure it reports'),
+    numbers('magnetic_field', (0.0, 0.0, 0.0), unit='uT', length=3,
+            description='magnetic field it reports (body frame)'),
+))
 
 
 def imu_from_config(config: Mapping[str, Any], body: RobotBody) -> SimImu:
-    """Build an IMU from a plain dict.
-
-    Keys: ``path`` (required; e.g. ``'/tmp/rm_sim_${ROS_DOMAIN_ID}/imu'``), ``name``
-    (``'imu'``), ``mount`` (``'gimbal'`` default or ``'chassis'``), ``rate_hz`` (100),
-    ``baudrate`` (115200), ``mount_rpy`` [rad] ((0, 0, 0)), ``temperature`` [°C] (25),
-    ``pressure`` [Pa] (101325), ``magnetic_field`` [µT] ((0, 0, 0)).
+    """Build an IMU from a plain dict (keys: ``IMU_SCHEMA``).
 
     Raises:
         SimConfigError: a missing, unknown or invalid key.
     """
-    if not isinstance(config, Mapping):
-        raise SimConfigError(f'an IMU config must be a mapping, got {config!r}')
-    unknown = sorted(set(config) - _IMU_KEYS)
-    if unknown:
-        raise SimConfigError(f'IMU: unknown key(s) {unknown}; known: {sorted(_IMU_KEYS)}')
-    if not isinstance(config.get('path'), str):
-        raise SimConfigError(f'IMU needs a path (string), got {config.get("path")!r}')
-    try:
-        mount = Mount(config.get('mount', 'gimbal'))
-    except ValueError:
-        raise SimConfigError(
-            f"IMU mount must be 'gimbal' or 'chassis', got {config.get('mount')!r}"
-        ) from None
-    kwargs = {
-        k: config[k]
-        for k in ('name', 'rate_hz', 'baudrate', 'temperature', 'pressure')
-        if k in config
-    }
-    for key in ('mount_rpy', 'magnetic_field'):
-        if key in config:
-            value = config[key]
-            if not isinstance(value, Sequence) or not all(
-                isinstance(v, int | float) and math.isfinite(v) for v in value
-            ):
-                raise SimConfigError(f'IMU {key} must be 3 finite numbers, got {value!r}')
-            kwargs[key] = value
-    for key in ('rate_hz', 'pressure'):
-        if key in kwargs and not isinstance(kwargs[key], int | float):
-            raise SimConfigError(f'IMU {key} must be a number, got {kwargs[key]!r}')
-    for key in ('baudrate', 'temperature'):
-        if key in kwargs and (isinstance(kwargs[key], bool) or not isinstance(kwargs[key], int)):
-            raise SimConfigError(f'IMU {key} must be an int, got {kwargs[key]!r}')
-    return SimImu(body, path=config['path'], mount=mount, **kwargs)
+    values = IMU_SCHEMA.read('imu', config, SimConfigError)
+    return SimImu(body, **{**values, 'mount': Mount(values['mount'])})

@@ -13,9 +13,9 @@ import dataclasses
 from collections.abc import Callable, Mapping
 from typing import Any, Generic, TypeVar
 
+from rm_base.config_schema import Schema, string
 from rm_base.sim._schedule import RateSchedule
 from rm_base.sim.errors import SimConfigError
-from rm_base.sim.joint import check_keys
 from rm_base.sim.pty_port import PtyPort
 
 State = TypeVar('State')
@@ -84,13 +84,21 @@ class OperatorLink(abc.ABC, Generic[State]):
 Link = TypeVar('Link', bound=OperatorLink[Any])
 
 
+def link_schema(owner: str) -> Schema:
+    """``sim.<owner>``: a terminal on a pty (the DR16 receiver, the image link)."""
+    return Schema((
+        string('path', nonempty=True,
+           description="the pty's link, e.g. /tmp/rm_sim_${ROS_DOMAIN_ID}/"
+               f'{owner} (${{VAR}} expanded)'),
+        string('name', owner, description='name in logs'),
+    ))
+
+
 def link_from_config(kind: Callable[..., Link], config: Mapping[str, Any], owner: str) -> Link:
-    """Build a link of kind from ``{path, name (owner)}`` (the world's ``owner`` key).
+    """Build a link of kind from ``link_schema(owner)`` (the world's ``owner`` key).
 
     Raises:
         SimConfigError: a missing path or an unknown key.
     """
-    check_keys(config, {'path', 'name'}, owner)
-    if not isinstance(config.get('path'), str):
-        raise SimConfigError(f'{owner} needs a path (string), got {config.get("path")!r}')
-    return kind(path=config['path'], name=str(config.get('name', owner)))
+    values = link_schema(owner).read(owner, config, SimConfigError)
+    return kind(path=values['path'], name=values['name'])

@@ -20,6 +20,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from rm_base.config_schema import Schema, integer, number, one_of, string
 from rm_base.hardware.protocols.referee import (
     GameProgress,
     GameStatus,
@@ -29,7 +30,6 @@ from rm_base.hardware.protocols.referee import (
 )
 from rm_base.sim.devices import SimDevice
 from rm_base.sim.errors import SimConfigError
-from rm_base.sim.joint import check_keys, config_number
 from rm_base.sim.launcher import Launcher, Shot
 from rm_base.sim.pty_port import PtyPort
 from rm_base.sim.referee_rules import STEP_NS, Outputs, RefereeRules, RefereeSettings
@@ -168,20 +168,29 @@ class SimReferee:
         self._outputs = outputs
 
 
-_SETTINGS = {
-    'robot_id': 'robot_id',
-    'level': 'level',
-    'max_hp': 'max_hp',
-    'heat_limit': 'heat_limit',
-    'cooling': 'cooling_per_s',
-    'allowance': 'allowance',
-}
-_FLOATS = {
-    'chassis_power_limit': 'chassis_power_limit_w',
-    'buffer_max': 'buffer_max_j',
-    'chassis_cut': 'chassis_cut_s',
-}
-_KEYS = {'path', 'name', 'protocol_version', 'calibre', 'match_s', *_SETTINGS, *_FLOATS}
+#: ``sim.referee``: the simulated referee system (its settings: ``RefereeSettings``).
+REFEREE_SCHEMA = Schema((
+    string('path', nonempty=True,
+           description="the pty's link, e.g. /tmp/rm_sim_${ROS_DOMAIN_ID}/referee "
+           '(${VAR} expanded)'),
+    string('name', 'referee', description='name in logs'),
+    one_of('protocol_version', (2024, 2025, 2026), 2026,
+           description='the season whose rules and frame layouts it plays'),
+    integer('robot_id', 3, ge=1, le=0xFF, description='1 hero, 3-5 infantry, 7 sentry... '
+            '(blue = red + 100)'),
+    integer('level', 1, ge=0, le=0xFFFF, description='robot level'),
+    integer('max_hp', 200, ge=1, le=0xFFFF, description='HP at the start'),
+    integer('heat_limit', 100, ge=0, le=0xFFFF, description='barrel heat limit'),
+    integer('cooling', 10, unit='1/s', ge=0, le=0xFFFF, description='barrel cooling value'),
+    number('chassis_power_limit', 60.0, unit='W', ge=0.0, description='chassis power limit'),
+    number('buffer_max', 60.0, unit='J', ge=0.0, description='buffer energy cap'),
+    number('chassis_cut', 5.0, unit='s', ge=0.0,
+           description='how long an empty buffer cuts the chassis (2025 on)'),
+    one_of('calibre', (17, 42), None, description="projectile calibre [mm]; default: the "
+           "shooter's, else 17"),
+    integer('allowance', 500, ge=0, le=0xFFFF, description='projectiles the robot may fire'),
+    integer('match_s', 420, unit='s', ge=0, description='match length'),
+))
 
 
 def referee_from_config(
@@ -193,46 +202,38 @@ def referee_from_config(
 ) -> SimReferee:
     """Build the referee from a plain dict (the world's ``referee``; bridge ``sim.referee``).
 
-    Keys: ``path`` (required), ``name`` ('referee'), ``protocol_version`` (2026; 2024 or
-    2025), ``robot_id`` (3), ``level`` (1), ``max_hp`` (200), ``heat_limit`` (100),
-    ``cooling`` [1/s] (10), ``chassis_power_limit`` [W] (60), ``buffer_max`` [J] (60),
-    ``chassis_cut`` [s] (5), ``calibre`` (the launcher's, else 17), ``allowance`` (500),
-    ``match_s`` (420).
+    Keys: ``REFEREE_SCHEMA``.
 
     Raises:
         SimConfigError: a missing, unknown or invalid key.
     """
-    check_keys(config, _KEYS, 'referee')
-    if not isinstance(config.get('path'), str):
-        raise SimConfigError(f'referee needs a path (string), got {config.get("path")!r}')
-    try:
-        version = ProtocolVersion(str(config.get('protocol_version', 2026)))
-    except ValueError:
-        raise SimConfigError(
-            f'referee protocol_version must be 2024, 2025 or 2026, got '
-            f'{config["protocol_version"]!r}'
-        ) from None
-    kwargs: dict[str, Any] = {
-        field: config[key] for key, field in _SETTINGS.items() if key in config
-    }
-    kwargs.update(
-        {field: config_number(config, key, 'referee') for key, field in _FLOATS.items()
-         if key in config}
-    )
-    calibre = config.get('calibre', launcher.calibre if launcher is not None else 17)
+    values = REFEREE_SCHEMA.read('referee', config, SimConfigError)
+    calibre = values['calibre']
+    if calibre is None:
+        calibre = launcher.calibre if launcher is not None else 17
     if launcher is not None and calibre != launcher.calibre:
         raise SimConfigError(
             f"referee calibre {calibre!r} is not the shooter's ({launcher.calibre} mm)"
         )
-    match_s = config.get('match_s', 420)
-    if isinstance(match_s, bool) or not isinstance(match_s, int) or match_s < 0:
-        raise SimConfigError(f'referee match_s must be an integer >= 0, got {match_s!r}')
+    settings = RefereeSettings(
+        version=ProtocolVersion(str(values['protocol_version'])),
+        robot_id=values['robot_id'],
+        level=values['level'],
+        max_hp=values['max_hp'],
+        heat_limit=values['heat_limit'],
+        cooling_per_s=values['cooling'],
+        chassis_power_limit_w=values['chassis_power_limit'],
+        buffer_max_j=values['buffer_max'],
+        calibre=calibre,
+        allowance=values['allowance'],
+        chassis_cut_s=values['chassis_cut'],
+    )
     return SimReferee(
-        RefereeSettings(version=version, calibre=calibre, **kwargs),
-        path=config['path'],
+        settings,
+        path=values['path'],
         chassis=chassis,
         gimbal=gimbal,
         launcher=launcher,
-        match_s=match_s,
-        name=str(config.get('name', 'referee')),
+        match_s=values['match_s'],
+        name=values['name'],
     )

@@ -68,7 +68,7 @@ def test_typed_settings_are_taken_over():
 def test_the_loop_priority_reaches_the_hardware_config_and_is_checked():
     settings = settings_from_parameters({'scheduler.priority': 0}, YAW)
     assert settings.hardware_config.priority == 0
-    with pytest.raises(HardwareConfigError, match=r'scheduler\.priority must be an integer 0-99'):
+    with pytest.raises(HardwareConfigError, match=r'scheduler\.priority must be <= 99, got 100'):
         settings_from_parameters({'scheduler.priority': 100}, YAW)
 
 

@@ -330,7 +330,7 @@ def test_started_hardware_runs_at_its_rate_and_shuts_down_with_zero(channel):
         ({'arm2': {'type': 'dm8009', 'bus': 'can0', 'id': 3}}, 'both send frame 0x003'),
         (
             {'wheel': {'type': 'm3508', 'bus': 'can0', 'id': 1, 'direction': 2}},
-            'direction must be \\+1 or -1',
+            r'joints\.wheel\.direction must be one of 1, -1, got 2',
         ),
         (
             {'wheel': {'type': 'm3508', 'bus': 'can0', 'id': 1, 'velocity_pid': {'kp': -1}}},

@@ -281,10 +281,12 @@ def test_when_rate_exceeds_baudrate_expect_config_error(imu_path):
 @pytest.mark.parametrize(
     ('change', 'message'),
     [
-        ({'mount': 'turret'}, "mount must be 'gimbal' or 'chassis'"),
+        ({'mount': 'turret'}, "imu.mount must be one of gimbal, chassis, got 'turret'"),
         ({'rate': 100}, r"unknown key\(s\) \['rate'\]"),
-        ({'mount_rpy': [0, 0]}, '3 values'),
-        ({'baudrate': 115200.5}, 'baudrate must be an int'),
+        ({'mount_rpy': [0, 0]}, r'imu\.mount_rpy must have 3 entries, has 2'),
+        ({'baudrate': 115200.5}, r'imu\.baudrate must be integer; got float 115200\.5'),
+        ({'path': 7}, r'imu\.path must be string; got int 7'),
+        ({'rate_hz': float('nan')}, r'imu\.rate_hz must be finite'),
     ],
 )
 def test_when_bad_imu_config_expect_config_error(imu_path, change, message):
