@@ -484,6 +484,39 @@ def test_when_gyro_follows_base_link_expect_translation_along_the_heading_at_ent
     assert r.latest('/chassis_state').reason == 'commanded GYRO (follow source base_link)'
 
 
+def test_when_commanded_in_odom_expect_world_frame_translation_while_spinning(rig):
+    # follow_source odom (RC10's world speed): /vel_cmd's vx, vy are along odom's axes, in
+    # RAW too, whatever the chassis heading. Wheel odometry: odom is the sim world here
+    # (see the square test). First turn the robot away from odom's x axis.
+    r = rig(chassis={'imu.mount': 'none'})
+    cmd = r.command(ChassisCmd.RAW, power_limit=MODE_POWER)
+    r.velocity(wz=1.5)
+    assert r.wait_until(lambda: r.body()[2] > 1.2)
+    r.velocity()
+    assert r.wait_until(lambda: max(map(abs, r.body_twist())) < 0.01)
+    heading = r.body()[2]
+
+    def drive():
+        cmd.follow_source = 'odom'
+        r.velocity(vx=0.8, wz=3.0)  # along odom's x, spinning at 3 rad/s
+        assert r.wait_until(lambda: r.body_twist()[2] > 2.9)
+        return r.record(1.5)
+
+    samples = r.clean(drive)
+    (t0, x0, y0, yaw0, *_), (t1, x1, y1, yaw1, *_) = samples[0], samples[-1]
+    direction = math.atan2(y1 - y0, x1 - x0)
+    print(f'measured RAW odom: heading before {heading:.2f} rad, direction {direction:.4f} '
+          f'rad, speed {math.hypot(x1 - x0, y1 - y0) / (t1 - t0):.3f} m/s, spin '
+          f'{(yaw1 - yaw0) / (t1 - t0):.2f} rad/s')
+    # Along odom's x (+-0.05 rad) at 0.8 m/s (+-5 %), in a straight line (5 cm), while the
+    # chassis turns through ~4.5 rad at its own commanded rate (+-3 %).
+    assert direction == pytest.approx(0.0, abs=0.05)
+    assert math.hypot(x1 - x0, y1 - y0) / (t1 - t0) == pytest.approx(0.8, rel=0.05)
+    assert_straight(samples, 0.05)
+    assert (yaw1 - yaw0) / (t1 - t0) == pytest.approx(3.0, rel=0.03)
+    assert r.latest('/chassis_state').reason == 'commanded RAW (follow source odom)'
+
+
 def assert_straight(samples: Samples, tolerance: float) -> None:
     """Every sample within tolerance [m] of the line through the first and the last.
 

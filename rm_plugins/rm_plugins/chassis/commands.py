@@ -31,6 +31,7 @@ class FollowSource(Enum):
 
     GIMBAL = ''  # the gimbal: heading relative to the chassis = the yaw joint angle
     BASE_LINK = 'base_link'  # the robot's own heading when the mode was entered, held in odom
+    ODOM = 'odom'  # the world: odom's fixed axes, in every mode (RAW included)
 
 
 @dataclass(frozen=True, slots=True)
@@ -71,7 +72,8 @@ def parse_chassis_cmd(msg: Any) -> ChassisRequest:
     source = _SOURCES.get(msg.follow_source)
     if source is None:
         raise InputRejectedError(
-            f"unknown follow_source {msg.follow_source!r} (known: '' = gimbal, 'base_link')"
+            f"unknown follow_source {msg.follow_source!r} (known: '' = gimbal, 'base_link', "
+            "'odom')"
         )
     raw_accel = (msg.accel.linear.x, msg.accel.linear.y, msg.accel.angular.z)
     numbers = (*raw_accel, msg.power_limit)

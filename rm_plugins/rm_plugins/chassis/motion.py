@@ -38,7 +38,13 @@ from rm_base.control import (
     RampLimits,
 )
 from rm_base.errors import InputRejectedError
-from rm_base.geometry import Twist2D, WheelKinematics, desaturate_speeds, world_to_body_twist
+from rm_base.geometry import (
+    Twist2D,
+    WheelKinematics,
+    body_to_world_twist,
+    desaturate_speeds,
+    world_to_body_twist,
+)
 
 _MAX_UPDATE_DT = 0.05
 """Longest dt [s] the ramps and PIDs integrate in one step; a stalled tick (CPU steal) must
@@ -50,7 +56,7 @@ class FrameKind(enum.Enum):
 
     BASE_LINK = 'base_link'  # the chassis itself (RAW)
     GIMBAL = 'gimbal'  # the gimbal's heading
-    HELD = 'held'  # a heading in odom held since the mode was entered
+    HELD = 'held'  # a heading in odom: held since the mode was entered, or odom's own (0)
 
 
 class CommandFrame(NamedTuple):
@@ -68,6 +74,7 @@ class CommandFrame(NamedTuple):
 
 BASE_LINK_FRAME = CommandFrame(FrameKind.BASE_LINK)
 GIMBAL_FRAME = CommandFrame(FrameKind.GIMBAL)
+ODOM_FRAME = CommandFrame(FrameKind.HELD, 0.0)
 
 
 def held_frame(heading: float) -> CommandFrame:
@@ -165,12 +172,13 @@ class MotionPlanner:
         Args:
             mode: the motion mode.
             frame: the frame the command is in (a change re-expresses the ramp state);
-                BASE_LINK_FRAME in RAW.
+                in RAW BASE_LINK_FRAME, or a held heading (ODOM_FRAME: world-frame speeds).
             command: (vx [m/s], vy [m/s], wz [rad/s]) in that frame; wz is used in RAW only.
             dt: time since the previous step [s], finite and > 0 (capped at 50 ms).
             accel: per-axis acceleration override (vx, vy [m/s²], wz [rad/s²]), None for
                 the configured limits.
-            yaw_joint: heading of the command frame relative to the chassis [rad]; 0 in RAW.
+            yaw_joint: heading of the command frame relative to the chassis [rad]; unused
+                in RAW in BASE_LINK_FRAME.
             yaw_joint_rate: its measured rate [rad/s].
             gimbal_yaw_rate: heading rate of the command frame in the world [rad/s], fed
                 forward in FOLLOW/TWIST (0 if unknown).
@@ -185,7 +193,7 @@ class MotionPlanner:
             raise InputRejectedError(f'dt must be finite and > 0 s, got {dt!r}')
         dt = min(dt, _MAX_UPDATE_DT)
         raw = mode is ChassisMotionMode.RAW
-        phi = 0.0 if raw else yaw_joint
+        phi = 0.0 if raw and frame.kind is FrameKind.BASE_LINK else yaw_joint
         if not all(map(math.isfinite, (*command, phi, yaw_joint_rate, gimbal_yaw_rate))):
             raise InputRejectedError(
                 f'command, yaw joint angle and rates must be finite, got {tuple(command)}, '
@@ -199,7 +207,9 @@ class MotionPlanner:
             self._frame = frame
         vx, vy = self._linear.update(command[:2], dt)
         if raw:
-            twist = self._modes.update(mode, (vx, vy, command[2]), 0.0, dt)
+            # a world-frame command turns into the chassis frame; its wz is the chassis' own
+            cx, cy, _ = body_to_world_twist((vx, vy, 0.0), phi) if phi else (vx, vy, 0.0)
+            twist = self._modes.update(mode, (cx, cy, command[2]), 0.0, dt)
         else:
             twist = self._modes.update(
                 mode, (vx, vy, 0.0), phi, dt,

@@ -34,7 +34,10 @@ sends only bad commands still ends in PASSIVE within the timeout.
 follow_source: '' (the gimbal) takes the heading from the yaw joint angle; 'base_link'
 holds the robot's own heading at the moment the mode was entered, in odom (so FOLLOW
 drives straight in the robot frame it had, TWIST swings about it, and GYRO translates in
-that fixed world direction while spinning); it is taken anew after any PASSIVE.
+that fixed world direction while spinning); it is taken anew after any PASSIVE. 'odom'
+gives /vel_cmd's vx, vy in the odom frame's own axes (RC10's world speed), in every mode:
+in RAW wz is the chassis' own rate, FOLLOW turns the chassis to odom's x axis, GYRO spins
+while translating in odom.
 
 The wheel speed loops: the chassis sends wheel *velocity* targets, each wheel's velocity
 PID (its joint's ``velocity_pid`` in can_bridge) runs in the 1 kHz loop, and a power-limit
@@ -77,6 +80,7 @@ from rm_plugins.chassis.config import ChassisConfig, ImuMount, read_config
 from rm_plugins.chassis.motion import (
     BASE_LINK_FRAME,
     GIMBAL_FRAME,
+    ODOM_FRAME,
     CommandFrame,
     MotionPlanner,
     held_frame,
@@ -265,8 +269,10 @@ class StandChassis(PluginBase):
                     None,
                 )
         reason = f'commanded {request.mode.name}'
-        if request.mode is not ChassisMode.RAW and request.source is FollowSource.BASE_LINK:
-            reason += ' (follow source base_link)'
+        if request.source is FollowSource.ODOM or (
+            request.mode is not ChassisMode.RAW and request.source is FollowSource.BASE_LINK
+        ):
+            reason += f' (follow source {request.source.value})'
         return _Decision(request.mode, reason, request, yaw_joint)
 
     # -- feedback -----------------------------------------------------------------------
@@ -426,9 +432,15 @@ class StandChassis(PluginBase):
             self._active = True
         command = self._take_vel_cmd(now_ns)
         mode = _MOTION_MODES[request.mode]
-        if mode is ChassisMotionMode.RAW:
+        if request.source is FollowSource.ODOM:
             self._held_heading = None
-            frame: CommandFrame = BASE_LINK_FRAME
+            frame: CommandFrame = ODOM_FRAME
+            phi = wrap_to_pi(-self._odometry.pose.yaw)
+            phi_rate = -self._odometry.twist.wz
+            gimbal_rate = 0.0
+        elif mode is ChassisMotionMode.RAW:
+            self._held_heading = None
+            frame = BASE_LINK_FRAME
             phi = phi_rate = gimbal_rate = 0.0
         elif request.source is FollowSource.GIMBAL:
             self._held_heading = None

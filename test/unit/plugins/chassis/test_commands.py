@@ -40,7 +40,8 @@ def test_when_power_limit_is_positive_expect_it_in_watts():
 
 
 @pytest.mark.parametrize(('source', 'expected'), [('', FollowSource.GIMBAL),
-                                                   ('base_link', FollowSource.BASE_LINK)])
+                                                   ('base_link', FollowSource.BASE_LINK),
+                                                   ('odom', FollowSource.ODOM)])
 def test_when_follow_source_is_known_expect_its_member(source, expected):
     assert parse_chassis_cmd(cmd(source=source)).source is expected
 

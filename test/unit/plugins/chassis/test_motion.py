@@ -14,7 +14,7 @@ from rm_base.control import (
 )
 from rm_base.geometry import Twist2D, WheelKinematics, mecanum_wheels
 from rm_plugins.chassis import MotionPlanner
-from rm_plugins.chassis.motion import BASE_LINK_FRAME, GIMBAL_FRAME
+from rm_plugins.chassis.motion import BASE_LINK_FRAME, GIMBAL_FRAME, ODOM_FRAME
 
 RAW = ChassisMotionMode.RAW
 FOLLOW = ChassisMotionMode.FOLLOW
@@ -93,6 +93,19 @@ def test_when_switching_frames_expect_the_chassis_velocity_kept():
     out = p.update(FOLLOW, GIMBAL_FRAME, (0.0, 0.0, 0.0), DT, yaw_joint=math.pi / 2)
     assert out.twist.vx == pytest.approx(1.0 - 8.0 * DT)  # braking at 8 m/s^2
     assert out.twist.vy == pytest.approx(0.0, abs=1e-9)
+
+
+def test_when_raw_in_odom_expect_the_world_velocity_turned_into_the_chassis_frame():
+    # The chassis faces +90° in odom (odom's x is 90° to its right: phi = -pi/2), so 1 m/s
+    # along odom's x is 1 m/s to the chassis' right (-y); wz passes as its own rate.
+    p = planner()
+    out = run(p, RAW, (1.0, 0.0, 0.5), 200, frame=ODOM_FRAME, yaw_joint=-math.pi / 2)
+    assert out.twist.vx == pytest.approx(0.0, abs=1e-9)
+    assert out.twist.vy == pytest.approx(-1.0)
+    assert out.twist.wz == pytest.approx(0.5)
+    # In base_link the same phi is ignored: RAW is the chassis frame.
+    out = run(planner(), RAW, (1.0, 0.0, 0.0), 200, yaw_joint=-math.pi / 2)
+    assert (out.twist.vx, out.twist.vy) == pytest.approx((1.0, 0.0))
 
 
 def test_when_following_a_gimbal_turned_left_expect_a_left_turn_and_gimbal_frame_motion():
