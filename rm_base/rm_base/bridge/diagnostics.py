@@ -154,6 +154,7 @@ class DiagnosticsReporter:
             'commands_rejected': diag['commands_rejected'],
             'last_rejection': diag['last_rejection'] or '',
             'update_errors': diag['update_errors'],
+            **diag.get('details', {}),
         }
         return _status(
             f'{self._prefix}joint {state.name}',

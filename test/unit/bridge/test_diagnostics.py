@@ -110,6 +110,15 @@ def test_joint_values_and_hardware_id():
     assert v['last_rejection'] == 'velocity is nan'
 
 
+def test_a_families_details_join_the_joints_values():
+    diag = {**joint_diag('none'), 'details': {'torque_range [N*m]': 18.0}}
+    reporter = DiagnosticsReporter('can_bridge')
+    state = JointState('wheel', 0.0, 0.0, 0.0, math.nan, True, 0, 0, 0.0)
+    msg = reporter.build({'joints': {'wheel': diag}, 'buses': {'can0': bus_stats()},
+                          'scheduler': scheduler_stats()}, [state], CommandStats(), time_msg(0))
+    assert values(msg.status[0])['torque_range [N*m]'] == '18'
+
+
 def test_offline_joint_reports_nan_temperature():
     status = build(DiagnosticsReporter('b'), 'offline', online=False)['b: joint wheel']
     assert values(status)['online'] == 'False'

@@ -273,6 +273,8 @@ def test_piper_encodes_torque_over_18_nm_unless_told_8():
     for options, t_max, raw in (({}, 18.0, 141), ({'torque_range': 8}, 8.0, 159)):
         a = make('piper', id=1, **options)
         assert a.limits.t_max == t_max
+        # the encoding it assumes is on the joint's /diagnostics
+        assert a.diagnostics()['details'] == {'torque_range [N*m]': t_max}
         piper_feedback(a, T0, 0.0, 0.0, 0.0)
         a.set_command(Mode.MIT, T0, position=0.0, velocity=0.0, effort=2.0, kp=0.0, kd=0.0)
         a.update(T0, 0.001)

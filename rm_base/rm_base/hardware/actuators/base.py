@@ -629,4 +629,9 @@ class Actuator(abc.ABC):
             'commands_rejected': self.commands_rejected,
             'last_rejection': self.last_rejection,
             'update_errors': self.update_errors,
+            'details': self.details(),
         }
+
+    def details(self) -> dict[str, str | float]:
+        """What this joint's family adds to its /diagnostics (a setting a user must see)."""
+        return {}

@@ -56,6 +56,7 @@ class PiperJoint(Actuator):
                 f"joints.{config.name}.torque_range must be 18 or 8 (N·m, what the arm's "
                 f'firmware decodes), got {torque_range!r}'
             )
+        self.torque_range = float(torque_range)
         self.limits = limits_from_config(config.name, base, config.options.get('limits'))
         kt = piper.EFFORT_PER_AMP[config.id - 1]
         self.defaults = Defaults(1.0, kt, self.limits.t_max, self.limits.v_max, 80.0)
@@ -72,6 +73,10 @@ class PiperJoint(Actuator):
 
     def _feedback_ids(self) -> tuple[int, ...]:
         return (self._angle_id, self._speed_id)
+
+    def details(self) -> dict[str, str | float]:
+        """The torque encoding: which firmware this joint assumes."""
+        return {'torque_range [N*m]': self.torque_range}
 
     def _decode(self, msg: can.Message) -> tuple[float, float, float, float | None, int]:
         if msg.arbitration_id == self._angle_id:
