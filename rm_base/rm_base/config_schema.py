@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Callable, Collection, Mapping, Sequence
 from typing import Any, NamedTuple
 
 from rm_base.errors import ConfigError
@@ -354,6 +354,31 @@ def numbers(
                f'length {length}' if length else '')
 
 
+def check_table(
+    where: str,
+    data: object,
+    allowed: Collection[str] | None,
+    error: type[ConfigError] = ConfigError,
+) -> None:
+    """Raise error unless data is a mapping whose keys are all allowed (None: any)."""
+    if not isinstance(data, Mapping):
+        raise error(f'{where} must be a mapping, got {describe_value(data)}')
+    if allowed is not None:
+        unknown = set(data) - set(allowed)
+        if unknown:
+            raise error(f'{where}: unknown key(s) {sorted(unknown)}; allowed: {sorted(allowed)}')
+
+
+def read_value(
+    where: str, key: Key, data: Mapping[str, Any], error: type[ConfigError] = ConfigError
+) -> Any:
+    """One key's typed value in data; error names ``<where>.<key>``."""
+    try:
+        return key.read(data)
+    except InvalidValueError as err:
+        raise error(f'{where}.{key.name} {err}') from None
+
+
 @dataclasses.dataclass(frozen=True)
 class Schema:
     """The keys of one config table.
@@ -386,21 +411,9 @@ class Schema:
             error: data is not a mapping; an unknown key (unless open); a key missing,
                 of the wrong type or out of bounds, named as ``<where>.<key>``.
         """
-        if not isinstance(data, Mapping):
-            raise error(f'{where} must be a mapping, got {describe_value(data)}')
-        if not self.open:
-            unknown = set(data) - self.names
-            if unknown:
-                raise error(
-                    f'{where}: unknown key(s) {sorted(unknown)}; allowed: {sorted(self.names)}'
-                )
-        values = {}
-        for key in self.keys:
-            try:
-                values[key.name] = key.read(data)
-            except InvalidValueError as err:
-                raise error(f'{where}.{key.name} {err}') from None
-        return values
+        check_table(where, data, None if self.open else self.names, error)
+        assert isinstance(data, Mapping)
+        return {key.name: read_value(where, key, data, error) for key in self.keys}
 
     def extras(self, data: Mapping[str, Any]) -> dict[str, Any]:
         """The keys of data this schema does not declare (an open table's rest)."""

@@ -6,11 +6,11 @@ rm_base.sim.launcher).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+from rm_base.config_schema import REQUIRED, check_table, number, read_value
 from rm_base.sim.devices import SimDevice
 from rm_base.sim.errors import SimConfigError
 
@@ -44,19 +44,16 @@ def config_number(
     cfg: Mapping[str, Any], key: str, owner: str, default: float | None = None
 ) -> float:
     """``cfg[key]`` (or default) as a finite float; SimConfigError naming ``owner.key``."""
-    value = cfg.get(key, default)
-    if isinstance(value, bool) or not isinstance(value, int | float) or not math.isfinite(value):
-        raise SimConfigError(f'{owner}.{key} must be a finite number, got {value!r}')
-    return float(value)
+    value: float = read_value(
+        owner, number(key, REQUIRED if default is None else default, description=key), cfg,
+        SimConfigError,
+    )
+    return value
 
 
 def check_keys(cfg: Any, allowed: set[str] | frozenset[str], owner: str) -> None:
     """SimConfigError unless cfg is a mapping with only allowed keys."""
-    if not isinstance(cfg, Mapping):
-        raise SimConfigError(f'{owner} must be a mapping, got {cfg!r}')
-    unknown = sorted(set(cfg) - allowed)
-    if unknown:
-        raise SimConfigError(f'{owner}: unknown key(s) {unknown}; known: {sorted(allowed)}')
+    check_table(owner, cfg, allowed, SimConfigError)
 
 
 def motor_from_config(devices: Mapping[str, SimDevice], name: Any, owner: str) -> SimDevice:
