@@ -58,6 +58,17 @@ REQUIRED: Any = _Required()
 """Default of a key that has none: a missing value is a start-up error."""
 
 
+class _Optional:
+    """Marker for an optional key's default in the reference: none, or the type's own."""
+
+    def __repr__(self) -> str:
+        return 'OPTIONAL'
+
+
+OPTIONAL: Any = _Optional()
+"""An optional key's default as ``DeclaredParameter.default`` shows it (None is "required")."""
+
+
 class InvalidValueError(Exception):
     """A value failed a check; the text completes "<key> ..." (``must be > 0, got -1``)."""
 
@@ -231,20 +242,14 @@ class Key:
 
     def declared(self, prefix: str) -> DeclaredParameter:
         """This key's row of the reference, under prefix (``buses.<bus>.``)."""
-        default = None if self.default is REQUIRED else self.default
-        if default is None and self.default is not REQUIRED:
-            default = _NoDefault()
+        if self.default is REQUIRED:
+            default = None
+        else:
+            default = OPTIONAL if self.default is None else self.default
         return DeclaredParameter(
             prefix + self.name, self.type_name, self.unit, default, self.constraint,
             self.description,
         )
-
-
-class _NoDefault:
-    """An optional key's "default" in the reference: absent means none / the type's own."""
-
-    def __repr__(self) -> str:
-        return 'none'
 
 
 def number(
@@ -359,14 +364,15 @@ def check_table(
     data: object,
     allowed: Collection[str] | None,
     error: type[ConfigError] = ConfigError,
-) -> None:
-    """Raise error unless data is a mapping whose keys are all allowed (None: any)."""
+) -> Mapping[str, Any]:
+    """Data, if it is a mapping whose keys are all allowed (None: any); else raise error."""
     if not isinstance(data, Mapping):
         raise error(f'{where} must be a mapping, got {describe_value(data)}')
     if allowed is not None:
         unknown = set(data) - set(allowed)
         if unknown:
             raise error(f'{where}: unknown key(s) {sorted(unknown)}; allowed: {sorted(allowed)}')
+    return data
 
 
 def read_value(
@@ -411,9 +417,8 @@ class Schema:
             error: data is not a mapping; an unknown key (unless open); a key missing,
                 of the wrong type or out of bounds, named as ``<where>.<key>``.
         """
-        check_table(where, data, None if self.open else self.names, error)
-        assert isinstance(data, Mapping)
-        return {key.name: read_value(where, key, data, error) for key in self.keys}
+        table = check_table(where, data, None if self.open else self.names, error)
+        return {key.name: read_value(where, key, table, error) for key in self.keys}
 
     def extras(self, data: Mapping[str, Any]) -> dict[str, Any]:
         """The keys of data this schema does not declare (an open table's rest)."""

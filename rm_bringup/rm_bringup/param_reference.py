@@ -18,6 +18,7 @@ from typing import Any
 import rclpy
 from rclpy.context import Context
 from rm_base.bridge import CanBridgeNode
+from rm_base.config_schema import OPTIONAL
 from rm_base.host.node import RobotHost
 from rm_base.plugin.params import DeclaredParameter, declared_parameters
 from rm_base.ros_env import prepare_ros_process
@@ -77,7 +78,7 @@ def collect(robot: str = ROBOT) -> dict[str, list[DeclaredParameter]]:
 def _value(value: Any) -> str:
     if value is None:
         return '*required*'
-    if repr(value) == 'none':  # an optional key of a schema
+    if value is OPTIONAL:
         return '*none*'
     if isinstance(value, str):
         return f'`{value!r}`' if value else "`''`"

@@ -4,6 +4,7 @@ import math
 
 import pytest
 from rm_base.config_schema import (
+    OPTIONAL,
     REQUIRED,
     Schema,
     boolean,
@@ -98,5 +99,5 @@ def test_the_reference_rows_come_from_the_same_declaration():
     assert rows['chassis.<wheel>.count'].constraint == '>= 1, <= 8'
     assert rows['chassis.<wheel>.kind'].constraint == 'one of: mecanum, omni'
     assert rows['chassis.<wheel>.offset'].constraint == 'length 2'
-    assert repr(rows['chassis.<wheel>.limit'].default) == 'none'  # optional, no default
+    assert rows['chassis.<wheel>.limit'].default is OPTIONAL  # optional, no default
     assert rows['chassis.<wheel>.direction'].type_name == 'integer'

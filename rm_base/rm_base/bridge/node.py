@@ -232,18 +232,22 @@ class CanBridgeNode(Node):
         params = PluginParams(self, plugin='', prefix='')
         typed: dict[str, Any] = {}
 
-        def declare(name: str, read: Callable[..., Any], *args: Any, **kwargs: Any) -> None:
+        def fresh(name: str) -> str:
             # Declared from the overrides already (if set): redeclare with a descriptor.
             if self.has_parameter(name):
                 self.undeclare_parameter(name)
-            typed[name] = read(name, *args, **kwargs)
+            return name
+
+        def declare(name: str, read: Callable[..., Any], *args: Any, **kwargs: Any) -> None:
+            typed[name] = read(fresh(name), *args, **kwargs)
 
         def declare_schema(prefix: str, schema: Schema, **defaults: Any) -> None:
             group = params.group(prefix)
             for key in schema.keys:
                 if key.name in defaults:
                     key = dataclasses.replace(key, default=defaults[key.name])  # noqa: PLW2901
-                declare(f'{prefix}.{key.name}', lambda _name, k=key: group.declare_key(k))
+                fresh(group.key(key.name))
+                typed[group.key(key.name)] = group.declare_key(key)
 
         declare(
             'publish_rate',
