@@ -289,6 +289,14 @@ def test_euler_only_legacy_frames_give_an_orientation(run, tmp_path):
         o = h.imu[0].orientation
         assert (o.z, o.w) == pytest.approx((math.sin(math.radians(15)), math.cos(math.radians(15))))
         assert h.imu[0].linear_acceleration_covariance[0] == -1.0  # not provided
+        # A unit that appends an item this driver cannot read (0x83): what came before it
+        # is published, and /diagnostics counts the frames whose tail was left unread.
+        port.write(hipnuc.encode_frame(payload + b'\x83' + bytes(60)))
+        assert wait_until(lambda: len(h.imu) == 2, WAIT)
+        assert wait_until(
+            lambda: (s := h.imu_status()) is not None
+            and s['frames with unread items'] == '1 (item 0x83)', WAIT,
+        )
     finally:
         port.close()
 

@@ -129,6 +129,9 @@ class Hi220(PluginBase):
         self._device_clock = DeviceClock()
         self._published = 0
         self._user_id: int | None = None  # the unit's user id (0x90), when it sends it
+        # frames whose tail was not read (an item of unknown length), and the last such tag
+        self._unread_frames = 0
+        self._unread_tag: int | None = None
         self._next_diagnostics_ns: int | None = None
         self._report_published = 0
         self._report_ns: int | None = None
@@ -168,6 +171,8 @@ class Hi220(PluginBase):
         if sample.user_id is not None and sample.user_id != self._user_id:
             with self._lock:
                 self._user_id = sample.user_id
+        if sample.unread_tag is not None:
+            self._note_unread(sample.unread_tag)
         reading = reading_from_sample(sample, self.mounting)
         if (
             reading.orientation is None
@@ -189,12 +194,25 @@ class Hi220(PluginBase):
         with self._lock:
             self._published += 1
 
+    def _note_unread(self, tag: int) -> None:
+        with self._lock:
+            first = self._unread_tag != tag
+            self._unread_frames += 1
+            self._unread_tag = tag
+        if first:
+            self.logger.warning(
+                f'frames carry item 0x{tag:02X}, which this driver cannot read: the items '
+                'before it are used, it and the rest of each such frame are ignored '
+                '(configure the unit to send 0x91)'
+            )
+
     # -- diagnostics ------------------------------------------------------------------------
 
     def _publish_diagnostics(self, now, stats: ReaderStats) -> None:
         state = LinkState(self.state.value)
         with self._lock:
             published, user_id = self._published, self._user_id
+            unread_frames, unread_tag = self._unread_frames, self._unread_tag
         now_ns = now.nanoseconds
         rate = math.nan
         if self._report_ns is not None and now_ns > self._report_ns:
@@ -208,6 +226,9 @@ class Hi220(PluginBase):
             values={
                 'published': published, 'rate [Hz]': f'{rate:.1f}',
                 'user_id': 'not sent' if user_id is None else user_id,
+                'frames with unread items': (
+                    0 if unread_tag is None else f'{unread_frames} (item 0x{unread_tag:02X})'
+                ),
             },
         )
         msg = DiagnosticArray()

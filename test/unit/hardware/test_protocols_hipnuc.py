@@ -103,6 +103,19 @@ def test_inssol_item_is_skipped_not_decoded():
     assert s.user_id == 1
 
 
+def test_an_item_of_unknown_length_ends_the_payload_and_keeps_what_came_before():
+    # 0x91 then 0x83 (float INS, layout unknown here): the 0x91 is read, 0x83 is named.
+    payload = H2[hipnuc.HEADER_LENGTH:] + b'\x83' + bytes(40) + hipnuc.encode_legacy(user_id=9)
+    s = hipnuc.decode_payload(payload)
+    assert s.acc == pytest.approx((0.0, 0.0, 9.80665), abs=1e-5)
+    assert s.unread_tag == 0x83
+    assert s.user_id is None  # after the unknown item: not read
+    assert hipnuc.decode_payload(H2[hipnuc.HEADER_LENGTH:]).unread_tag is None
+    p = hipnuc.HipnucParser()
+    assert [x.unread_tag for x in p.feed(hipnuc.encode_frame(payload))] == [0x83]
+    assert (p.frames_ok, p.decode_errors) == (1, 0)
+
+
 @pytest.mark.parametrize(
     ('frame', 'error', 'match'),
     [
@@ -117,7 +130,7 @@ def test_malformed_frames(frame, error, match):
 
 
 def test_malformed_payloads():
-    with pytest.raises(ProtocolError, match='unknown HiPNUC item tag 0x42'):
+    with pytest.raises(ProtocolError, match='unknown HiPNUC item tag 0x42 at payload offset 0'):
         hipnuc.decode_payload(b'\x42\x00')
     with pytest.raises(FrameLengthError, match='needs 76 bytes, 10 left'):
         hipnuc.decode_payload(b'\x91' + bytes(9))

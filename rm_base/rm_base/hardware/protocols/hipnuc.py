@@ -153,6 +153,8 @@ class ImuSample:
         status: main_status (0x91).
         user_id: user id (0x90).
         skipped_tags: items recognised but not decoded (e.g. 0x81).
+        unread_tag: the first item of unknown length (e.g. 0x83); it and the rest of the
+            payload were not read, the items before it were.
     """
 
     acc: Vector3 | None = None
@@ -166,17 +168,20 @@ class ImuSample:
     status: int | None = None
     user_id: int | None = None
     skipped_tags: tuple[int, ...] = ()
+    unread_tag: int | None = None
 
 
 def decode_payload(payload: bytes | bytearray) -> ImuSample:
     """Decode the items of a payload into one :class:`ImuSample` (SI units).
 
-    Later items overwrite earlier ones of the same kind, as in HiPNUC's decoder.
+    Later items overwrite earlier ones of the same kind, as in HiPNUC's decoder. An item
+    of unknown length (0x83, whose layout is not in docs/PROTOCOLS.md) ends the reading:
+    the items before it are kept and the sample names it in ``unread_tag``, so a unit that
+    sends 0x91 followed by 0x83 still gives its 0x91 every frame.
 
     Raises:
         FrameLengthError: an item runs past the end of the payload.
-        ProtocolError: an unknown item tag (its length is unknown, so the rest of the
-            payload cannot be parsed).
+        ProtocolError: the payload starts with an unknown item tag (nothing to keep).
     """
     f: dict[str, object] = {}
     skipped: list[int] = []
@@ -186,7 +191,10 @@ def decode_payload(payload: bytes | bytearray) -> ImuSample:
         tag = payload[ofs]
         size = ITEM_LENGTHS.get(tag)
         if size is None:
-            raise ProtocolError(f'unknown HiPNUC item tag 0x{tag:02X} at payload offset {ofs}')
+            if ofs == 0:
+                raise ProtocolError(f'unknown HiPNUC item tag 0x{tag:02X} at payload offset 0')
+            f['unread_tag'] = tag
+            break
         if ofs + size > n:
             raise FrameLengthError(
                 f'HiPNUC item 0x{tag:02X} needs {size} bytes, {n - ofs} left in the payload'
