@@ -18,6 +18,7 @@ the same numbers come out on every run.
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import pytest
@@ -170,8 +171,17 @@ def p90(values):
     return ordered[int(0.9 * (len(ordered) - 1))]
 
 
-def test_when_rate_yaw_is_commanded_expect_the_barrel_to_turn_at_that_rate_in_the_world(sim):
-    s = sim()
+# The yaw loop in the incremental form (RoboMaster firmware's) with a tracking
+# differentiator on its target: the same gains, the same outcome. Over the 4 s the world
+# yaw passes +-pi, where an unwrapped angle error would saturate the loop.
+INCREMENTAL_YAW = {'yaw_pid.form': 'incremental', 'yaw_pid.td_acceleration_limit': 200.0}
+
+
+@pytest.mark.parametrize('gimbal', [{}, INCREMENTAL_YAW], ids=['positional', 'incremental'])
+def test_when_rate_yaw_is_commanded_expect_the_barrel_to_turn_at_that_rate_in_the_world(
+    sim, gimbal
+):
+    s = sim(gimbal=gimbal)
     s.command(GimbalCmd.RATE, rate_yaw=1.0)
     assert s.robot.wait_until(lambda: s.in_state(GimbalCmd.RATE), WAIT)
     s.settle(1.0)  # past the start-up transient (loop time constant 1 / kp = 0.05 s)
@@ -182,6 +192,8 @@ def test_when_rate_yaw_is_commanded_expect_the_barrel_to_turn_at_that_rate_in_th
     # rate / kp = 0.05 rad that varies by a few hundredths, so over 3 s the mean rate is
     # 1 rad/s within +-5 %.
     assert rate == pytest.approx(1.0, rel=0.05), why
+    steps = [b - a for (_, a), (_, b) in itertools.pairwise(samples)]
+    assert max(steps) < 0.03 and min(steps) > 0.01, why  # 0.02 rad per sample, no jump
     assert s.state().reason == 'rates held in the world frame'
 
 

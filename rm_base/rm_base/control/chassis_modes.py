@@ -40,7 +40,7 @@ from dataclasses import dataclass
 from enum import Enum
 
 from rm_base.control._validation import require_non_negative, require_positive, require_real
-from rm_base.control.pid import Pid, PidGains
+from rm_base.control.pid_form import PidConfig, build_pid
 from rm_base.errors import ConfigError, InputRejectedError
 from rm_base.geometry.kinematics import Twist2D, body_to_world_twist
 
@@ -91,20 +91,20 @@ class FollowParams:
     """FOLLOW (and TWIST) heading control.
 
     Attributes:
-        gains: PID from the heading error [rad] to wz [rad/s]; angle_mode must be on, so
-            the chassis turns the short way round. Its output_limit bounds the feedback
-            part of wz; the feed-forward comes on top.
+        gains: PID (positional or incremental) from the heading error [rad] to wz
+            [rad/s]; angle_mode must be on, so the chassis turns the short way round. Its
+            output_limit bounds the feedback part of wz; the feed-forward comes on top.
         offset: Yaw joint angle phi the chassis holds in FOLLOW [rad]; 0 lines the chassis
             up with the gimbal, pi/4 keeps it turned 45° clockwise of the gimbal.
     """
 
-    gains: PidGains
+    gains: PidConfig
     offset: float = 0.0
 
     def __post_init__(self) -> None:
         owner = type(self).__name__
-        if not isinstance(self.gains, PidGains):
-            raise ConfigError(f'{owner}.gains must be a PidGains, got {self.gains!r}')
+        if not isinstance(self.gains, PidConfig):
+            raise ConfigError(f'{owner}.gains must be a PID config, got {self.gains!r}')
         if not self.gains.angle_mode:
             raise ConfigError(f'{owner}.gains must have angle_mode=True (the error is an angle)')
         offset = require_real(owner, 'offset', self.offset)
@@ -228,7 +228,7 @@ class ChassisModeController:
         if not isinstance(params, ChassisModeParams):
             raise ConfigError(f'params must be a ChassisModeParams, got {params!r}')
         self._params = params
-        self._pid = Pid(params.follow.gains)
+        self._pid = build_pid(params.follow.gains)
         self.reset()
 
     @property

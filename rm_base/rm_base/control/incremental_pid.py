@@ -11,6 +11,10 @@ The increments are those of a positional PID (P, rectangle-rule I, D on the erro
 the integral lives in the output itself; clamping the output therefore also stops it
 winding up. The state starts at rest: the first update acts as if the previous error was
 zero, but has no derivative (no kick from the first error).
+
+In angle mode (a gimbal or heading loop) the error is wrapped to [-pi, pi) so the loop
+turns the short way, its rate is taken from the wrapped change, and the TD follows the
+setpoint the short way round from where it is.
 """
 
 import math
@@ -18,7 +22,18 @@ from dataclasses import dataclass
 
 from rm_base.control._validation import require_non_negative, require_positive
 from rm_base.control.tracking_differentiator import TdParams, TrackingDifferentiator
-from rm_base.errors import InputRejectedError
+from rm_base.errors import ConfigError, InputRejectedError
+
+_PI = math.pi
+_TAU = 2.0 * math.pi
+
+
+def _wrap(angle: float) -> float:
+    """The angle [rad] wrapped to [-pi, pi)."""
+    if -_PI <= angle < _PI:
+        return angle
+    angle = math.remainder(angle, _TAU)
+    return angle - _TAU if angle >= _PI else angle
 
 
 @dataclass(frozen=True, slots=True)
@@ -30,12 +45,14 @@ class IncrementalPidGains:
         ki: Integral gain [output / (error·s)], >= 0.
         kd: Derivative gain [output / (error/s)], >= 0.
         output_limit: Output clamped to ±output_limit [output], > 0 (inf: no limit).
+        angle_mode: The error is an angle [rad]: wrapped to [-pi, pi).
     """
 
     kp: float = 0.0
     ki: float = 0.0
     kd: float = 0.0
     output_limit: float = math.inf
+    angle_mode: bool = False
 
     def __post_init__(self) -> None:
         owner = type(self).__name__
@@ -46,6 +63,8 @@ class IncrementalPidGains:
             'output_limit',
             require_positive(owner, 'output_limit', self.output_limit, finite=False),
         )
+        if not isinstance(self.angle_mode, bool):
+            raise ConfigError(f'{owner}.angle_mode must be a bool, got {self.angle_mode!r}')
 
 
 class IncrementalPid:
@@ -113,20 +132,27 @@ class IncrementalPid:
             raise InputRejectedError(
                 f'setpoint and measurement must be finite, got {setpoint!r}, {measurement!r}'
             )
+        g = self._gains
+        angle = g.angle_mode
         td = self._td
         if td is not None:
             if not self._td_started:
                 td.reset(measurement)
                 self._td_started = True
+            tracked = td.value
+            if angle and tracked is not None:
+                setpoint = tracked + _wrap(setpoint - tracked)
             setpoint = td.update(setpoint, dt)
 
-        g = self._gains
         error = setpoint - measurement
+        if angle:
+            error = _wrap(error)
         d_prev = self._d_prev
         if d_prev is None:
             rate = d_prev = 0.0
         else:
-            rate = (error - self._e_prev) / dt
+            change = error - self._e_prev
+            rate = (_wrap(change) if angle else change) / dt
         increment = g.kp * (error - self._e_prev) + g.ki * error * dt + g.kd * (rate - d_prev)
         output = self._output + increment
         limit = g.output_limit

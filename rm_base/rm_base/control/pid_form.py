@@ -31,6 +31,16 @@ class IncrementalPidConfig:
     gains: IncrementalPidGains = dataclasses.field(default_factory=IncrementalPidGains)
     setpoint_td: TdParams | None = None
 
+    @property
+    def output_limit(self) -> float:
+        """The output bound, as :attr:`PidGains.output_limit`."""
+        return self.gains.output_limit
+
+    @property
+    def angle_mode(self) -> bool:
+        """Whether the error is an angle, as :attr:`PidGains.angle_mode`."""
+        return self.gains.angle_mode
+
 
 PidConfig = PidGains | IncrementalPidConfig
 Controller = Pid | IncrementalPid
@@ -57,6 +67,18 @@ def pid_config(data: Mapping[str, Any] | None) -> PidConfig:
     if td and 'acceleration_limit' not in td:
         raise ConfigError('td_filter_factor needs td_acceleration_limit')
     return IncrementalPidConfig(IncrementalPidGains(**fields), TdParams(**td) if td else None)
+
+
+def incremental_like(gains: PidGains, setpoint_td: TdParams | None = None) -> IncrementalPidConfig:
+    """The incremental PID with the kp, ki, kd, output limit and angle mode of gains.
+
+    The positional-only fields (integral limit and separation, deadband, D low-pass) have
+    no incremental counterpart: the output limit bounds the integral.
+    """
+    return IncrementalPidConfig(
+        IncrementalPidGains(gains.kp, gains.ki, gains.kd, gains.output_limit, gains.angle_mode),
+        setpoint_td,
+    )
 
 
 def build_pid(config: PidConfig) -> Controller:

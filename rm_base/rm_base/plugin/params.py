@@ -267,7 +267,7 @@ class PluginParams:
         )
         if unique and len(set(values)) != len(values):
             duplicates = sorted({v for v in values if values.count(v) > 1})
-            raise self._error(name, f'has duplicate entries: {", ".join(duplicates)}')
+            raise self.error(name, f'has duplicate entries: {", ".join(duplicates)}')
         return values
 
     def boolean_array(
@@ -355,10 +355,10 @@ class PluginParams:
                 key, None if required else default, descriptor
             )
         except Exception as err:  # rclpy raises several unrelated exception types here
-            raise self._error(name, f'cannot be declared: {err}') from err
+            raise self.error(name, f'cannot be declared: {err}') from err
         value = parameter.value
         if value is None:
-            raise self._error(
+            raise self.error(
                 name,
                 f'is required but not set ({type_name}'
                 f'{", " + unit if unit else ""}: {description})',
@@ -368,11 +368,12 @@ class PluginParams:
         except WrongTypeError as err:
             unit_text = f' [{unit}]' if unit else ''
             got = str(err) or f'got {describe_value(value)}'
-            raise self._error(name, f'must be {type_name}{unit_text}; {got}') from None
+            raise self.error(name, f'must be {type_name}{unit_text}; {got}') from None
         except InvalidValueError as err:
-            raise self._error(name, str(err)) from None
+            raise self.error(name, str(err)) from None
 
-    def _error(self, name: str, problem: str) -> ParameterError:
+    def error(self, name: str, problem: str) -> ParameterError:
+        """The error for a problem with key name, naming the plugin and the full key."""
         key = self.key(name)
         if self.plugin:
             kind = f' ({self.plugin_type})' if self.plugin_type else ''

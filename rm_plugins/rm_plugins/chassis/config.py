@@ -26,6 +26,7 @@ from rm_base.control import (
 from rm_base.errors import ConfigError
 from rm_base.geometry import MECANUM_ROLLER_SIGNS, WheelKinematics, mecanum_wheels, omni_wheels
 from rm_base.plugin import ParameterError, PluginParams
+from rm_base.plugin.pid_params import loop_pid
 
 
 class Kinematics(Enum):
@@ -225,7 +226,7 @@ def read_config(p: PluginParams) -> ChassisConfig:
                   'integral_limit': 1.0, 'integral_separation': 0.3},
     )
     follow = FollowParams(
-        follow_gains,
+        loop_pid(p, 'follow.pid', follow_gains, setpoint_unit='rad'),
         p.double('follow.offset', 0.0,
                  description='yaw joint angle held in FOLLOW (gimbal left of chassis > 0)',
                  unit='rad', ge=-math.pi, le=math.pi),

@@ -4,9 +4,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from rm_base.control import PidGains
+from rm_base.control import PidConfig, PidGains
 from rm_base.geometry.ballistics import STANDARD_GRAVITY, ProjectileModel
 from rm_base.plugin import PluginConfigError, PluginParams
+from rm_base.plugin.pid_params import loop_pid
 
 
 @dataclass(frozen=True)
@@ -15,13 +16,14 @@ class AxisConfig:
 
     Attributes:
         joint: joint name in the robot config.
-        angle_pid: outer loop: world angle error [rad] -> world rate [rad/s]; angle mode;
-            its output_limit is the axis' largest world rate.
+        angle_pid: outer loop: world angle error [rad] -> world rate [rad/s]; angle mode,
+            positional or incremental (``<axis>_pid.form``); its output_limit is the axis'
+            largest world rate.
         max_joint_velocity: largest joint velocity target sent to the bridge [rad/s].
     """
 
     joint: str
-    angle_pid: PidGains
+    angle_pid: PidConfig
     max_joint_velocity: float
 
 
@@ -78,7 +80,7 @@ class GimbalConfig:
 def _axis(p: PluginParams, name: str, default_joint: str, defaults: dict[str, float]) -> AxisConfig:
     joint = p.string(f'{name}_joint', default_joint, description=f'{name} joint name')
     key = f'{name}_pid'
-    gains = PidGains(
+    positional = PidGains(
         kp=p.double(
             f'{key}.kp',
             defaults['kp'],
@@ -123,6 +125,7 @@ def _axis(p: PluginParams, name: str, default_joint: str, defaults: dict[str, fl
         ),
         angle_mode=True,
     )
+    gains = loop_pid(p, key, positional, setpoint_unit='rad')
     max_velocity = p.double(
         f'{name}_max_joint_velocity',
         defaults['max_joint_velocity'],

@@ -19,7 +19,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from rm_base.control import LowPassFilter, Pid, PidGains
+from rm_base.control import LowPassFilter, PidConfig, build_pid
 from rm_base.geometry import wrap_to_pi
 
 
@@ -86,10 +86,10 @@ class AxisLoop:
         max_joint_velocity: bound of the joint velocity target [rad/s].
     """
 
-    def __init__(self, gains: PidGains, max_joint_velocity: float) -> None:
+    def __init__(self, gains: PidConfig, max_joint_velocity: float) -> None:
         if not gains.angle_mode:
             raise ValueError('a gimbal angle loop needs angle_mode gains')
-        self._pid = Pid(gains)
+        self._pid = build_pid(gains)
         self._max_rate = gains.output_limit
         self._max_velocity = max_joint_velocity
 

@@ -8,6 +8,8 @@ from rm_base.control import (
     ChassisMotionMode,
     FollowParams,
     GyroParams,
+    IncrementalPidConfig,
+    IncrementalPidGains,
     PidGains,
     TwistParams,
     TwistWaveform,
@@ -88,6 +90,19 @@ def test_when_follow_error_crosses_pi_expect_short_way_round():
     # chassis heading -3.0 -> setpoint 3.0: error 6.0 wrapped = 6 - 2 pi = -0.28319;
     # wz = 2 * -0.28319 = -0.56637
     twist = make(kp=2.0, offset=-3.0).update(FOLLOW, (0.0, 0.0, 0.0), 3.0, 0.01)
+    assert twist.wz == pytest.approx(2.0 * (6.0 - 2.0 * math.pi))
+
+
+def test_when_follow_runs_the_incremental_form_expect_the_same_short_way_round():
+    gains = IncrementalPidConfig(IncrementalPidGains(kp=2.0, angle_mode=True))
+    controller = ChassisModeController(
+        ChassisModeParams(
+            follow=FollowParams(gains, offset=-3.0),
+            twist=TwistParams(amplitude=0.6, period_s=1.0),
+            gyro=GyroParams(spin_rate=8.0),
+        )
+    )
+    twist = controller.update(FOLLOW, (0.0, 0.0, 0.0), 3.0, 0.01)
     assert twist.wz == pytest.approx(2.0 * (6.0 - 2.0 * math.pi))
 
 
@@ -281,6 +296,8 @@ def test_when_update_input_invalid_expect_rejected(kwargs, message):
 def test_when_follow_gains_not_angle_mode_expect_config_error():
     with pytest.raises(ConfigError, match='angle_mode'):
         FollowParams(PidGains(kp=1.0))
+    with pytest.raises(ConfigError, match='angle_mode'):
+        FollowParams(IncrementalPidConfig(IncrementalPidGains(kp=1.0)))
 
 
 @pytest.mark.parametrize(

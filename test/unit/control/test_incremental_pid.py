@@ -89,3 +89,26 @@ def test_when_gain_negative_expect_config_error():
 def test_when_output_limit_zero_expect_config_error():
     with pytest.raises(ConfigError, match='output_limit'):
         IncrementalPidGains(output_limit=0.0)
+
+
+def test_in_angle_mode_the_error_turns_the_short_way_and_its_rate_has_no_wrap_spike():
+    pid = IncrementalPid(IncrementalPidGains(kp=1.0, kd=0.01, angle_mode=True))
+    # From 3.0 rad to -3.0 rad: the short way is +0.283 rad across pi, not -6 rad.
+    assert pid.update(-3.0, 3.0, 0.001) == pytest.approx(2.0 * math.pi - 6.0)
+    # The error crosses -pi to +pi (measurement moves 0.02 rad): wrapped, the change is
+    # -0.02 rad, so the D increment is small, not a 2*pi/dt kick.
+    pid = IncrementalPid(IncrementalPidGains(kp=0.0, kd=0.001, angle_mode=True))
+    pid.update(0.0, math.pi - 0.01, 0.001)
+    out = pid.update(0.0, -math.pi + 0.01, 0.001)
+    assert abs(out) < 0.05
+    positional = IncrementalPid(IncrementalPidGains(kp=1.0))
+    assert positional.update(2.0 * math.pi, 0.0, 0.001) == pytest.approx(2.0 * math.pi)
+
+
+def test_in_angle_mode_the_td_follows_the_setpoint_the_short_way_round():
+    pid = IncrementalPid(IncrementalPidGains(kp=1.0, angle_mode=True), setpoint_td=TdParams(50.0))
+    pid.update(3.0, 3.0, 0.001)
+    for _ in range(2000):
+        pid.update(-3.0, 3.0, 0.001)  # 0.28 rad ahead across +pi, not 6 rad back
+    tracked = pid.tracked_setpoint
+    assert tracked == pytest.approx(-3.0 + 2.0 * math.pi, abs=1e-3)

@@ -183,3 +183,37 @@ def test_node_level_parameters_have_no_prefix_and_no_plugin_in_the_message(ros_c
             params.string_array('plugins', description='plugins')
     finally:
         node.destroy_node()
+
+
+def test_a_loop_pid_is_positional_by_default_and_incremental_with_its_td_when_asked(make_params):
+    from rm_base.control import IncrementalPidConfig, PidGains, TdParams
+    from rm_base.plugin.pid_params import loop_pid
+
+    gains = PidGains(kp=2.0, ki=0.5, kd=0.1, output_limit=3.0, integral_limit=1.0,
+                     angle_mode=True)
+    assert loop_pid(make_params(), 'follow.pid', gains, setpoint_unit='rad') is gains
+    params = make_params(**{'chassis.follow.pid.form': 'incremental',
+                            'chassis.follow.pid.td_acceleration_limit': 40.0})
+    config = loop_pid(params, 'follow.pid', gains, setpoint_unit='rad')
+    assert isinstance(config, IncrementalPidConfig)
+    assert (config.gains.kp, config.gains.ki, config.gains.kd) == (2.0, 0.5, 0.1)
+    assert (config.output_limit, config.angle_mode) == (3.0, True)
+    assert config.setpoint_td == TdParams(40.0, None)
+
+
+@pytest.mark.parametrize(
+    ('overrides', 'message'),
+    [
+        ({'form': 'velocity'}, r"'chassis.follow.pid.form' must be one of positional, incremental"),
+        ({'td_acceleration_limit': 40.0}, 'applies to the incremental form only'),
+        ({'form': 'incremental', 'td_filter_factor': 0.01},
+         'td_filter_factor.* needs td_acceleration_limit > 0'),
+    ],
+)
+def test_a_bad_loop_pid_form_is_refused_naming_the_key(make_params, overrides, message):
+    from rm_base.control import PidGains
+    from rm_base.plugin.pid_params import loop_pid
+
+    params = make_params(**{f'chassis.follow.pid.{k}': v for k, v in overrides.items()})
+    with pytest.raises(ParameterError, match=message):
+        loop_pid(params, 'follow.pid', PidGains(kp=1.0, angle_mode=True), setpoint_unit='rad')
