@@ -10,8 +10,9 @@ What happens:
    plugins, overrides): the loop, the plugins and rm_sim stepped together on a simulated
    clock, so a replay gives the same numbers on every run, whatever the machine's load.
 2. The bag (test/data/<scenario>/ unless given) is read with rmcli's reader
-   (``rm_bringup.cli.bag_io``) and each message is handed to the plugins subscribed to
-   its topic at its bag time on the simulated clock, through the callbacks their
+   (``rm_bringup.cli.bag_io``; a type recorded with an older definition is rebuilt in the
+   installed one, as ``rmcli bag play`` does) and each message is handed to the plugins
+   subscribed to its topic at its bag time on the simulated clock, through the callbacks their
    subscriptions run. Every std_msgs/Header in a command is stamped with the robot's
    ROS clock at that moment, as a live commander's would be (the bags carry stamps
    relative to their start; played with plain ``rmcli bag play`` into a live robot, they
@@ -236,7 +237,8 @@ def replay(
         ReplayError: an unknown output, or a bag topic no plugin subscribes.
     """
     from rclpy.serialization import deserialize_message
-    from rm_bringup.cli.bag_io import open_bag, read_messages
+    from rm_bringup.cli.bag_convert import read_installed
+    from rm_bringup.cli.bag_io import open_bag
     from rm_bringup.cli.interfaces import get_message_class
     from support.lockstep import LockstepRobot
 
@@ -251,8 +253,8 @@ def replay(
         start_ns = reader.start_time
         schedule = [
             (stamp - start_ns, c.topic, deserialize_message(raw, classes[c.topic]))
-            for c, stamp, raw in read_messages(reader, bag, list(reader.connections),
-                                               start=start_ns)
+            for c, stamp, raw in read_installed(reader, bag, list(reader.connections),
+                                                start=start_ns)
         ]
     wall0 = time.monotonic()
     with LockstepRobot(setup.config, plugins=tuple(setup.plugins),

@@ -11,7 +11,8 @@ import itertools
 import pathlib
 
 import pytest
-from rm_bringup.cli.bag_io import open_bag, read_messages
+from rm_bringup.cli.bag_convert import read_installed
+from rm_bringup.cli.bag_io import open_bag
 from rm_bringup.cli.bag_types import rm_bag_types
 
 from replay.scenarios import DATA_DIR, RATE_HZ, SCENARIOS, Command, Robot, Scenario
@@ -41,7 +42,7 @@ def decoded(path, store):
         types = {c.topic: c.msgtype for c in reader.connections}
         messages = [
             (c.topic, t, store.deserialize_cdr(raw, c.msgtype))
-            for c, t, raw in read_messages(reader, path)
+            for c, t, raw in read_installed(reader, path)
         ]
     return types, messages
 

@@ -12,6 +12,11 @@ DDS on localhost) to see them.
 ``--remap FROM:=TO`` publishes a recorded topic under another name (a teleop bag recorded on
 /cmd_vel replayed as /vel_cmd), as ros2 bag play's --remap does for topic names.
 
+A topic recorded with an older definition of its type (a field added since) is decoded with
+the recorded definition and rebuilt in the installed one, new fields at their defaults
+(:mod:`.bag_convert`); playback says so per topic, and refuses a topic whose field changed
+its kind.
+
 ``--clock [HZ]`` also publishes the bag's time on /clock (rosgraph_msgs/Clock, 40 Hz by
 default, as ros2 bag play), advancing at ``--rate``, so nodes run with ``use_sim_time``
 see the time the messages were recorded at: a stamped command replayed stays fresh.
@@ -28,6 +33,7 @@ import time
 from dataclasses import dataclass
 from pathlib import Path
 
+from .bag_convert import Conversion, conversions
 from .bag_io import open_bag, read_messages
 from .errors import CliError, MessageTypeError
 from .interfaces import get_message_class
@@ -134,13 +140,18 @@ def run(args: argparse.Namespace) -> int:
             if not publishers:
                 raise CliError(f'nothing to play in {path}: no topic has a known message type')
             playable = [c for c in connections if c.topic in publishers]
+            converted = conversions(playable)
+            for conversion, topic in {(v, c.topic) for c in playable
+                                      if (v := converted.get(c.id)) is not None}:
+                print(f'rmcli: {conversion.describe(topic)}', file=sys.stderr)
             clock = None
             if args.clock is not None:
                 clock = ClockPublisher(node, args.clock)
             _wait_for_subscribers(publishers.values(), args.wait_for_subscribers, stop)
             options = PlayOptions(args.rate, args.loop, args.start_offset, args.delay)
             played = play(
-                reader, path, playable, publishers, options=options, stop=stop, clock=clock
+                reader, path, playable, publishers, options=options, stop=stop, clock=clock,
+                converted=converted,
             )
             for publisher in publishers.values():
                 _flush(publisher)
@@ -253,7 +264,8 @@ class PlayOptions:
 
 
 def play(
-    reader, path: Path, connections, publishers, *, options: PlayOptions, stop, clock=None
+    reader, path: Path, connections, publishers, *, options: PlayOptions, stop, clock=None,
+    converted: dict[int, Conversion] | None = None,
 ) -> int:
     """Publish the bag's messages with their relative timing; return how many were sent.
 
@@ -265,6 +277,7 @@ def play(
         options: rate, loop, start offset and delay.
         stop: threading.Event that ends playback at once when set.
         clock: a ClockPublisher to give the bag time to (``--clock``), or None.
+        converted: by connection id, how to rebuild its messages in the installed type.
 
     Raises:
         BagError: the bag is damaged part-way.
@@ -283,6 +296,7 @@ def play(
             rate=options.rate,
             stop=stop,
             clock=clock,
+            converted=converted or {},
         )
         if not options.loop:
             break
@@ -290,7 +304,8 @@ def play(
 
 
 def _play_once(
-    reader, path, connections, *, publishers, start_ns: int, rate: float, stop, clock=None
+    reader, path, connections, *, publishers, start_ns: int, rate: float, stop, clock=None,
+    converted: dict[int, Conversion],
 ) -> int:
     """Publish every message from start_ns on at its relative time; return how many.
 
@@ -323,7 +338,10 @@ def _play_once(
                 break
         if clock is not None:
             tick(time.monotonic_ns())
-        publishers[connection.topic].publish(bytes(raw))
+        conversion = converted.get(connection.id)
+        publishers[connection.topic].publish(
+            bytes(raw) if conversion is None else conversion(raw)
+        )
         count += 1
     return count
 
