@@ -330,6 +330,29 @@ def test_when_raw_forward_expect_every_wheel_at_v_over_r_and_the_body_moving_for
     assert r.state() == ChassisCmd.RAW
 
 
+def test_speed_gears_scale_the_commanded_speed_and_rotation(rig):
+    # SLOW 0.5 / 0.5 (standard defaults), and a FAST gear set to 1.5 / 1.2 in the config.
+    r = rig(chassis={'gears.fast.linear': 1.5, 'gears.fast.angular': 1.2})
+    cmd = r.command(ChassisCmd.RAW)
+    r.velocity(vx=0.8, wz=1.0)
+    measured = {}
+    for gear in (ChassisCmd.GEAR_SLOW, ChassisCmd.GEAR_NORMAL, ChassisCmd.GEAR_FAST):
+        cmd.speed_gear = gear
+        r.robot.run(1.0)  # the ramps and the wheel loops settle
+        samples = r.record(0.5)
+        (t0, *_), (t1, *_) = samples[0], samples[-1]
+        vx = sum(s[5] for s in samples) / len(samples)
+        wz = (samples[-1][3] - samples[0][3]) / (t1 - t0)
+        measured[gear] = (vx, wz)
+    print(f'measured per gear (vx, wz): {measured}')
+    # Commanded 0.8 m/s and 1 rad/s: SLOW 0.4 / 0.5, NORMAL 0.8 / 1.0, FAST 1.2 / 1.2, each
+    # within 5 % (the wheel loops hold the speed; turning and driving share the wheels).
+    for gear, (vx, wz) in {ChassisCmd.GEAR_SLOW: (0.4, 0.5), ChassisCmd.GEAR_NORMAL: (0.8, 1.0),
+                           ChassisCmd.GEAR_FAST: (1.2, 1.2)}.items():
+        assert measured[gear] == pytest.approx((vx, wz), rel=0.05), (gear, measured)
+    assert r.plugin.reason == 'commanded RAW in FAST gear'
+
+
 def test_when_passive_expect_zero_effort_on_the_wire_and_the_wheels_coasting(rig):
     r = rig()
     cmd = r.command(ChassisCmd.RAW)

@@ -273,3 +273,44 @@ def test_play_with_clock_publishes_the_bag_time_while_it_plays(recording):
     assert len(commands) == len(cmd_times)
     for clock_then, stamp in zip(commands, cmd_times, strict=True):
         assert clock_then is not None and abs(clock_then - stamp) < 0.1
+
+
+def test_play_rebuilds_a_topic_recorded_with_an_older_definition(tmp_path):
+    # A ChassisCmd recorded before speed_gear existed (and with a field since removed).
+    from rm_bringup.cli.bag_convert import message_with_defaults
+    from rm_bringup.cli.bag_types import msg_file
+    from rosbags.rosbag2 import StoragePlugin, Writer
+    from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+
+    msgtype = 'rm_msgs/msg/ChassisCmd'
+    text = msg_file(msgtype).read_text(encoding='utf-8')
+    old = text.replace('uint8 speed_gear', 'float64 legacy_gain')
+    assert old != text
+    store = get_typestore(Stores.ROS2_JAZZY)
+    store.register(get_types_from_msg(old, msgtype))
+    bag = tmp_path / 'old'
+    with Writer(bag, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
+        connection = writer.add_connection(CMD_TOPIC, msgtype, typestore=store)
+        for i in range(3):
+            msg = message_with_defaults(store, msgtype, mode=ChassisCmd.GYRO, power_limit=40.0 + i)
+            writer.write(connection, 1_000_000_000 + i * 20_000_000,
+                         store.serialize_cdr(msg, msgtype))
+    received = []
+    with rclpy_context() as context:
+        graph = Graph(context)
+        try:
+            graph.node.create_subscription(ChassisCmd, CMD_TOPIC, received.append, 10)
+            player = rmcli('bag', 'play', str(bag), '--wait-for-subscribers', str(TIMEOUT_S))
+            try:
+                graph.wait(lambda: len(received) >= 3 or player.poll() is not None)
+                graph.wait(lambda: len(received) >= 3, timeout=2.0)
+            finally:
+                out, err = stop_process(player, timeout=TIMEOUT_S)
+        finally:
+            graph.close()
+    assert player.returncode == 0, f'{out}\n{err}'
+    assert [(m.mode, m.power_limit, m.speed_gear) for m in received] == [
+        (ChassisCmd.GYRO, 40.0 + i, ChassisCmd.GEAR_NORMAL) for i in range(3)
+    ]
+    assert 'new fields at their defaults: speed_gear' in err
+    assert 'not played: legacy_gain' in err

@@ -1,7 +1,7 @@
 """Chassis commands: rm_msgs/ChassisCmd and geometry_msgs/Twist checked into plain values.
 
-A command is used whole or not at all: a NaN/inf field, an unknown mode or an unknown
-follow source rejects the message (``InputRejectedError`` with the reason), and the
+A command is used whole or not at all: a NaN/inf field, an unknown mode, follow source or
+speed gear rejects the message (``InputRejectedError`` with the reason), and the
 plugin keeps acting on the last valid command until that one times out. No ROS here: the
 messages are read through their attributes.
 """
@@ -34,6 +34,14 @@ class FollowSource(Enum):
     ODOM = 'odom'  # the world: odom's fixed axes, in every mode (RAW included)
 
 
+class SpeedGear(IntEnum):
+    """ChassisCmd.speed_gear: which coefficients scale /vel_cmd (SRML's speed gears)."""
+
+    NORMAL = 0
+    SLOW = 1
+    FAST = 2
+
+
 @dataclass(frozen=True, slots=True)
 class ChassisRequest:
     """A checked ChassisCmd.
@@ -44,12 +52,14 @@ class ChassisRequest:
             the message had <= 0 (use the configured default).
         power_limit: chassis power limit [W]; None if the message had <= 0 (configured).
         source: frame of FOLLOW/TWIST/GYRO.
+        gear: the speed gear /vel_cmd is scaled by.
     """
 
     mode: ChassisMode
     accel: tuple[float | None, float | None, float | None]
     power_limit: float | None
     source: FollowSource
+    gear: SpeedGear = SpeedGear.NORMAL
 
 
 _SOURCES = {source.value: source for source in FollowSource}
@@ -59,7 +69,7 @@ def parse_chassis_cmd(msg: Any) -> ChassisRequest:
     """Check an rm_msgs/ChassisCmd and return it as a ChassisRequest.
 
     Raises:
-        InputRejectedError: unknown mode, unknown follow_source, or a NaN/inf number.
+        InputRejectedError: unknown mode, follow_source or speed_gear, or a NaN/inf number.
     """
     try:
         mode = ChassisMode(int(msg.mode))
@@ -75,6 +85,14 @@ def parse_chassis_cmd(msg: Any) -> ChassisRequest:
             f"unknown follow_source {msg.follow_source!r} (known: '' = gimbal, 'base_link', "
             "'odom')"
         )
+    try:
+        gear = SpeedGear(int(msg.speed_gear))
+    except ValueError:
+        raise InputRejectedError(
+            f'unknown speed_gear {msg.speed_gear} (known: '
+            + ', '.join(f'{g.value}={g.name}' for g in SpeedGear)
+            + ')'
+        ) from None
     raw_accel = (msg.accel.linear.x, msg.accel.linear.y, msg.accel.angular.z)
     numbers = (*raw_accel, msg.power_limit)
     if not all(map(math.isfinite, numbers)):
@@ -84,7 +102,7 @@ def parse_chassis_cmd(msg: Any) -> ChassisRequest:
         )
     accel = tuple(float(a) if a > 0.0 else None for a in raw_accel)
     power_limit = float(msg.power_limit) if msg.power_limit > 0.0 else None
-    return ChassisRequest(mode, accel, power_limit, source)  # type: ignore[arg-type]
+    return ChassisRequest(mode, accel, power_limit, source, gear)  # type: ignore[arg-type]
 
 
 def parse_vel_cmd(msg: Any) -> tuple[float, float, float]:

@@ -7,6 +7,7 @@ See ``rm_bringup/config/standard.yaml`` for a complete, commented example.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from enum import Enum
@@ -27,6 +28,15 @@ from rm_base.errors import ConfigError
 from rm_base.geometry import MECANUM_ROLLER_SIGNS, WheelKinematics, mecanum_wheels, omni_wheels
 from rm_base.plugin import ParameterError, PluginParams
 from rm_base.plugin.pid_params import loop_pid
+
+from rm_plugins.chassis.commands import SpeedGear
+
+# SRML's speed gears: (linear, angular) coefficients on /vel_cmd by default.
+_GEAR_DEFAULTS = {
+    SpeedGear.SLOW: (0.5, 0.5),
+    SpeedGear.NORMAL: (1.0, 1.0),
+    SpeedGear.FAST: (1.5, 1.0),
+}
 
 
 class Kinematics(Enum):
@@ -75,6 +85,7 @@ class ChassisConfig:
         base_frame: child frame (the robot).
         publish_tf: broadcast odom -> base_frame on /tf (where tf2_ros is available).
         publish_rate: rate of /chassis_state and /odom [Hz].
+        gears: per speed gear, the (linear, angular) coefficients on /vel_cmd.
     """
 
     kinematics: Kinematics
@@ -100,6 +111,9 @@ class ChassisConfig:
     publish_rate: float
     referee_power: BufferEnergyParams | None = None
     referee_timeout: float = 1.0
+    gears: dict[SpeedGear, tuple[float, float]] = dataclasses.field(
+        default_factory=lambda: dict.fromkeys(SpeedGear, (1.0, 1.0))
+    )
 
 
 
@@ -195,6 +209,20 @@ def _pid(p: PluginParams, group: str, unit_in: str, unit_out: str, *, angle: boo
         ),
         angle_mode=angle,
     )
+
+
+def _gears(p: PluginParams) -> dict[SpeedGear, tuple[float, float]]:
+    gears = {}
+    for gear, (linear, angular) in _GEAR_DEFAULTS.items():
+        name = gear.name.lower()
+        gears[gear] = (
+            p.double(f'gears.{name}.linear', linear, unit='1', gt=0.0,
+                     description=f'{name} gear (ChassisCmd.speed_gear): factor on /vel_cmd vx, '
+                     'vy (the wheel speed limit still applies)'),
+            p.double(f'gears.{name}.angular', angular, unit='1', gt=0.0,
+                     description=f"{name} gear: factor on /vel_cmd wz (RAW's rotation)"),
+        )
+    return gears
 
 
 def _where(p: PluginParams) -> str:
@@ -316,6 +344,7 @@ def read_config(p: PluginParams) -> ChassisConfig:
         publish_rate=p.double('publish_rate', 100.0,
                               description='rate of /chassis_state and /odom', unit='Hz',
                               gt=0.0),
+        gears=_gears(p),
     )
 
 

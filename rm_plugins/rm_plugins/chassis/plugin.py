@@ -4,8 +4,9 @@ Why one module: one state machine and the tick that runs it; kinematics, planner
 power and config are modules of their own.
 
 Inputs
-    /chassis_cmd (rm_msgs/ChassisCmd): the state, acceleration limits, power limit and
-        follow source. Watched: without a command for ``command_timeout`` the framework
+    /chassis_cmd (rm_msgs/ChassisCmd): the state, acceleration limits, power limit,
+        follow source and speed gear (its ``gears.<gear>`` coefficients scale /vel_cmd's
+        vx, vy and wz). Watched: without a command for ``command_timeout`` the framework
         puts the chassis in PASSIVE.
     /vel_cmd (geometry_msgs/Twist): vx, vy [m/s] and (RAW only) wz [rad/s]. Not watched:
         without one for ``vel_cmd_timeout`` the translation brakes to zero on the brake
@@ -25,7 +26,7 @@ States (values = ChassisCmd mode constants), all decided in ``_decide``:
         that follows the gimbal, the yaw joint) without fresh feedback. Wheels get MODE_OFF.
     RAW, FOLLOW, TWIST, GYRO: as commanded, see ``rm_base.control.chassis_modes``.
 
-An invalid /chassis_cmd (unknown mode or follow source, NaN) is rejected with a log line
+An invalid /chassis_cmd (unknown mode, follow source or speed gear, NaN) is rejected with a log line
 and changes nothing: the chassis keeps acting on the last valid command until that one is
 ``command_timeout`` old, then falls back to PASSIVE. Staying is safer than an immediate
 PASSIVE on a moving robot (limp wheels coast with no braking at all), and a sender that
@@ -73,6 +74,7 @@ from rm_plugins.chassis.commands import (
     ChassisMode,
     ChassisRequest,
     FollowSource,
+    SpeedGear,
     parse_chassis_cmd,
     parse_vel_cmd,
 )
@@ -269,6 +271,8 @@ class StandChassis(PluginBase):
                     None,
                 )
         reason = f'commanded {request.mode.name}'
+        if request.gear is not SpeedGear.NORMAL:
+            reason += f' in {request.gear.name} gear'
         if request.source is FollowSource.ODOM or (
             request.mode is not ChassisMode.RAW and request.source is FollowSource.BASE_LINK
         ):
@@ -430,7 +434,9 @@ class StandChassis(PluginBase):
             # Take over from the measured motion (the chassis may still be rolling).
             self._planner.reset(self._odometry.twist)
             self._active = True
-        command = self._take_vel_cmd(now_ns)
+        vx, vy, wz = self._take_vel_cmd(now_ns)
+        linear, angular = self.config.gears[request.gear]
+        command = (vx * linear, vy * linear, wz * angular)
         mode = _MOTION_MODES[request.mode]
         if request.source is FollowSource.ODOM:
             self._held_heading = None

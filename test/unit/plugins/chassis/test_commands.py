@@ -6,6 +6,7 @@ import pytest
 from geometry_msgs.msg import Twist
 from rm_base.errors import InputRejectedError
 from rm_plugins.chassis import ChassisMode, FollowSource, parse_chassis_cmd, parse_vel_cmd
+from rm_plugins.chassis.commands import SpeedGear
 
 from rm_msgs.msg import ChassisCmd
 
@@ -44,6 +45,23 @@ def test_when_power_limit_is_positive_expect_it_in_watts():
                                                    ('odom', FollowSource.ODOM)])
 def test_when_follow_source_is_known_expect_its_member(source, expected):
     assert parse_chassis_cmd(cmd(source=source)).source is expected
+
+
+@pytest.mark.parametrize(('gear', 'expected'), [(ChassisCmd.GEAR_NORMAL, SpeedGear.NORMAL),
+                                                 (ChassisCmd.GEAR_SLOW, SpeedGear.SLOW),
+                                                 (ChassisCmd.GEAR_FAST, SpeedGear.FAST)])
+def test_when_speed_gear_is_a_chassiscmd_constant_expect_that_gear(gear, expected):
+    msg = cmd()
+    msg.speed_gear = gear
+    assert parse_chassis_cmd(msg).gear is expected
+    assert parse_chassis_cmd(cmd()).gear is SpeedGear.NORMAL  # a command without one
+
+
+def test_when_speed_gear_is_unknown_expect_rejected_naming_the_gears():
+    msg = cmd()
+    msg.speed_gear = 9
+    with pytest.raises(InputRejectedError, match=r'unknown speed_gear 9 \(known: 0=NORMAL, 1=SLOW'):
+        parse_chassis_cmd(msg)
 
 
 def test_when_follow_source_is_unknown_expect_rejected():
