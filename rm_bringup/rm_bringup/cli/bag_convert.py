@@ -166,8 +166,11 @@ def _value(store: Typestore, desc: Any, old: Any) -> Any:
         if old is not _MISSING:
             return old
         name = detail[0]
-        return '' if name in ('string', 'wstring') else (False if name == 'bool' else
-                                                        0.0 if name.startswith('float') else 0)
+        if name in ('string', 'wstring'):
+            return ''
+        if name == 'bool':
+            return False
+        return 0.0 if name.startswith('float') else 0
     if kind == Nodetype.NAME:
         return _build(store, detail, None if old is _MISSING else old)
     element, length = detail

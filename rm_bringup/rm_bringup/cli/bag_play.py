@@ -141,8 +141,8 @@ def run(args: argparse.Namespace) -> int:
                 raise CliError(f'nothing to play in {path}: no topic has a known message type')
             playable = [c for c in connections if c.topic in publishers]
             converted = conversions(playable)
-            for conversion, topic in {(v, c.topic) for c in playable
-                                      if (v := converted.get(c.id)) is not None}:
+            by_topic = {c.topic: converted[c.id] for c in playable if c.id in converted}
+            for topic, conversion in by_topic.items():
                 print(f'rmcli: {conversion.describe(topic)}', file=sys.stderr)
             clock = None
             if args.clock is not None:
