@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from enum import Enum, IntEnum
-from typing import Any
+from typing import Any, TypeVar
 
 from rm_base.errors import InputRejectedError
 
@@ -63,6 +63,16 @@ class ChassisRequest:
 
 
 _SOURCES = {source.value: source for source in FollowSource}
+_E = TypeVar('_E', bound=IntEnum)
+
+
+def _constant(kind: type[_E], value: int, field: str) -> _E:
+    """The member of kind that a message constant field holds, or a rejection naming all."""
+    try:
+        return kind(int(value))
+    except ValueError:
+        known = ', '.join(f'{m.value}={m.name}' for m in kind)
+        raise InputRejectedError(f'unknown {field} {value} (known: {known})') from None
 
 
 def parse_chassis_cmd(msg: Any) -> ChassisRequest:
@@ -71,28 +81,14 @@ def parse_chassis_cmd(msg: Any) -> ChassisRequest:
     Raises:
         InputRejectedError: unknown mode, follow_source or speed_gear, or a NaN/inf number.
     """
-    try:
-        mode = ChassisMode(int(msg.mode))
-    except ValueError:
-        raise InputRejectedError(
-            f'unknown mode {msg.mode} (known: '
-            + ', '.join(f'{m.value}={m.name}' for m in ChassisMode)
-            + ')'
-        ) from None
+    mode = _constant(ChassisMode, msg.mode, 'mode')
     source = _SOURCES.get(msg.follow_source)
     if source is None:
         raise InputRejectedError(
             f"unknown follow_source {msg.follow_source!r} (known: '' = gimbal, 'base_link', "
             "'odom')"
         )
-    try:
-        gear = SpeedGear(int(msg.speed_gear))
-    except ValueError:
-        raise InputRejectedError(
-            f'unknown speed_gear {msg.speed_gear} (known: '
-            + ', '.join(f'{g.value}={g.name}' for g in SpeedGear)
-            + ')'
-        ) from None
+    gear = _constant(SpeedGear, msg.speed_gear, 'speed_gear')
     raw_accel = (msg.accel.linear.x, msg.accel.linear.y, msg.accel.angular.z)
     numbers = (*raw_accel, msg.power_limit)
     if not all(map(math.isfinite, numbers)):
