@@ -23,17 +23,7 @@ from dataclasses import dataclass
 from rm_base.control._validation import require_non_negative, require_positive
 from rm_base.control.tracking_differentiator import TdParams, TrackingDifferentiator
 from rm_base.errors import ConfigError, InputRejectedError
-
-_PI = math.pi
-_TAU = 2.0 * math.pi
-
-
-def _wrap(angle: float) -> float:
-    """The angle [rad] wrapped to [-pi, pi)."""
-    if -_PI <= angle < _PI:
-        return angle
-    angle = math.remainder(angle, _TAU)
-    return angle - _TAU if angle >= _PI else angle
+from rm_base.geometry.angles import wrap_to_pi
 
 
 @dataclass(frozen=True, slots=True)
@@ -141,18 +131,18 @@ class IncrementalPid:
                 self._td_started = True
             tracked = td.value
             if angle and tracked is not None:
-                setpoint = tracked + _wrap(setpoint - tracked)
+                setpoint = tracked + wrap_to_pi(setpoint - tracked)
             setpoint = td.update(setpoint, dt)
 
         error = setpoint - measurement
         if angle:
-            error = _wrap(error)
+            error = wrap_to_pi(error)
         d_prev = self._d_prev
         if d_prev is None:
             rate = d_prev = 0.0
         else:
             change = error - self._e_prev
-            rate = (_wrap(change) if angle else change) / dt
+            rate = (wrap_to_pi(change) if angle else change) / dt
         increment = g.kp * (error - self._e_prev) + g.ki * error * dt + g.kd * (rate - d_prev)
         output = self._output + increment
         limit = g.output_limit

@@ -46,6 +46,8 @@ class Conversion:
         msgtype: the message type, e.g. ``rm_msgs/msg/ChassisCmd``.
         added: dotted names of installed fields the recording lacks (given defaults).
         dropped: dotted names of recorded fields the installed type lacks (not played).
+        recorded: the types as the bag defines them (decodes the recorded CDR).
+        installed: the installed types (encodes the rebuilt message).
     """
 
     msgtype: str
