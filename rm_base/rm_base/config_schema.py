@@ -359,6 +359,36 @@ def numbers(
                f'length {length}' if length else '')
 
 
+def strings(
+    name: str, default: Any = REQUIRED, *, description: str, nonempty: bool = True
+) -> Key:
+    """A list of non-empty strings (names); returned as a tuple."""
+
+    def item(value: object) -> str:
+        text = to_str(value)
+        if nonempty and not text:
+            raise InvalidValueError('must not be empty')
+        return text
+
+    return Key(name, 'string[]', array_of(item), description, '', default)
+
+
+def signs(name: str, default: Any = REQUIRED, *, description: str) -> Key:
+    """A list of directions, each 1 or -1; returned as a tuple of ints."""
+
+    def item(value: object) -> int:
+        if isinstance(value, bool) or value not in (1, -1):
+            raise InvalidValueError(f'must be 1 or -1, got {value!r}')
+        return 1 if value == 1 else -1
+
+    return Key(name, 'integer[]', array_of(item), description, '', default, 'each 1 or -1')
+
+
+def tables(name: str, default: Any = REQUIRED, *, description: str) -> Key:
+    """A list of mappings (each read further by its own schema); returned as a tuple."""
+    return Key(name, 'mapping[]', array_of(to_mapping), description, '', default)
+
+
 def check_table(
     where: str,
     data: object,

@@ -398,7 +398,8 @@ def test_sim_world_error_is_a_config_error_naming_the_group(ros_context):
         'sim.body.gimbal.yaw.motor': 'yaw',  # no joint of that name
     }
     overrides = [Parameter(k, value=v) for k, v in params.items()]
-    with pytest.raises(ConfigError, match=r"simulated world .*gimbal\.yaw names motor 'yaw'"):
+    message = r"simulated world .*gimbal\.yaw\.motor is 'yaw', which is not a configured motor"
+    with pytest.raises(ConfigError, match=message):
         CanBridgeNode(context=ros_context, parameter_overrides=overrides)
 
 

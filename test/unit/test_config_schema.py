@@ -13,7 +13,10 @@ from rm_base.config_schema import (
     number,
     numbers,
     one_of,
+    signs,
     string,
+    strings,
+    tables,
 )
 from rm_base.errors import ConfigError
 
@@ -101,3 +104,39 @@ def test_the_reference_rows_come_from_the_same_declaration():
     assert rows['chassis.<wheel>.offset'].constraint == 'length 2'
     assert rows['chassis.<wheel>.limit'].default is OPTIONAL  # optional, no default
     assert rows['chassis.<wheel>.direction'].type_name == 'integer'
+
+
+LISTS = Schema((
+    strings('motors', description='names'),
+    signs('directions', None, description='per motor'),
+    tables('wheels', (), description='one table each'),
+))
+
+
+def test_lists_of_names_signs_and_tables_read_as_tuples():
+    values = LISTS.read('chassis', {
+        'motors': ['fl', 'fr'], 'directions': [1, -1], 'wheels': [{'x': 1}, {'y': 2}],
+    })
+    assert values == {
+        'motors': ('fl', 'fr'), 'directions': (1, -1), 'wheels': ({'x': 1}, {'y': 2}),
+    }
+    assert LISTS.read('chassis', {'motors': []})['directions'] is None
+
+
+@pytest.mark.parametrize(
+    ('table', 'message'),
+    [
+        ({'motors': 'fl'}, r"chassis\.motors must be string\[\]; got str 'fl'"),
+        ({'motors': ['fl', '']}, r'chassis\.motors entry \[1\] must not be empty'),
+        ({'motors': ['fl', 3]}, r'chassis\.motors must be string\[\]; entry \[1\] is int 3'),
+        ({'motors': [], 'directions': [1, 0]},
+         r'chassis\.directions entry \[1\] must be 1 or -1, got 0'),
+        ({'motors': [], 'directions': [True]},
+         r'chassis\.directions entry \[0\] must be 1 or -1, got True'),
+        ({'motors': [], 'wheels': [{}, 'x']},
+         r"chassis\.wheels must be mapping\[\]; entry \[1\] is str 'x'"),
+    ],
+)
+def test_a_bad_list_names_its_entry(table, message):
+    with pytest.raises(ConfigError, match=message):
+        LISTS.read('chassis', table)

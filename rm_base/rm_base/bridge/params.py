@@ -15,9 +15,10 @@ declarations and the schemas named here:
 ``buses.<bus>.*``               a bus: ``hardware.config.BUS_SCHEMA``
 ``joints.<joint>.*``            a joint: ``hardware.config.JOINT_SCHEMA`` and its family's
                                 options
-``joints.<joint>.sim.*``        simulated-motor overrides (sim only): the keys of
-                                ``rm_base.sim.device_from_config``
-``sim.body.*``                  robot body: ``rm_base.sim.body_from_config``
+``joints.<joint>.sim.*``        simulated-motor overrides (sim only):
+                                ``sim.device_config.MOTOR_SCHEMA``, ``PHYSICS_SCHEMA`` and
+                                the family's ``SimFamily.schema``
+``sim.body.*``                  robot body: ``sim.body_config.BODY_TABLES``
 ``sim.imu.*``                   one IMU: ``sim.imu.IMU_SCHEMA``
 ``sim.referee.*``               the referee system: ``sim.referee.REFEREE_SCHEMA``
 ``sim.remote.*``                the DR16 receiver: ``sim.operator_link.link_schema``

@@ -8,6 +8,8 @@ from typing import TYPE_CHECKING, Any, Protocol
 
 import can
 
+from rm_base.config_schema import Schema
+
 if TYPE_CHECKING:
     from rm_base.hardware.actuators.base import Actuator
     from rm_base.hardware.config import JointConfig
@@ -61,9 +63,10 @@ class SimFamily:
 
     Attributes:
         models: simulated motor type -> default physics (output-shaft constants).
-        keys: the device config keys of the family, beyond the common ones and the
-            physics fields.
-        build: (device config, parts) -> the simulated device; raises SimConfigError.
+        schema: the device config keys of the family, beyond the common ones and the
+            physics (rm_base.sim.device_config).
+        build: (the schema's values, parts) -> the simulated device; raises
+            SimConfigError.
         joint_types: hardware joint type -> (simulated type, extra device keys) for a
             joint without ``sim.type``; a joint type missing here has no simulated model.
         joint_type_of: the same for joints whose simulated type depends on their options
@@ -75,7 +78,7 @@ class SimFamily:
     """
 
     models: Mapping[str, MotorParams]
-    keys: frozenset[str]
+    schema: Schema
     build: Callable[[Mapping[str, Any], DeviceParts], SimDevice]
     joint_types: Mapping[str, tuple[str, Mapping[str, Any]]] = field(default_factory=dict)
     joint_type_of: Callable[[JointConfig], tuple[str, Mapping[str, Any]] | None] | None = None

@@ -4,7 +4,8 @@
 :class:`SimWorld` holds the channels, motors, robot body and IMUs that share one clock.
 """
 
-from rm_base.sim.body import Mount, RobotBody, body_from_config
+from rm_base.sim.body import Mount, RobotBody
+from rm_base.sim.body_config import body_from_config
 from rm_base.sim.bus import DEFAULT_RX_QUEUE_SIZE, SimBus
 from rm_base.sim.channel import ChannelStats, SimChannel, channel_names, find_channel
 from rm_base.sim.device_config import check_channel, device_from_config

@@ -17,32 +17,17 @@ about the axis (positive pitch noses down).
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from enum import Enum
-from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from rm_base.errors import ConfigError
-from rm_base.geometry import (
-    Wheel,
-    WheelKinematics,
-    mecanum_wheels,
-    omni_wheels,
-    rotation_matrix_from_rpy,
-)
+from rm_base.geometry import WheelKinematics, rotation_matrix_from_rpy
 from rm_base.sim.devices import SimDevice
 from rm_base.sim.errors import SimConfigError
-from rm_base.sim.joint import (
-    Joint,
-    check_keys,
-    config_number,
-    direction_from_config,
-    joint_from_config,
-    motor_from_config,
-)
-from rm_base.sim.launcher import Launcher, launcher_from_config
+from rm_base.sim.joint import Joint
+from rm_base.sim.launcher import Launcher
 
 
 class Mount(Enum):
@@ -80,7 +65,7 @@ class RobotBody:
         yaw_world_frame_inertia: bool = True,
         launcher: Launcher | None = None,
     ):
-        """Create the body; see :func:`body_from_config` for the parameters.
+        """Create the body (:func:`rm_base.sim.body_config.body_from_config` reads a config).
 
         Raises:
             SimConfigError: wheels and kinematics disagree in number, or a bad pose.
@@ -197,146 +182,3 @@ class RobotBody:
     def world_acceleration(self) -> NDArray[np.float64]:
         """Linear acceleration of the chassis in the world frame [m/s²] (z = 0)."""
         return np.array([self.linear_acceleration[0], self.linear_acceleration[1], 0.0])
-
-
-# -- config ----------------------------------------------------------------------------------
-
-
-def _chassis(
-    cfg: Mapping[str, Any], devices: Mapping[str, SimDevice]
-) -> tuple[WheelKinematics, list[SimDevice], list[float]]:
-    kind = cfg.get('type')
-    common = {'type', 'motors', 'directions'}
-    if kind == 'mecanum':
-        check_keys(cfg, common | {'wheelbase', 'track', 'wheel_radius', 'roller_signs'}, 'chassis')
-        extra = {'roller_signs': cfg['roller_signs']} if 'roller_signs' in cfg else {}
-        wheels = mecanum_wheels(
-            config_number(cfg, 'wheelbase', 'chassis'),
-            config_number(cfg, 'track', 'chassis'),
-            config_number(cfg, 'wheel_radius', 'chassis'),
-            **extra,
-        )
-    elif kind == 'omni':
-        check_keys(cfg, common | {'mounting_angles', 'centre_distance', 'wheel_radius'}, 'chassis')
-        wheels = omni_wheels(
-            cfg.get('mounting_angles', ()),
-            config_number(cfg, 'centre_distance', 'chassis'),
-            config_number(cfg, 'wheel_radius', 'chassis'),
-        )
-    elif kind == 'wheels':
-        check_keys(cfg, {'type', 'wheels'}, 'chassis')
-        return _explicit_wheels(cfg.get('wheels'), devices)
-    else:
-        raise SimConfigError(f"chassis.type must be 'mecanum', 'omni' or 'wheels', got {kind!r}")
-    names = cfg.get('motors')
-    if not isinstance(names, Sequence) or isinstance(names, str) or len(names) != len(wheels):
-        raise SimConfigError(f'chassis.motors must name {len(wheels)} motors, got {names!r}')
-    directions = cfg.get('directions', [1] * len(wheels))
-    if not isinstance(directions, Sequence) or len(directions) != len(wheels):
-        raise SimConfigError(f'chassis.directions must be {len(wheels)} of ±1, got {directions!r}')
-    return (
-        WheelKinematics(wheels),
-        [motor_from_config(devices, n, 'chassis.motors') for n in names],
-        [direction_from_config(d, 'chassis') for d in directions],
-    )
-
-
-def _explicit_wheels(
-    entries: Any, devices: Mapping[str, SimDevice]
-) -> tuple[WheelKinematics, list[SimDevice], list[float]]:
-    if not isinstance(entries, Sequence) or isinstance(entries, str):
-        raise SimConfigError(f'chassis.wheels must be a list, got {entries!r}')
-    allowed = {'motor', 'x', 'y', 'radius', 'rolling_direction', 'roller_angle', 'direction'}
-    wheels, motors, directions = [], [], []
-    for i, entry in enumerate(entries):
-        owner = f'chassis.wheels[{i}]'
-        check_keys(entry, allowed, owner)
-        wheels.append(
-            Wheel(
-                config_number(entry, 'x', owner),
-                config_number(entry, 'y', owner),
-                config_number(entry, 'radius', owner),
-                rolling_direction=config_number(entry, 'rolling_direction', owner, 0.0),
-                roller_angle=config_number(entry, 'roller_angle', owner, 0.0),
-            )
-        )
-        motors.append(motor_from_config(devices, entry.get('motor'), owner))
-        directions.append(direction_from_config(entry.get('direction', 1), owner))
-    return WheelKinematics(wheels), motors, directions
-
-
-def body_from_config(config: Mapping[str, Any], devices: Mapping[str, SimDevice]) -> RobotBody:
-    """Build the body from a plain dict; motors are referred to by name.
-
-    Schema (SI units, every part optional)::
-
-        initial_pose: [x, y, yaw]                # m, m, rad
-        chassis:                                  # wheel i speed = direction_i * motor speed
-          type: mecanum                           # FL, FR, RL, RR (rm_base.geometry layout)
-          motors: [wheel_fl, wheel_fr, wheel_rl, wheel_rr]
-          wheelbase: 0.4                          # m
-          track: 0.4                              # m
-          wheel_radius: 0.076                     # m
-          roller_signs: [-1, 1, 1, -1]            # optional
-          directions: [1, -1, 1, -1]              # optional, default all 1
-        # or type: omni with mounting_angles [rad], centre_distance [m], wheel_radius, motors
-        # or type: wheels with wheels: [{motor, x, y, radius, rolling_direction,
-        #                                roller_angle, direction}, ...]
-        gimbal:
-          yaw: {motor: yaw, direction: 1, zero: 0.0, world_frame_inertia: true}
-          pitch: {motor: pitch, direction: 1, zero: 0.0, gravity_torque: 0.0}   # N·m
-        shooter: {trigger: ..., friction: [...], ...}   # rm_base.sim.launcher
-
-    Args:
-        config: the ``body`` dict of a world config.
-        devices: every configured motor by name.
-
-    Returns:
-        The body.
-
-    Raises:
-        SimConfigError: an unknown key, a missing or unknown motor, bad geometry.
-    """
-    check_keys(config, {'initial_pose', 'chassis', 'gimbal', 'shooter'}, 'body')
-    try:
-        kinematics: WheelKinematics | None = None
-        wheels: list[SimDevice] = []
-        directions: list[float] | None = None
-        if 'chassis' in config:
-            if not isinstance(config['chassis'], Mapping):
-                raise SimConfigError(f'chassis must be a mapping, got {config["chassis"]!r}')
-            kinematics, wheels, directions = _chassis(config['chassis'], devices)
-        yaw = pitch = None
-        gravity, world_frame = 0.0, True
-        gimbal = config.get('gimbal', {})
-        check_keys(gimbal, {'yaw', 'pitch'}, 'gimbal')
-        if 'yaw' in gimbal:
-            yaw = joint_from_config(gimbal['yaw'], devices, 'gimbal.yaw', {'world_frame_inertia'})
-            world_frame = gimbal['yaw'].get('world_frame_inertia', True)
-            if not isinstance(world_frame, bool):
-                raise SimConfigError(
-                    f'gimbal.yaw.world_frame_inertia must be true/false, got {world_frame!r}'
-                )
-        if 'pitch' in gimbal:
-            pitch = joint_from_config(gimbal['pitch'], devices, 'gimbal.pitch', {'gravity_torque'})
-            gravity = config_number(gimbal['pitch'], 'gravity_torque', 'gimbal.pitch', 0.0)
-        pose = config.get('initial_pose', (0.0, 0.0, 0.0))
-        if not isinstance(pose, Sequence) or isinstance(pose, str):
-            raise SimConfigError(f'initial_pose must be [x, y, yaw], got {pose!r}')
-        return RobotBody(
-            kinematics=kinematics,
-            wheels=wheels,
-            wheel_directions=directions,
-            yaw=yaw,
-            pitch=pitch,
-            initial_pose=pose,
-            pitch_gravity_torque=gravity,
-            yaw_world_frame_inertia=world_frame,
-            launcher=launcher_from_config(config['shooter'], devices)
-            if 'shooter' in config
-            else None,
-        )
-    except SimConfigError:
-        raise
-    except ConfigError as err:
-        raise SimConfigError(f'body: {err}') from err

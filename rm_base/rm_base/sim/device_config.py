@@ -1,7 +1,8 @@
 """Simulated motors from plain config dicts, and the check that they can share a bus.
 
-The keys every motor has are read here; the rest belong to the motor's family, which
-builds the device (``rm_base.motors``: one registry of families).
+The keys every motor has and its physics are read here; the rest belong to the motor's
+family, which declares them (``SimFamily.schema``) and builds the device
+(``rm_base.motors``: one registry of families).
 """
 
 from __future__ import annotations
@@ -9,43 +10,41 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from rm_base.config_schema import Schema, integer, number, string
 from rm_base.hardware.errors import HardwareConfigError, ValueRangeError
 from rm_base.motors import DeviceParts, UnknownTypeError, families, sim_family
-from rm_base.sim.config_values import can_id, number
-from rm_base.sim.devices import SimDevice
+from rm_base.sim.devices import STD_ID_MAX, SimDevice
 from rm_base.sim.errors import SimConfigError
 from rm_base.sim.motor import MotorModel
-from rm_base.sim.motor_params import MotorParams
+from rm_base.sim.motor_params import PHYSICS_SCHEMA
 
-_PARAM_KEYS = frozenset(MotorParams.__dataclass_fields__)
-_COMMON_KEYS = frozenset(
-    {'type', 'id', 'name', 'initial_position', 'initial_velocity', 'overtemp_c'}
+#: The keys every simulated motor has; its physics (PHYSICS_SCHEMA) and its family's
+#: keys (``SimFamily.schema``) complete them.
+MOTOR_SCHEMA = Schema(
+    (
+        string('type', nonempty=True,
+               description='simulated motor type (m3508, m2006, gm6020, dm4310, dm8009, '
+               'cheetah)'),
+        integer('id', ge=0, le=STD_ID_MAX,
+                description='ESC id (DJI) or CAN id'),
+        string('name', None, nonempty=True,
+               description="unique name; default '<type>_<id>'"),
+        number('initial_position', 0.0, unit='rad', description='output angle at the start'),
+        number('initial_velocity', 0.0, unit='rad/s', description='output speed at the start'),
+        number('overtemp_c', None, unit='degC',
+               description='the driver cuts its output above this winding temperature; '
+               "default the family's (none for DJI and Cheetah, 120 for Damiao)"),
+    ),
+    open=True,
 )
 
 
 def device_from_config(config: Mapping[str, Any], *, seed: int = 0) -> SimDevice:
     """Build a simulated motor from a plain dict.
 
-    Keys (SI units; every key but ``type`` and ``id`` is optional):
-
-    * ``type``: ``'m3508' | 'm2006' | 'gm6020' | 'dm4310' | 'dm8009' | 'cheetah'``.
-    * ``id``: ESC id (DJI: C620/C610 1..8, GM6020 1..7) or CAN id (Damiao, Cheetah).
-    * ``name``: unique name, default ``'<type>_<id>'``.
-    * any :class:`~rm_base.sim.motor.MotorParams` field, e.g. ``load_inertia`` [kg·m²],
-      ``viscous_friction`` [N·m·s/rad], ``coulomb_friction`` [N·m], ``max_current`` [A].
-    * ``initial_position`` [rad] and ``initial_velocity`` [rad/s] at the output shaft.
-    * ``overtemp_c``: cut-out temperature [°C]; default none for DJI and Cheetah,
-      120 °C for Damiao (which then reports COIL_OVER_TEMPERATURE).
-    * DJI: ``feedback_rate_hz`` (1000), ``command_timeout`` [s] (0.1; 0 or None = never),
-      ``control`` (GM6020: ``'voltage'`` (default) or ``'current'``), and the
-      UNVERIFIED scales of :func:`rm_base.motors.dji.protocol.make_dji_spec`:
-      ``raw_limit``, ``si_per_raw``, ``feedback_amps_per_raw``.
-    * Damiao: ``model`` (default from the type, e.g. ``'DM4310'``), ``master_id``
-      (default id + 0x10), ``mode`` (``'mit'`` default, ``'pos_vel'``, ``'vel'``),
-      ``limits`` (``{'p_max': .., 'v_max': .., 't_max': ..}`` overrides), ``enabled``
-      (False), ``command_timeout`` [s] (None), ``vel_kp``, ``vel_ki``, ``pos_kp``.
-    * Cheetah: ``master_id`` (0), ``limits`` (default P ±12.5, V ±65, T ±18),
-      ``enabled`` (False), ``reply_voltage`` (False: 6-byte reply).
+    Keys: :data:`MOTOR_SCHEMA`, :data:`~rm_base.sim.motor_params.PHYSICS_SCHEMA` (each
+    defaulting to the type's model) and the family's ``SimFamily.schema``
+    (docs/PARAMETERS.md lists them all).
 
     Args:
         config: the motor's dict.
@@ -55,37 +54,40 @@ def device_from_config(config: Mapping[str, Any], *, seed: int = 0) -> SimDevice
         The device.
 
     Raises:
-        SimConfigError: a missing, unknown or invalid key.
+        SimConfigError: a missing, unknown or invalid key, named as ``<motor>.<key>``.
     """
-    if not isinstance(config, Mapping):
-        raise SimConfigError(f'a motor config must be a mapping, got {config!r}')
-    if 'type' not in config or 'id' not in config:
-        raise SimConfigError(f'a motor config needs a type and an id, got {dict(config)!r}')
-    sim_type = config['type']
+    named = config.get('name') if isinstance(config, Mapping) else None
+    values = MOTOR_SCHEMA.read(named if isinstance(named, str) and named else 'motor', config,
+                               SimConfigError)
+    sim_type = values['type']
     try:
         family = sim_family(sim_type)
     except UnknownTypeError as err:
         raise SimConfigError(str(err)) from None
-    motor_id = can_id(config, 'id', f'{sim_type} motor')
-    name = config.get('name', f'{sim_type}_{motor_id}')
-    if not isinstance(name, str) or not name:
-        raise SimConfigError(f'motor name must be a non-empty string, got {name!r}')
-    allowed = _COMMON_KEYS | _PARAM_KEYS | family.keys
-    unknown = sorted(set(config) - allowed)
+    name = values['name'] or f'{sim_type}_{values["id"]}'
+    rest = MOTOR_SCHEMA.extras(config)
+    allowed = PHYSICS_SCHEMA.names | family.schema.names
+    unknown = sorted(set(rest) - allowed)
     if unknown:
-        raise SimConfigError(f'{name}: unknown key(s) {unknown}; known: {sorted(allowed)}')
-
-    params = family.models[sim_type].replace(**{k: config[k] for k in _PARAM_KEYS & set(config)})
+        known = sorted(MOTOR_SCHEMA.names | allowed)
+        raise SimConfigError(f'{name}: unknown key(s) {unknown}; known: {known}')
+    physics = PHYSICS_SCHEMA.read(
+        name, {k: v for k, v in rest.items() if k in PHYSICS_SCHEMA.names}, SimConfigError
+    )
+    options = family.schema.read(
+        name, {k: v for k, v in rest.items() if k in family.schema.names}, SimConfigError
+    )
+    params = family.models[sim_type].replace(
+        **{k: v for k, v in physics.items() if v is not None}
+    )
     model = MotorModel(
-        params,
-        angle=number(config, 'initial_position', 0.0, name),
-        velocity=number(config, 'initial_velocity', 0.0, name),
+        params, angle=values['initial_position'], velocity=values['initial_velocity']
     )
     common: dict[str, Any] = {'seed': seed}
-    if 'overtemp_c' in config:
-        common['overtemp_c'] = number(config, 'overtemp_c', None, name)
+    if values['overtemp_c'] is not None:
+        common['overtemp_c'] = values['overtemp_c']
     try:
-        return family.build(config, DeviceParts(name, sim_type, motor_id, model, common))
+        return family.build(options, DeviceParts(name, sim_type, values['id'], model, common))
     except (HardwareConfigError, ValueRangeError) as err:
         raise SimConfigError(f'{name}: {err}') from err
 

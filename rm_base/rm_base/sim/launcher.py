@@ -15,22 +15,14 @@ that reverses (unjamming) and comes forward again fires only pockets it has not 
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
 
 from rm_base.sim.devices import SimDevice
 from rm_base.sim.errors import SimConfigError
-from rm_base.sim.joint import (
-    Joint,
-    check_keys,
-    config_number,
-    direction_from_config,
-    joint_from_config,
-    motor_from_config,
-)
+from rm_base.sim.joint import Joint
 
-_CALIBRES = (17, 42)
+CALIBRES = (17, 42)
 
 
 @dataclass(frozen=True)
@@ -72,7 +64,7 @@ class Launcher:
         for name, value in (('speed_ratio', speed_ratio), ('min_speed', min_speed)):
             if not (math.isfinite(value) and value >= 0.0):
                 raise SimConfigError(f'shooter {name} must be >= 0, got {value!r}')
-        if calibre not in _CALIBRES:
+        if calibre not in CALIBRES:
             raise SimConfigError(f'shooter calibre must be 17 or 42 (mm), got {calibre!r}')
         if not friction:
             raise SimConfigError('a shooter needs at least one friction wheel')
@@ -111,58 +103,3 @@ class Launcher:
 
     def _pocket(self) -> int:
         return math.floor((self.trigger.angle - self.fire_phase) / self.slot_angle)
-
-
-_REQUIRED = frozenset({'trigger', 'friction_motors', 'slots', 'fire_phase', 'speed_ratio'})
-_KEYS = _REQUIRED | {'friction_directions', 'min_speed', 'calibre'}
-
-
-def launcher_from_config(config: Mapping[str, Any], devices: Mapping[str, SimDevice]) -> Launcher:
-    """Build the launcher from the body's ``shooter`` dict.
-
-    Schema (lists of plain values, as ROS parameters can carry)::
-
-        shooter:
-          trigger: {motor: trigger, direction: 1, zero: 0.0}
-          friction_motors: [friction_l, friction_r]
-          friction_directions: [1, -1]   # launch direction per wheel, default all 1
-          slots: 8                 # pockets per trigger turn
-          fire_phase: 0.55         # [rad] where in a slot a ball leaves for the wheels
-          speed_ratio: 0.0385      # [m/s per rad/s] muzzle speed per friction wheel speed
-          min_speed: 5.0           # [m/s] slower balls stay in the barrel
-          calibre: 17              # [mm] 17 or 42
-
-    Raises:
-        SimConfigError: a missing or unknown key, an unknown motor, bad values.
-    """
-    check_keys(config, _KEYS, 'shooter')
-    missing = sorted(_REQUIRED - set(config))
-    if missing:
-        raise SimConfigError(f'shooter: missing key(s) {missing}')
-    motors = config['friction_motors']
-    if not isinstance(motors, Sequence) or isinstance(motors, str):
-        raise SimConfigError(f'shooter.friction_motors must be a list of motors, got {motors!r}')
-    directions = config.get('friction_directions', [1] * len(motors))
-    if not isinstance(directions, Sequence) or len(directions) != len(motors):
-        raise SimConfigError(
-            f'shooter.friction_directions must be one 1 or -1 per motor, got {directions!r}'
-        )
-    friction = [
-        Joint(
-            motor_from_config(devices, motor, 'shooter.friction_motors'),
-            direction_from_config(direction, 'shooter.friction_directions'),
-        )
-        for motor, direction in zip(motors, directions, strict=True)
-    ]
-    numbers = {
-        key: config_number(config, key, 'shooter')
-        for key in ('fire_phase', 'speed_ratio', 'min_speed')
-        if key in config
-    }
-    return Launcher(
-        joint_from_config(config['trigger'], devices, 'shooter.trigger'),
-        friction,
-        slots=config['slots'],
-        calibre=config.get('calibre', 17),
-        **numbers,
-    )

@@ -7,10 +7,10 @@ rotor-side model that moves.
 from __future__ import annotations
 
 import dataclasses
-import math
 from dataclasses import dataclass
 from enum import Enum
 
+from rm_base.config_schema import Key, Schema, number
 from rm_base.sim.errors import SimConfigError
 
 
@@ -33,20 +33,7 @@ class MotorType(Enum):
 class MotorParams:
     """Physical constants of one motor and its driver; output-shaft values unless noted.
 
-    Attributes:
-        gear_ratio: rotor turns per output turn (1 for direct drive), > 0.
-        torque_constant: Kt at the output shaft [N·m/A], > 0.
-        back_emf_constant: Ke at the output shaft [V/(rad/s)], >= 0.
-        resistance: winding resistance seen by the driver [Ω], > 0.
-        supply_voltage: bus voltage [V], > 0.
-        max_current: driver current limit [A], > 0.
-        rotor_inertia: inertia of the rotor alone, rotor side [kg·m²], > 0.
-        load_inertia: inertia of what the output shaft drives [kg·m²], >= 0.
-        viscous_friction: at the output shaft [N·m·s/rad], >= 0.
-        coulomb_friction: at the output shaft [N·m], >= 0.
-        thermal_resistance: winding to ambient [K/W], > 0.
-        thermal_capacitance: of the winding [J/K], > 0.
-        ambient_temperature: [°C]; also the initial temperature.
+    The fields, their units and bounds are :data:`PHYSICS_SCHEMA`'s keys (checked here).
     """
 
     gear_ratio: float
@@ -63,43 +50,23 @@ class MotorParams:
     thermal_capacitance: float = 150.0
     ambient_temperature: float = 25.0
 
-    _POSITIVE = (
-        'gear_ratio',
-        'torque_constant',
-        'resistance',
-        'supply_voltage',
-        'max_current',
-        'rotor_inertia',
-        'thermal_resistance',
-        'thermal_capacitance',
-    )
-    _NON_NEGATIVE = ('back_emf_constant', 'load_inertia', 'viscous_friction', 'coulomb_friction')
-
     def __post_init__(self) -> None:
-        for field in dataclasses.fields(self):
-            value = getattr(self, field.name)
-            if isinstance(value, bool) or not isinstance(value, int | float):
-                raise SimConfigError(f'motor parameter {field.name} must be a number: {value!r}')
-            if not math.isfinite(value):
-                raise SimConfigError(f'motor parameter {field.name} must be finite, got {value}')
-        for name in self._POSITIVE:
-            if (value := getattr(self, name)) <= 0.0:
-                raise SimConfigError(f'motor parameter {name} must be > 0, got {value}')
-        for name in self._NON_NEGATIVE:
-            if (value := getattr(self, name)) < 0.0:
-                raise SimConfigError(f'motor parameter {name} must be >= 0, got {value}')
+        PHYSICS_SCHEMA.read('motor parameter', dataclasses.asdict(self), SimConfigError)
 
-    def replace(self, **overrides: float) -> MotorParams:
+    def replace(self, **overrides: object) -> MotorParams:
         """Return a copy with some fields replaced (validated like the constructor).
 
         Raises:
             SimConfigError: an unknown field name or an invalid value.
         """
-        names = {field.name for field in dataclasses.fields(self)}
+        names = PHYSICS_SCHEMA.names
         unknown = sorted(set(overrides) - names)
         if unknown:
             raise SimConfigError(f'unknown motor parameter(s) {unknown}; known: {sorted(names)}')
-        return dataclasses.replace(self, **{k: float(v) for k, v in overrides.items()})
+        values = PHYSICS_SCHEMA.read(
+            'motor parameter', {**dataclasses.asdict(self), **overrides}, SimConfigError
+        )
+        return dataclasses.replace(self, **values)
 
     @property
     def inertia(self) -> float:
@@ -110,6 +77,30 @@ class MotorParams:
     def output_inertia(self) -> float:
         """Total inertia seen at the output shaft [kg·m²]."""
         return self.inertia * self.gear_ratio**2
+
+
+def _physics_key(name: str, unit: str, bound: str, description: str) -> Key:
+    bounds = {'>': {'gt': 0.0}, '>=': {'ge': 0.0}, '': {}}[bound]
+    return number(name, None, unit=unit, description=description, **bounds)
+
+
+#: The physics of ``joints.<joint>.sim`` / a world's motor: :class:`MotorParams`' fields,
+#: each defaulting to the simulated type's value.
+PHYSICS_SCHEMA = Schema(tuple(_physics_key(*row) for row in (
+    ('gear_ratio', '', '>', 'rotor turns per output turn (1: direct drive)'),
+    ('torque_constant', 'N·m/A', '>', 'Kt at the output shaft'),
+    ('back_emf_constant', 'V/(rad/s)', '>=', 'Ke at the output shaft'),
+    ('resistance', 'Ohm', '>', 'winding resistance seen by the driver'),
+    ('supply_voltage', 'V', '>', 'bus voltage'),
+    ('max_current', 'A', '>', 'driver current limit'),
+    ('rotor_inertia', 'kg·m²', '>', 'the rotor alone, rotor side'),
+    ('load_inertia', 'kg·m²', '>=', 'what the output shaft drives'),
+    ('viscous_friction', 'N·m·s/rad', '>=', 'at the output shaft'),
+    ('coulomb_friction', 'N·m', '>=', 'at the output shaft'),
+    ('thermal_resistance', 'K/W', '>', 'winding to ambient'),
+    ('thermal_capacitance', 'J/K', '>', 'of the winding'),
+    ('ambient_temperature', 'degC', '', 'ambient, and the winding at the start'),
+)))
 
 
 # Approximate catalogue values (datasheets and team measurements, rounded); every one can be

@@ -31,7 +31,8 @@ from enum import Enum
 from pathlib import Path
 from typing import Any
 
-from rm_base.sim.body import RobotBody, body_from_config
+from rm_base.sim.body import RobotBody
+from rm_base.sim.body_config import body_from_config
 from rm_base.sim.channel import SimChannel, register_channel, release_channel
 from rm_base.sim.device_config import check_channel, device_from_config
 from rm_base.sim.devices import SimDevice
@@ -151,7 +152,7 @@ class SimWorld:
             channels:                   # channel name -> list of motor dicts
               can0: [{type: m3508, id: 1, name: wheel_fl, load_inertia: 0.002}, ...]
               can1: [{type: gm6020, id: 1, name: yaw}, {type: dm4310, id: 2, name: pitch}]
-            body: {...}                 # see rm_base.sim.body.body_from_config
+            body: {...}                 # see rm_base.sim.body_config.body_from_config
             imus: [{path: '/tmp/rm_sim_${ROS_DOMAIN_ID}/imu', mount: gimbal, rate_hz: 100}]
             referee: {path: '/tmp/rm_sim_${ROS_DOMAIN_ID}/referee', chassis_power_limit: 60}
             remote: {path: '/tmp/rm_sim_${ROS_DOMAIN_ID}/dr16'}
@@ -250,7 +251,7 @@ class SimWorld:
             return device
 
     def set_body(self, config: Mapping[str, Any]) -> RobotBody:
-        """Build the robot body (see :func:`~rm_base.sim.body.body_from_config`).
+        """Build the robot body (see :func:`~rm_base.sim.body_config.body_from_config`).
 
         Raises:
             SimConfigError: invalid config or unknown motor names.

@@ -18,6 +18,7 @@ from rm_base import motors
 # A motor family of its own package, as a team would ship it: an MIT-protocol joint type
 # and its simulated motor, registered through the rm_base.motor_families entry point.
 ACME_MODULE = """
+from rm_base.config_schema import Schema, integer
 from rm_base.motors import MotorFamily, SimFamily
 from rm_base.motors.cheetah import protocol as cheetah
 from rm_base.motors.cheetah.actuator import Cheetah
@@ -32,7 +33,7 @@ class AcmeJoint(Cheetah):
 def build(cfg, parts):
     return CheetahDevice(
         parts.name, parts.sim_type, parts.motor_id, parts.model,
-        cheetah.CHEETAH_DEFAULT_LIMITS, master_id=cfg.get('master_id', 0), **parts.common,
+        cheetah.CHEETAH_DEFAULT_LIMITS, master_id=cfg['master_id'], **parts.common,
     )
 
 
@@ -41,7 +42,7 @@ FAMILY = MotorFamily(
     actuators=(AcmeJoint,),
     sim=SimFamily(
         models={'acme_sim': MOTOR_DEFAULTS[MotorType.CHEETAH].replace(load_inertia=1e-4)},
-        keys=frozenset({'master_id'}),
+        schema=Schema((integer('master_id', 0, description='replies'),)),
         build=build,
         joint_types={'acme_mit': ('acme_sim', {})},
         shared_options=('master_id',),

@@ -172,12 +172,21 @@ def test_when_pitch_carries_gravity_torque_expect_it_noses_down(make_world):
 @pytest.mark.parametrize(
     ('change', 'message'),
     [
-        ({'chassis': {'type': 'tank'}}, "chassis.type must be 'mecanum', 'omni' or 'wheels'"),
-        ({'gimbal': {'yaw': {'motor': 'nope'}}}, "names motor 'nope'"),
-        ({'gimbal': {'roll': {'motor': 'yaw'}}}, r"unknown key\(s\) \['roll'\]"),
-        ({'gimbal': {'yaw': {'motor': 'yaw', 'direction': 2}}}, 'direction must be 1 or -1'),
-        ({'initial_pose': [0, 0]}, 'initial_pose must be 3 finite numbers'),
-        ({'gravity': 9.8}, r"unknown key\(s\) \['gravity'\]"),
+        ({'chassis': {'type': 'tank'}},
+         r"body\.chassis\.type must be one of mecanum, omni, wheels, got 'tank'"),
+        ({'chassis': {'type': 'mecanum'}}, r'body\.chassis\.motors is required'),
+        ({'gimbal': {'yaw': {'motor': 'nope'}}},
+         r"body\.gimbal\.yaw\.motor is 'nope', which is not a configured motor"),
+        ({'gimbal': {'roll': {'motor': 'yaw'}}}, r"body\.gimbal: unknown key\(s\) \['roll'\]"),
+        ({'gimbal': {'yaw': {'motor': 'yaw', 'direction': 2}}},
+         r'body\.gimbal\.yaw\.direction must be one of 1, -1, got 2'),
+        ({'gimbal': {'pitch': {'motor': 'pitch', 'gravity_torque': 'lots'}}},
+         r"body\.gimbal\.pitch\.gravity_torque must be double \[N·m\]; got str 'lots'"),
+        ({'gimbal': {'yaw': {'motor': 'yaw', 'world_frame_inertia': 1}}},
+         r'body\.gimbal\.yaw\.world_frame_inertia must be bool'),
+        ({'initial_pose': [0, 0]}, r'body\.initial_pose must have 3 entries, has 2'),
+        ({'initial_pose': [0, 0, float('nan')]}, r'body\.initial_pose entry \[2\] must be finite'),
+        ({'gravity': 9.8}, r"body: unknown key\(s\) \['gravity'\]"),
     ],
 )
 def test_when_bad_body_config_expect_config_error(make_world, change, message):
@@ -191,6 +200,32 @@ def test_when_chassis_names_too_few_motors_expect_config_error(make_world):
     config = robot_config()
     config['body']['chassis']['motors'] = WHEELS[:3]
     with pytest.raises(SimConfigError, match='must name 4 motors'):
+        make_world(config)
+
+
+@pytest.mark.parametrize(
+    ('chassis', 'message'),
+    [
+        ({'directions': [1, -1, 1]}, r'body\.chassis\.directions must have one entry per wheel'),
+        ({'directions': [1, -1, 1, 0]},
+         r'body\.chassis\.directions entry \[3\] must be 1 or -1, got 0'),
+        ({'wheelbase': -0.4}, r'body\.chassis\.wheelbase must be > 0\.0, got -0\.4'),
+        ({'type': 'wheels', 'wheels': [{'motor': 'wheel_fl', 'x': 0.0, 'y': 0.2}]},
+         r'body\.chassis: unknown key\(s\)'),
+    ],
+)
+def test_when_bad_chassis_expect_the_key_named(make_world, chassis, message):
+    config = robot_config()
+    config['body']['chassis'] = {**config['body']['chassis'], **chassis}
+    with pytest.raises(SimConfigError, match=message):
+        make_world(config)
+
+
+def test_when_a_listed_wheel_is_bad_expect_its_index_named(make_world):
+    config = robot_config()
+    wheel = {'motor': 'wheel_fl', 'x': 0.0, 'y': 0.2, 'radius': 0.05}
+    config['body']['chassis'] = {'type': 'wheels', 'wheels': [wheel, {**wheel, 'radius': 0}]}
+    with pytest.raises(SimConfigError, match=r'body\.chassis\.wheels\[1\]\.radius must be > 0'):
         make_world(config)
 
 

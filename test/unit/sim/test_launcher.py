@@ -5,7 +5,7 @@ from types import SimpleNamespace
 
 import pytest
 from rm_base.sim import Joint, Launcher, SimConfigError
-from rm_base.sim.launcher import launcher_from_config
+from rm_base.sim.body_config import launcher_from_config
 
 SLOT = 2.0 * math.pi / 8
 PHASE = 0.55

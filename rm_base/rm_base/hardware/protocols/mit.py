@@ -20,6 +20,7 @@ from __future__ import annotations
 import dataclasses
 import enum
 import math
+from collections.abc import Mapping
 from typing import NamedTuple
 
 from rm_base.hardware.errors import FrameLengthError, HardwareConfigError, ValueRangeError
@@ -81,7 +82,7 @@ class MitLimits:
             if not ok:
                 raise HardwareConfigError(f'MitLimits.{lo} must be finite and < {hi}, got {low!r}')
 
-    def with_overrides(self, overrides: dict[str, float] | None) -> MitLimits:
+    def with_overrides(self, overrides: Mapping[str, object] | None) -> MitLimits:
         """Return a copy with some fields replaced (e.g. from a robot config).
 
         Raises:
@@ -95,7 +96,10 @@ class MitLimits:
             raise HardwareConfigError(
                 f'unknown MIT limit(s) {sorted(unknown)}; known: {sorted(fields)}'
             )
-        return dataclasses.replace(self, **{k: float(v) for k, v in overrides.items()})
+        for key, value in overrides.items():
+            if isinstance(value, bool) or not isinstance(value, int | float):
+                raise HardwareConfigError(f'MIT limit {key} must be a number, got {value!r}')
+        return dataclasses.replace(self, **{k: float(v) for k, v in overrides.items()})  # type: ignore[arg-type]
 
 
 class MitCommand(NamedTuple):

@@ -5,25 +5,34 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from rm_base.config_schema import Schema, boolean, integer, mapping
 from rm_base.motors.cheetah import protocol as cheetah
 from rm_base.motors.cheetah.actuator import Cheetah
 from rm_base.motors.cheetah.sim_device import CheetahDevice
 from rm_base.motors.family import DeviceParts, MotorFamily, SimFamily
-from rm_base.sim.config_values import can_id, flag, mit_limits
+from rm_base.sim.devices import STD_ID_MAX
 from rm_base.sim.motor_params import MOTOR_DEFAULTS, MotorType
 
+#: A simulated Cheetah driver's keys (``SimFamily.schema``).
+SIM_SCHEMA = Schema((
+    integer('master_id', cheetah.DEFAULT_MASTER_ID, ge=0, le=STD_ID_MAX,
+            description='id of its replies'),
+    mapping('limits', None, description="MIT ranges (p_max, v_max, t_max...) over the default's"),
+    boolean('enabled', False, description='in motor mode at the start (else it waits for enter)'),
+    boolean('reply_voltage', False, description='replies carry the bus voltage (8 bytes, not 6)'),
+))
 
-def _build(cfg: Mapping[str, Any], parts: DeviceParts) -> CheetahDevice:
-    name = parts.name
+
+def _build(values: Mapping[str, Any], parts: DeviceParts) -> CheetahDevice:
     return CheetahDevice(
-        name,
+        parts.name,
         MotorType(parts.sim_type),
         parts.motor_id,
         parts.model,
-        mit_limits(cfg, cheetah.CHEETAH_DEFAULT_LIMITS, name),
-        master_id=can_id(cfg, 'master_id', name, default=cheetah.DEFAULT_MASTER_ID),
-        enabled=flag(cfg, 'enabled', name),
-        reply_voltage=flag(cfg, 'reply_voltage', name),
+        cheetah.CHEETAH_DEFAULT_LIMITS.with_overrides(values['limits']),
+        master_id=values['master_id'],
+        enabled=values['enabled'],
+        reply_voltage=values['reply_voltage'],
         **parts.common,
     )
 
@@ -33,7 +42,7 @@ FAMILY = MotorFamily(
     actuators=(Cheetah,),
     sim=SimFamily(
         models={'cheetah': MOTOR_DEFAULTS[MotorType.CHEETAH]},
-        keys=frozenset({'master_id', 'limits', 'enabled', 'reply_voltage'}),
+        schema=SIM_SCHEMA,
         build=_build,
         joint_types={'cheetah': ('cheetah', {})},
         shared_options=('master_id', 'limits'),

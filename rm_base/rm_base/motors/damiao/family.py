@@ -5,12 +5,13 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
+from rm_base.config_schema import Schema, boolean, integer, mapping, number, string
 from rm_base.hardware.config import JointConfig
 from rm_base.motors.damiao import protocol as damiao
 from rm_base.motors.damiao.actuator import Damiao, Dm4310, Dm4340, Dm8009, Dm10010L
 from rm_base.motors.damiao.sim_device import DamiaoDevice
 from rm_base.motors.family import DeviceParts, MotorFamily, SimFamily
-from rm_base.sim.config_values import can_id, flag, mit_limits, number
+from rm_base.sim.devices import STD_ID_MAX
 from rm_base.sim.errors import SimConfigError
 from rm_base.sim.motor_params import MOTOR_DEFAULTS, MotorType
 
@@ -18,41 +19,47 @@ _MODELS = {'dm4310': 'DM4310', 'dm8009': 'DM8009'}
 _MODES = {'mit': damiao.DmMode.MIT, 'pos_vel': damiao.DmMode.POS_VEL, 'vel': damiao.DmMode.VEL}
 
 
-def _build(cfg: Mapping[str, Any], parts: DeviceParts) -> DamiaoDevice:
+#: A simulated Damiao motor's keys (``SimFamily.schema``).
+SIM_SCHEMA = Schema((
+    string('model', None, nonempty=True,
+           description="its model (DM4310, DM8009...: its MIT ranges); default the type's"),
+    integer('master_id', None, ge=0, le=STD_ID_MAX,
+            description='id of its feedback frames; default id + 0x10'),
+    string('mode', 'mit', choices=tuple(_MODES), description='control mode at the start'),
+    mapping('limits', None, description="MIT ranges (p_max, v_max, t_max) over the model's"),
+    boolean('enabled', False, description='enabled at the start (else it waits for enable)'),
+    number('command_timeout', None, unit='s', ge=0.0,
+           description='TIMEOUT register: enabled and no command for this long -> '
+           'COMMUNICATION_LOST; none or 0: never'),
+    number('vel_kp', None, unit='N·m·s/rad', ge=0.0,
+           description='internal velocity loop gain (POS_VEL, VEL); default ~100 rad/s '
+           'bandwidth on the inertia'),
+    number('vel_ki', None, unit='N·m/rad', ge=0.0,
+           description='internal velocity loop integral gain; default vel_kp x 25'),
+    number('pos_kp', 20.0, unit='1/s', ge=0.0, description='internal position loop gain (POS_VEL)'),
+))
+
+
+def _build(values: Mapping[str, Any], parts: DeviceParts) -> DamiaoDevice:
     name, motor_id = parts.name, parts.motor_id
     if motor_id > damiao.MAX_MOTOR_ID:
         # The feedback carries only the low nibble of the id.
         raise SimConfigError(f'{name}: Damiao id must be 0..15, got {motor_id}')
-    dm_model = cfg.get('model', _MODELS[parts.sim_type])
-    if not isinstance(dm_model, str):
-        raise SimConfigError(f'{name}: model must be a string, got {dm_model!r}')
-    limits = mit_limits(cfg, damiao.dm_limits(dm_model), name)
-    mode_name = cfg.get('mode', 'mit')
-    if mode_name not in _MODES:
-        raise SimConfigError(f'{name}: mode must be one of {sorted(_MODES)}, got {mode_name!r}')
-    timeout = number(cfg, 'command_timeout', None, name)
-    if timeout is not None and timeout < 0.0:
-        raise SimConfigError(f'{name}: command_timeout must be >= 0 s, got {timeout}')
-    gains = {k: number(cfg, k, None, name) for k in ('vel_kp', 'vel_ki')}
-    for key, value in gains.items():
-        if value is not None and value < 0.0:
-            raise SimConfigError(f'{name}: {key} must be >= 0, got {value}')
-    pos_kp = number(cfg, 'pos_kp', 20.0, name)
-    if pos_kp is None or pos_kp < 0.0:
-        raise SimConfigError(f'{name}: pos_kp must be >= 0, got {pos_kp}')
+    model = values['model'] or _MODELS[parts.sim_type]
+    master_id = values['master_id']
     return DamiaoDevice(
         name,
         MotorType(parts.sim_type),
         motor_id,
         parts.model,
-        limits,
-        master_id=can_id(cfg, 'master_id', name, default=motor_id + 0x10),
-        mode=_MODES[mode_name],
-        enabled=flag(cfg, 'enabled', name),
-        command_timeout=timeout,
-        vel_kp=gains['vel_kp'],
-        vel_ki=gains['vel_ki'],
-        pos_kp=pos_kp,
+        damiao.dm_limits(model).with_overrides(values['limits']),
+        master_id=motor_id + 0x10 if master_id is None else master_id,
+        mode=_MODES[values['mode']],
+        enabled=values['enabled'],
+        command_timeout=values['command_timeout'],
+        vel_kp=values['vel_kp'],
+        vel_ki=values['vel_ki'],
+        pos_kp=values['pos_kp'],
         **parts.common,
     )
 
@@ -70,19 +77,7 @@ FAMILY = MotorFamily(
     actuators=(Damiao, Dm4310, Dm4340, Dm8009, Dm10010L),
     sim=SimFamily(
         models={t.value: MOTOR_DEFAULTS[t] for t in (MotorType.DM4310, MotorType.DM8009)},
-        keys=frozenset(
-            {
-                'model',
-                'master_id',
-                'mode',
-                'limits',
-                'enabled',
-                'command_timeout',
-                'vel_kp',
-                'vel_ki',
-                'pos_kp',
-            }
-        ),
+        schema=SIM_SCHEMA,
         build=_build,
         joint_types={
             'dm4310': ('dm4310', {}),

@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
+from rm_base.config_schema import Schema, integer, number, string
 from rm_base.hardware.actuators import Actuator
 from rm_base.hardware.errors import HardwareConfigError, ValueRangeError
 from rm_base.motors.dji import protocol as dji
@@ -12,7 +13,6 @@ from rm_base.motors.dji.actuator import M2006, M3508, DjiActuator, Gm6020Current
 from rm_base.motors.dji.groups import DjiCommandGroup, build_dji_groups
 from rm_base.motors.dji.sim_device import DjiDevice
 from rm_base.motors.family import DeviceParts, MotorFamily, SimFamily
-from rm_base.sim.config_values import number
 from rm_base.sim.devices import SimDevice
 from rm_base.sim.errors import SimConfigError
 from rm_base.sim.motor_params import MOTOR_DEFAULTS, MotorType
@@ -20,38 +20,45 @@ from rm_base.sim.motor_params import MOTOR_DEFAULTS, MotorType
 _KINDS = {'m3508': dji.DjiKind.C620, 'm2006': dji.DjiKind.C610}
 
 
-def _build(cfg: Mapping[str, Any], parts: DeviceParts) -> DjiDevice:
-    name = parts.name
-    control = cfg.get('control', 'voltage')
+#: A simulated DJI ESC's keys (``SimFamily.schema``); the scales must match the joint's.
+SIM_SCHEMA = Schema((
+    number('feedback_rate_hz', 1000.0, unit='Hz', gt=0.0, description='feedback frames per second'),
+    number('command_timeout', 0.1, unit='s', ge=0.0,
+           description='no command for this long: zero current (0: never)'),
+    string('control', None, choices=('voltage', 'current'),
+           description='GM6020 only: what its command sets; default voltage'),
+    integer('raw_limit', None, gt=0, description="command clamp [raw]; default the kind's"),
+    number('si_per_raw', None, gt=0.0,
+           description="A (V for a GM6020 on voltage) per raw unit; default the kind's"),
+    number('feedback_amps_per_raw', None, gt=0.0,
+           description="feedback current per raw unit [A]; default the kind's"),
+))
+
+
+def _build(values: Mapping[str, Any], parts: DeviceParts) -> DjiDevice:
+    control = values['control']
     if parts.sim_type == 'gm6020':
-        if control not in ('voltage', 'current'):
-            raise SimConfigError(f"{name}: control must be 'voltage' or 'current', got {control!r}")
-        kind = dji.DjiKind.GM6020_VOLTAGE if control == 'voltage' else dji.DjiKind.GM6020_CURRENT
-    elif 'control' in cfg:
-        raise SimConfigError(f'{name}: only the GM6020 has a control mode')
+        current = control == 'current'
+        kind = dji.DjiKind.GM6020_CURRENT if current else dji.DjiKind.GM6020_VOLTAGE
+    elif control is not None:
+        raise SimConfigError(f'{parts.name}: only the GM6020 has a control mode')
     else:
         kind = _KINDS[parts.sim_type]
     spec = dji.make_dji_spec(
         kind,
-        raw_limit=cfg.get('raw_limit'),
-        si_per_raw=cfg.get('si_per_raw'),
-        feedback_amps_per_raw=cfg.get('feedback_amps_per_raw'),
+        raw_limit=values['raw_limit'],
+        si_per_raw=values['si_per_raw'],
+        feedback_amps_per_raw=values['feedback_amps_per_raw'],
     )
     spec.check_id(parts.motor_id)
-    rate = number(cfg, 'feedback_rate_hz', 1000.0, name)
-    if rate is None or rate <= 0.0:
-        raise SimConfigError(f'{name}: feedback_rate_hz must be > 0, got {rate}')
-    timeout = number(cfg, 'command_timeout', 0.1, name)
-    if timeout is not None and timeout < 0.0:
-        raise SimConfigError(f'{name}: command_timeout must be >= 0 s, got {timeout}')
     return DjiDevice(
-        name,
+        parts.name,
         MotorType(parts.sim_type),
         parts.motor_id,
         parts.model,
         spec,
-        feedback_rate_hz=rate,
-        command_timeout=timeout,
+        feedback_rate_hz=values['feedback_rate_hz'],
+        command_timeout=values['command_timeout'],
         **parts.common,
     )
 
@@ -79,16 +86,7 @@ FAMILY = MotorFamily(
         models={
             t.value: MOTOR_DEFAULTS[t] for t in (MotorType.M3508, MotorType.M2006, MotorType.GM6020)
         },
-        keys=frozenset(
-            {
-                'feedback_rate_hz',
-                'command_timeout',
-                'control',
-                'raw_limit',
-                'si_per_raw',
-                'feedback_amps_per_raw',
-            }
-        ),
+        schema=SIM_SCHEMA,
         build=_build,
         joint_types={
             'm3508': ('m3508', {}),
