@@ -82,6 +82,8 @@ def _value(value: Any) -> str:
         return '*none*'
     if isinstance(value, str):
         return f'`{value!r}`' if value else "`''`"
+    if isinstance(value, float) and len(repr(value)) > 10:  # a derived constant
+        return f'`{value:.6g}`'
     if isinstance(value, list | tuple):
         return '`[' + ', '.join(repr(v) for v in value) + ']`'
     return f'`{value!r}`'
@@ -116,7 +118,7 @@ def joint_types() -> list[str]:
         '## can_bridge joint types\n',
         'Every `joints.<joint>` takes the common keys '
         f'({", ".join(f"`{k}`" for k in sorted(COMMON_JOINT_KEYS - {"name"}))}) and the '
-        "options of its type's family (docs/PROTOCOLS.md has what they mean). With "
+        "options of its type (their tables follow this one). With "
         '`sim: true` a joint is simulated as the model below, unless `joints.<joint>.sim.type` '
         "says otherwise. A joint's `velocity_pid` and `position_pid` take the fields of "
         '`rm_base.control.PidGains` (`kp`, `ki`, `kd`, `output_limit`, `integral_limit`, '
@@ -133,11 +135,22 @@ def joint_types() -> list[str]:
             sim = family.sim.joint_types.get(cls.type_name) if family.sim is not None else None
             if sim is None and family.sim is not None and family.sim.joint_type_of is not None:
                 sim = ('by its `model`', {})
-            options = ', '.join(f'`{k}`' for k in sorted(cls.option_keys)) or '-'
+            options = ', '.join(f'`{k}`' for k in sorted(cls.options_schema.names)) or '-'
             simulated = '-' if sim is None else sim[0]
             if sim is not None and not simulated.startswith('by'):
                 simulated = f'`{simulated}`'
             out.append(f'| `{cls.type_name}` | {family.name} | {options} | {simulated} |')
+    out.append('')
+    for family in families().values():
+        if family.name not in BUILT_IN:
+            continue
+        shared: dict[int, list[Any]] = {}  # types that share one options schema
+        for cls in family.actuators:
+            shared.setdefault(id(cls.options_schema), []).append(cls)
+        for classes in shared.values():
+            names = ', '.join(cls.type_name for cls in classes)
+            out += [f'### joints.<joint> options: {names}\n',
+                    *_table(classes[0].options_schema.declared('joints.<joint>.')), '']
     return out
 
 
@@ -237,7 +250,6 @@ def render(declared: dict[str, list[DeclaredParameter]]) -> str:
         if node == 'can_bridge':
             out.extend(tables())
             out.extend(joint_types())
-            out.append('')
             out.extend(sim_tables())
     return '\n'.join(out).rstrip() + '\n'
 

@@ -104,6 +104,22 @@ def test_damiao_model_from_option_and_limit_overrides():
         make(limits={'vmax': 1.0})
 
 
+@pytest.mark.parametrize(
+    ('options', 'message'),
+    [
+        ({'auto_enable': 'false'}, r"joints\.j\.auto_enable must be bool; got str 'false'"),
+        ({'disable_on_shutdown': 0}, r'joints\.j\.disable_on_shutdown must be bool'),
+        ({'master_id': 0x800}, r'joints\.j\.master_id must be <= 2047, got 2048'),
+        ({'limits': [1, 2]}, r'joints\.j\.limits must be mapping'),
+        ({'limits': {'v_max': 'fast'}}, r'joints\.j\.limits: MIT limit v_max must be a number'),
+        ({'mode': 'mit'}, r"joints\.j: unknown key\(s\) \['mode'\]"),
+    ],
+)
+def test_a_bad_mit_option_is_refused_naming_its_key(options, message):
+    with pytest.raises(HardwareConfigError, match=message):
+        make(**options)
+
+
 # --- commands ---
 def ticked(a, now_ns=T0, **command):
     a.set_command(now_ns=now_ns, **command)
@@ -285,5 +301,6 @@ def test_piper_encodes_torque_over_18_nm_unless_told_8():
 
 @pytest.mark.parametrize('value', [10, True, 'eighteen', 18.5])
 def test_piper_refuses_a_torque_range_no_firmware_has(value):
-    with pytest.raises(HardwareConfigError, match='torque_range must be 18 or 8'):
+    message = r'joints\.j\.torque_range must be one of 18, 8, got'
+    with pytest.raises(HardwareConfigError, match=message):
         make('piper', id=1, torque_range=value)

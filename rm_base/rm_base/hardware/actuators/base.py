@@ -39,6 +39,7 @@ from typing import Any, ClassVar, NamedTuple
 
 import can
 
+from rm_base.config_schema import Schema
 from rm_base.control import build_pid
 from rm_base.hardware.config import JointConfig, SafetyConfig
 from rm_base.hardware.errors import CommandRejectedError, HardwareConfigError, ProtocolError
@@ -182,12 +183,22 @@ class Actuator(abc.ABC):
     #: Defaults of the optional joint keys (a family may set it per instance before
     #: calling ``Actuator.__init__``, e.g. from a motor model).
     defaults: Defaults
-    #: Family-specific config keys (``JointConfig.options``).
-    option_keys: ClassVar[frozenset[str]] = frozenset()
+    #: Family-specific config keys (``JointConfig.options``), declared once.
+    options_schema: ClassVar[Schema] = Schema(())
     #: Start the multi-turn position within half a turn of zero (single-turn encoders).
     start_near_zero: ClassVar[bool] = False
     #: Id of this actuator's own command frame (families that pack one set it).
     command_id: int
+
+    @classmethod
+    def read_options(cls, config: JointConfig) -> dict[str, Any]:
+        """The joint's options through ``options_schema`` (a subclass may need them early).
+
+        Raises:
+            HardwareConfigError: an unknown, missing or invalid option, named by its key.
+        """
+        return cls.options_schema.read(f'joints.{config.name}', config.options,
+                                       HardwareConfigError)
 
     def __init__(self, config: JointConfig, safety: SafetyConfig | None = None) -> None:
         """Build the actuator from its config.
@@ -200,12 +211,8 @@ class Actuator(abc.ABC):
             HardwareConfigError: unknown option or invalid value.
         """
         safety = safety or SafetyConfig()
-        unknown = set(config.options) - self.option_keys
-        if unknown:
-            raise HardwareConfigError(
-                f'joints.{config.name}: unknown key(s) {sorted(unknown)} for type '
-                f'{self.type_name!r}; its options: {sorted(self.option_keys)}'
-            )
+        #: The joint's options, typed, defaults filled in (``options_schema``).
+        self.options = self.read_options(config)
         d = self.defaults
         self.config = config
         self.name = config.name

@@ -30,10 +30,12 @@ with motion at 1 kHz) and is unwrapped into a continuous position.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any, ClassVar
 
 import can
 
+from rm_base.config_schema import Schema, boolean, integer, mapping
 from rm_base.hardware.actuators.base import (
     Actuator,
     Feedback,
@@ -51,19 +53,22 @@ ENABLE_RETRY_NS = 100_000_000
 _ZERO = MitCommand(0.0, 0.0, 0.0, 0.0, 0.0)
 
 
-def limits_from_config(name: str, base: MitLimits, overrides: Any) -> MitLimits:
-    """Apply a joint's ``limits`` overrides to ``base``.
+#: A joint's (and a simulated motor's) ``limits`` option: MIT ranges over the defaults.
+LIMITS_KEY = mapping('limits', None,
+                     description="MIT ranges over the model's (p_min, p_max, v_max, t_max...)")
+
+
+def limits_from_config(
+    name: str, base: MitLimits, overrides: Mapping[str, Any] | None
+) -> MitLimits:
+    """Apply a joint's ``limits`` overrides (read by ``LIMITS_KEY``) to ``base``.
 
     Raises:
-        HardwareConfigError: not a mapping, or an unknown/invalid field.
+        HardwareConfigError: an unknown or invalid field.
     """
-    if overrides is None:
-        return base
-    if not isinstance(overrides, dict):
-        raise HardwareConfigError(f'joints.{name}.limits must be a mapping, got {overrides!r}')
     try:
         return base.with_overrides(overrides)
-    except (HardwareConfigError, TypeError, ValueError) as err:
+    except HardwareConfigError as err:
         raise HardwareConfigError(f'joints.{name}.limits: {err}') from err
 
 
@@ -97,7 +102,13 @@ def _sat(x: float, limit: float) -> float:
 class MitActuator(Actuator):
     """Shared MIT frame handling for Damiao and Cheetah; subclasses decode replies."""
 
-    option_keys = frozenset({'limits', 'master_id', 'auto_enable', 'disable_on_shutdown'})
+    options_schema = Schema((
+        LIMITS_KEY,
+        integer('master_id', None, ge=0, le=0x7FF,
+                description="id the motor replies on; default the family's"),
+        boolean('auto_enable', True, description='send enable when the motor comes online'),
+        boolean('disable_on_shutdown', True, description='send disable when the bridge stops'),
+    ))
     max_motor_id: ClassVar[int] = 0x7FF
 
     def __init__(
@@ -113,17 +124,17 @@ class MitActuator(Actuator):
             raise HardwareConfigError(
                 f'joints.{config.name}.id {config.id} outside 0..{self.max_motor_id}'
             )
-        opts = config.options
-        master = opts.get('master_id', self._default_master_id(config.id))
-        if isinstance(master, bool) or not isinstance(master, int) or not 0 <= master <= 0x7FF:
-            raise HardwareConfigError(f'joints.{config.name}.master_id must be 0..0x7FF')
+        opts = self.options
+        master = opts['master_id']
+        if master is None:
+            master = self._default_master_id(config.id)
         self.limits = limits
         self.motor_id = config.id
         #: Command frame id (the motor id; MIT mode has no offset).
         self.command_id = config.id
         self.master_id = master
-        self.auto_enable = bool(opts.get('auto_enable', True))
-        self.disable_on_shutdown = bool(opts.get('disable_on_shutdown', True))
+        self.auto_enable: bool = opts['auto_enable']
+        self.disable_on_shutdown: bool = opts['disable_on_shutdown']
         self._position_unwrapper = Unwrapper(2.0 * limits.p_max)
         self._fields = _ZERO
         self._system_pending: SystemCommand | None = (

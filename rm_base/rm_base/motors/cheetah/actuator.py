@@ -26,7 +26,7 @@ class Cheetah(MitActuator):
             HardwareConfigError: invalid id or option.
         """
         limits = limits_from_config(
-            config.name, cheetah.CHEETAH_DEFAULT_LIMITS, config.options.get('limits')
+            config.name, cheetah.CHEETAH_DEFAULT_LIMITS, self.read_options(config)['limits']
         )
         self.defaults = Defaults(1.0, None, limits.t_max, limits.v_max, math.inf)
         super().__init__(config, limits, safety)

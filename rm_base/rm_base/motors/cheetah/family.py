@@ -5,7 +5,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from rm_base.config_schema import Schema, boolean, integer, mapping
+from rm_base.config_schema import Schema, boolean, integer
+from rm_base.hardware.actuators.mit import LIMITS_KEY
 from rm_base.motors.cheetah import protocol as cheetah
 from rm_base.motors.cheetah.actuator import Cheetah
 from rm_base.motors.cheetah.sim_device import CheetahDevice
@@ -17,7 +18,7 @@ from rm_base.sim.motor_params import MOTOR_DEFAULTS, MotorType
 SIM_SCHEMA = Schema((
     integer('master_id', cheetah.DEFAULT_MASTER_ID, ge=0, le=STD_ID_MAX,
             description='id of its replies'),
-    mapping('limits', None, description="MIT ranges (p_max, v_max, t_max...) over the default's"),
+    LIMITS_KEY,
     boolean('enabled', False, description='in motor mode at the start (else it waits for enter)'),
     boolean('reply_voltage', False, description='replies carry the bus voltage (8 bytes, not 6)'),
 ))

@@ -11,6 +11,7 @@ from typing import ClassVar
 
 import can
 
+from rm_base.config_schema import Schema, string
 from rm_base.hardware.actuators.base import Defaults
 from rm_base.hardware.actuators.mit import MitActuator, limits_from_config
 from rm_base.hardware.config import JointConfig, SafetyConfig
@@ -23,7 +24,11 @@ class Damiao(MitActuator):
 
     type_name = 'damiao'
     default_model: ClassVar[str | None] = None
-    option_keys = MitActuator.option_keys | {'model'}
+    options_schema = Schema((
+        *MitActuator.options_schema.keys,
+        string('model', None, nonempty=True,
+               description='DM4310, DM8009...: its MIT ranges; type damiao must set it'),
+    ))
 
     def __init__(self, config: JointConfig, safety: SafetyConfig | None = None) -> None:
         """Build the actuator; see the module docstring for the options.
@@ -31,8 +36,9 @@ class Damiao(MitActuator):
         Raises:
             HardwareConfigError: unknown model, invalid id or option.
         """
-        model = config.options.get('model', self.default_model)
-        if not isinstance(model, str):
+        options = self.read_options(config)
+        model = options['model'] or self.default_model
+        if model is None:
             raise HardwareConfigError(
                 f'joints.{config.name}.model is required for type {self.type_name!r} '
                 f'(one of {", ".join(damiao.DM_MODEL_LIMITS)})'
@@ -41,7 +47,7 @@ class Damiao(MitActuator):
             base = damiao.dm_limits(model)
         except HardwareConfigError as err:
             raise HardwareConfigError(f'joints.{config.name}.model: {err}') from err
-        limits = limits_from_config(config.name, base, config.options.get('limits'))
+        limits = limits_from_config(config.name, base, options['limits'])
         # the motor reports its own output shaft; torque is reported, so no Kt is needed
         self.defaults = Defaults(1.0, None, limits.t_max, limits.v_max, 80.0)
         self.model = model.upper()

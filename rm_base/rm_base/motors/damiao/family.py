@@ -5,7 +5,8 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from rm_base.config_schema import Schema, boolean, integer, mapping, number, string
+from rm_base.config_schema import Schema, boolean, integer, number, string
+from rm_base.hardware.actuators.mit import LIMITS_KEY
 from rm_base.hardware.config import JointConfig
 from rm_base.motors.damiao import protocol as damiao
 from rm_base.motors.damiao.actuator import Damiao, Dm4310, Dm4340, Dm8009, Dm10010L
@@ -26,7 +27,7 @@ SIM_SCHEMA = Schema((
     integer('master_id', None, ge=0, le=STD_ID_MAX,
             description='id of its feedback frames; default id + 0x10'),
     string('mode', 'mit', choices=tuple(_MODES), description='control mode at the start'),
-    mapping('limits', None, description="MIT ranges (p_max, v_max, t_max) over the model's"),
+    LIMITS_KEY,
     boolean('enabled', False, description='enabled at the start (else it waits for enable)'),
     number('command_timeout', None, unit='s', ge=0.0,
            description='TIMEOUT register: enabled and no command for this long -> '

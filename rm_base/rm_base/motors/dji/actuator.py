@@ -5,15 +5,11 @@ packs the shared frame (0x200, 0x1FF, 0x2FF, 0x1FE, 0x2FE). The rotor encoder is
 turn, so the joint position starts within half an output turn of zero and is unwrapped
 from there.
 
-Family options (``joints.<name>.<key>``):
-
-* ``raw_limit``: command clamp in raw units (GM6020 voltage: 25000 default, 30000 max);
-* ``si_per_raw``: A (V for GM6020 voltage) per raw unit — e.g. ``1.62/16384`` for the
-  other GM6020 current-mode scale (UNVERIFIED which is right; 3 A/16384 is the default);
-* ``feedback_amps_per_raw``: A per raw unit of the feedback current;
-* GM6020 voltage mode only: ``resistance`` [Ω] (1.8) and ``back_emf_constant`` [V·s/rad]
-  (60/(2π·13.33 rpm/V) = 0.716), the model that turns an effort into a voltage:
-  ``V = R·I + Ke·ω``. Both are datasheet-level values (not in docs/PROTOCOLS.md).
+Family options (``joints.<name>.<key>``): each class's ``options_schema``. ``si_per_raw``
+may be ``1.62/16384`` for the other GM6020 current-mode scale (UNVERIFIED which is right;
+3 A/16384 is the default). A GM6020 on voltage turns an effort into a voltage with
+``V = R·I + Ke·ω``; R 1.8 Ω and Ke 60/(2π·13.33 rpm/V) = 0.716 V·s/rad are datasheet-level
+values (not in docs/PROTOCOLS.md).
 """
 
 from __future__ import annotations
@@ -23,6 +19,7 @@ from typing import ClassVar
 
 import can
 
+from rm_base.config_schema import Schema, integer, number
 from rm_base.geometry.encoder import EncoderUnwrapper
 from rm_base.hardware.actuators.base import Actuator, Defaults, Feedback, JointCommand
 from rm_base.hardware.config import JointConfig, SafetyConfig
@@ -38,12 +35,23 @@ _TAU = 2.0 * math.pi
 GM6020_BACK_EMF_V_S_PER_RAD = 60.0 / (_TAU * 13.33)
 GM6020_RESISTANCE_OHM = 1.8
 
+#: The scales of a DJI ESC's frames: the joint's options, and its simulated ESC's keys.
+SCALE_KEYS = (
+    integer('raw_limit', None, gt=0,
+            description="command clamp [raw]; default the kind's (GM6020 voltage 25000, at "
+            'most 30000)'),
+    number('si_per_raw', None, gt=0.0,
+           description="A (V for a GM6020 on voltage) per raw command unit; default the kind's"),
+    number('feedback_amps_per_raw', None, gt=0.0,
+           description="A per raw unit of the feedback current; default the kind's"),
+)
+
 
 class DjiActuator(Actuator):
     """A DJI ESC-driven motor; the group packs its raw command."""
 
     kind: ClassVar[dji.DjiKind]
-    option_keys = frozenset({'raw_limit', 'si_per_raw', 'feedback_amps_per_raw'})
+    options_schema = Schema(SCALE_KEYS)
     start_near_zero = True
 
     def __init__(self, config: JointConfig, safety: SafetyConfig | None = None) -> None:
@@ -53,12 +61,12 @@ class DjiActuator(Actuator):
             HardwareConfigError: invalid id or option.
         """
         super().__init__(config, safety)
-        opts = config.options
+        opts = self.options
         self.spec = dji.make_dji_spec(
             self.kind,
-            raw_limit=opts.get('raw_limit'),
-            si_per_raw=opts.get('si_per_raw'),
-            feedback_amps_per_raw=opts.get('feedback_amps_per_raw'),
+            raw_limit=opts['raw_limit'],
+            si_per_raw=opts['si_per_raw'],
+            feedback_amps_per_raw=opts['feedback_amps_per_raw'],
         )
         try:
             self.command_frame_id, self.slot = self.spec.command_slot(config.id)
@@ -138,7 +146,13 @@ class Gm6020Voltage(DjiActuator):
     type_name = 'gm6020'
     kind = dji.DjiKind.GM6020_VOLTAGE
     defaults = Defaults(1.0, 0.741, 1.2, 33.5, 80.0)
-    option_keys = DjiActuator.option_keys | {'resistance', 'back_emf_constant'}
+    options_schema = Schema((
+        *SCALE_KEYS,
+        number('resistance', GM6020_RESISTANCE_OHM, unit='Ohm', gt=0.0,
+               description='winding resistance in V = R·I + Ke·w (datasheet level)'),
+        number('back_emf_constant', GM6020_BACK_EMF_V_S_PER_RAD, unit='V·s/rad', gt=0.0,
+               description='Ke in V = R·I + Ke·w (datasheet level)'),
+    ))
 
     def __init__(self, config: JointConfig, safety: SafetyConfig | None = None) -> None:
         """Build the actuator; see the module docstring for the options.
@@ -147,15 +161,8 @@ class Gm6020Voltage(DjiActuator):
             HardwareConfigError: invalid id or option.
         """
         super().__init__(config, safety)
-        opts = config.options
-        self.resistance = _positive(
-            config.name, 'resistance', opts.get('resistance', GM6020_RESISTANCE_OHM)
-        )
-        self.back_emf_constant = _positive(
-            config.name,
-            'back_emf_constant',
-            opts.get('back_emf_constant', GM6020_BACK_EMF_V_S_PER_RAD),
-        )
+        self.resistance: float = self.options['resistance']
+        self.back_emf_constant: float = self.options['back_emf_constant']
 
     def _set_output(self, effort: float, command: JointCommand, feedback: Feedback) -> float:
         rotor_velocity = feedback.device_velocity
@@ -167,13 +174,3 @@ class Gm6020Voltage(DjiActuator):
             self.resistance
         )
         return self.direction * applied_amps * self._kt
-
-
-def _positive(name: str, key: str, value: object) -> float:
-    if (
-        isinstance(value, bool)
-        or not isinstance(value, int | float)
-        or not (math.isfinite(value) and value > 0)
-    ):
-        raise HardwareConfigError(f'joints.{name}.{key} must be > 0, got {value!r}')
-    return float(value)

@@ -5,11 +5,18 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from rm_base.config_schema import Schema, integer, number, string
+from rm_base.config_schema import Schema, number, string
 from rm_base.hardware.actuators import Actuator
 from rm_base.hardware.errors import HardwareConfigError, ValueRangeError
 from rm_base.motors.dji import protocol as dji
-from rm_base.motors.dji.actuator import M2006, M3508, DjiActuator, Gm6020Current, Gm6020Voltage
+from rm_base.motors.dji.actuator import (
+    M2006,
+    M3508,
+    SCALE_KEYS,
+    DjiActuator,
+    Gm6020Current,
+    Gm6020Voltage,
+)
 from rm_base.motors.dji.groups import DjiCommandGroup, build_dji_groups
 from rm_base.motors.dji.sim_device import DjiDevice
 from rm_base.motors.family import DeviceParts, MotorFamily, SimFamily
@@ -27,11 +34,7 @@ SIM_SCHEMA = Schema((
            description='no command for this long: zero current (0: never)'),
     string('control', None, choices=('voltage', 'current'),
            description='GM6020 only: what its command sets; default voltage'),
-    integer('raw_limit', None, gt=0, description="command clamp [raw]; default the kind's"),
-    number('si_per_raw', None, gt=0.0,
-           description="A (V for a GM6020 on voltage) per raw unit; default the kind's"),
-    number('feedback_amps_per_raw', None, gt=0.0,
-           description="feedback current per raw unit [A]; default the kind's"),
+    *SCALE_KEYS,
 ))
 
 

@@ -20,8 +20,9 @@ from __future__ import annotations
 
 import can
 
+from rm_base.config_schema import Schema, one_of
 from rm_base.hardware.actuators.base import Actuator, Defaults, Feedback, JointCommand
-from rm_base.hardware.actuators.mit import fit_mit_target, limits_from_config
+from rm_base.hardware.actuators.mit import LIMITS_KEY, fit_mit_target, limits_from_config
 from rm_base.hardware.config import JointConfig, SafetyConfig
 from rm_base.hardware.errors import HardwareConfigError
 from rm_base.hardware.protocols.mit import MitCommand
@@ -37,7 +38,12 @@ class PiperJoint(Actuator):
     """One Piper joint (``id`` = joint number 1..6)."""
 
     type_name = 'piper'
-    option_keys = frozenset({'limits', 'torque_range'})
+    options_schema = Schema((
+        LIMITS_KEY,
+        one_of('torque_range', (18, 8), 18,
+               description="t_ref range [N·m] the arm's firmware decodes: 18 (official SDK) "
+               'or 8 (newer firmware)'),
+    ))
 
     def __init__(self, config: JointConfig, safety: SafetyConfig | None = None) -> None:
         """Build the joint.
@@ -49,15 +55,10 @@ class PiperJoint(Actuator):
             raise HardwareConfigError(f'joints.{config.name}.id must be a Piper joint 1..6')
         if config.gear_ratio not in (None, 1.0):
             raise HardwareConfigError(f'joints.{config.name}.gear_ratio: Piper joints are 1:1')
-        torque_range = config.options.get('torque_range', 18.0)
-        base = _TORQUE_RANGES.get(torque_range) if not isinstance(torque_range, bool) else None
-        if base is None:
-            raise HardwareConfigError(
-                f"joints.{config.name}.torque_range must be 18 or 8 (N·m, what the arm's "
-                f'firmware decodes), got {torque_range!r}'
-            )
-        self.torque_range = float(torque_range)
-        self.limits = limits_from_config(config.name, base, config.options.get('limits'))
+        options = self.read_options(config)
+        base = _TORQUE_RANGES[options['torque_range']]
+        self.torque_range = float(options['torque_range'])
+        self.limits = limits_from_config(config.name, base, options['limits'])
         kt = piper.EFFORT_PER_AMP[config.id - 1]
         self.defaults = Defaults(1.0, kt, self.limits.t_max, self.limits.v_max, 80.0)
         super().__init__(config, safety)
