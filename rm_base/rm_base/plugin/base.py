@@ -42,6 +42,7 @@ from enum import Enum
 from typing import Any, ClassVar
 
 from rclpy.qos import DurabilityPolicy, QoSProfile, qos_profile_sensor_data
+from rclpy.time import Time
 
 from rm_base.errors import ConfigError
 from rm_base.plugin.commands import CommandInput
@@ -124,7 +125,7 @@ class PluginBase:
         self._enabled = False
         self._lost_reason: str | None = None
         self._last_run_ns: int | None = None
-        self._tick_now: Any = None  # the now of the run() in progress, else None
+        self._tick_now: Time | None = None  # the now of the run() in progress
         self._next_error_log_ns = 0
         self._suppressed_errors = 0
 
@@ -238,7 +239,7 @@ class PluginBase:
         self._last_run_ns = None
         self.on_reset()
 
-    def run(self, now: Any, dt: float | None = None) -> None:
+    def run(self, now: Time, dt: float | None = None) -> None:
         """One tick: the command watchdog, then ``update`` (or ``on_command_lost``).
 
         Never raises: an exception from a hook is logged (rate-limited), counted in
@@ -518,7 +519,7 @@ class PluginBase:
     def on_init(self) -> None:
         """Declare parameters, claim joints, subscribe commands. Default: nothing."""
 
-    def update(self, now: Any, dt: float) -> None:
+    def update(self, now: Time, dt: float) -> None:
         """One tick while enabled and commanded. Default: nothing.
 
         Args:
@@ -535,7 +536,7 @@ class PluginBase:
     def on_disable(self) -> None:
         """Called by disable() after zero output and reset. Default: nothing."""
 
-    def on_command_lost(self, now: Any, dt: float) -> None:
+    def on_command_lost(self, now: Time, dt: float) -> None:
         """Each tick while a watched command is missing. Default: zero output."""
         self.zero_output()
 

@@ -31,6 +31,7 @@ from typing import Any, Protocol
 
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from rclpy.serialization import deserialize_message
+from rclpy.time import Time
 
 from rm_base.control import ChassisPowerModel, PowerLimitResult, estimate_power
 from rm_base.errors import InputRejectedError
@@ -92,7 +93,7 @@ class NodeIO(abc.ABC):
         self._local: dict[str, int] = {}  # topic: publishers of this node's plugins
 
     @abc.abstractmethod
-    def send(self, targets: Mapping[str, JointTarget], now: Any) -> None:
+    def send(self, targets: Mapping[str, JointTarget], now: Time) -> None:
         """Apply one coordinated set of joint targets (all or none), stamped now.
 
         Raises:
@@ -259,7 +260,7 @@ class DdsJointIO(NodeIO):
         )
         self._power_limit_pub: Any = None
 
-    def send(self, targets: Mapping[str, JointTarget], now: Any) -> None:
+    def send(self, targets: Mapping[str, JointTarget], now: Time) -> None:
         """Publish targets as one rm_msgs/ActuatorCmd stamped now."""
         msg = build_actuator_cmd(targets)
         msg.header.stamp = now.to_msg()
@@ -335,7 +336,7 @@ class LocalJointIO(NodeIO):
         self._hardware = hardware
         self._power_limits: list[str] = []
 
-    def send(self, targets: Mapping[str, JointTarget], now: Any) -> None:
+    def send(self, targets: Mapping[str, JointTarget], now: Time) -> None:
         """Set targets on the actuators (checked here, once; the hardware clock stamps them)."""
         set_target = self._hardware.set_target
         for joint, target in check_targets(targets):

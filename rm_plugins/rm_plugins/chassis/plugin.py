@@ -62,9 +62,11 @@ from typing import Any, NamedTuple
 from geometry_msgs.msg import TransformStamped, Twist
 from nav_msgs.msg import Odometry as OdometryMsg
 from rclpy.qos import qos_profile_sensor_data
+from rclpy.time import Time
 from rm_base.control import ChassisMotionMode, estimate_power
 from rm_base.errors import InputRejectedError
 from rm_base.geometry import Twist2D, quaternion_from_yaw, wrap_to_pi, yaw_from_quaternion
+from rm_base.joints import JointState
 from rm_base.plugin import JointTarget, LatestMessage, LogThrottle, PluginBase, PluginConfigError
 from rm_base.plugin.commands import stamp_ns_of
 from sensor_msgs.msg import Imu
@@ -122,7 +124,7 @@ class _Decision(NamedTuple):
     state: ChassisMode
     reason: str
     request: ChassisRequest | None
-    yaw_joint: Any = None  # the yaw joint's JointState when following the gimbal
+    yaw_joint: JointState | None = None  # when following the gimbal
 
 
 class StandChassis(PluginBase):
@@ -187,7 +189,7 @@ class StandChassis(PluginBase):
         self._held_heading: float | None = None
         self._planner.reset()
 
-    def update(self, now: Any, dt: float) -> None:
+    def update(self, now: Time, dt: float) -> None:
         """One tick: feedback and odometry, the state, then the wheels and the reports."""
         now_ns = now.nanoseconds
         wheels, wheel_problem = self._wheel_states(now_ns)
@@ -200,7 +202,7 @@ class StandChassis(PluginBase):
             self._drive_wheels(now_ns, dt, decision, decision.request, speeds)
         self._maybe_publish(now)
 
-    def on_command_lost(self, now: Any, dt: float) -> None:
+    def on_command_lost(self, now: Time, dt: float) -> None:
         """Zero output while /chassis_cmd is missing; odometry and reports go on."""
         # The framework has gone to PASSIVE with the watchdog's reason and reset us.
         now_ns = now.nanoseconds
@@ -281,14 +283,14 @@ class StandChassis(PluginBase):
 
     # -- feedback -----------------------------------------------------------------------
 
-    def _fresh(self, joint: str, now_ns: int) -> Any:
+    def _fresh(self, joint: str, now_ns: int) -> JointState | None:
         state = self.joint_states.get(joint)
         timeout_ns = self.config.wheel_feedback_timeout * _NS_PER_S
         if state is None or not state.online or now_ns - state.stamp_ns > timeout_ns:
             return None
         return state
 
-    def _wheel_states(self, now_ns: int) -> tuple[list[Any] | None, str | None]:
+    def _wheel_states(self, now_ns: int) -> tuple[list[JointState] | None, str | None]:
         states = []
         for joint in self.config.wheel_joints:
             state = self._fresh(joint, now_ns)
@@ -297,7 +299,7 @@ class StandChassis(PluginBase):
             states.append(state)
         return states, None
 
-    def _yaw_joint_state(self, now_ns: int) -> Any:
+    def _yaw_joint_state(self, now_ns: int) -> JointState | None:
         return self._fresh(self.config.yaw_joint, now_ns)
 
     def _imu_sample(self, now_ns: int) -> tuple[Any, int] | None:
@@ -354,7 +356,7 @@ class StandChassis(PluginBase):
             )
         return self._odometry.twist.wz + phi_rate
 
-    def _update_odometry(self, now_ns: int, wheels: Sequence[Any] | None) -> None:
+    def _update_odometry(self, now_ns: int, wheels: Sequence[JointState] | None) -> None:
         """Move the odometry by the wheel angles since the last update (IMU yaw if fresh)."""
         if wheels is None:
             return  # no wheel feedback: hold the pose; the angles count on meanwhile
@@ -387,7 +389,7 @@ class StandChassis(PluginBase):
     # -- actuation ----------------------------------------------------------------------
 
     def _passive(
-        self, now_ns: int, state: ChassisMode | None, reason: str, speeds: Any
+        self, now_ns: int, state: ChassisMode | None, reason: str, speeds: list[float] | None
     ) -> None:
         if state is not None:
             self.transition(state, reason)
@@ -451,6 +453,7 @@ class StandChassis(PluginBase):
         elif request.source is FollowSource.GIMBAL:
             self._held_heading = None
             joint = decision.yaw_joint
+            assert joint is not None  # _decide stays PASSIVE without fresh yaw feedback
             frame = GIMBAL_FRAME
             # The angle now, not when it was measured: in GYRO it changes at the spin rate,
             # and the feedback is up to a publish period (plus transport) old.
@@ -486,7 +489,7 @@ class StandChassis(PluginBase):
 
     # -- reports ------------------------------------------------------------------------
 
-    def _maybe_publish(self, now: Any) -> None:
+    def _maybe_publish(self, now: Time) -> None:
         now_ns = now.nanoseconds
         if now_ns < self._next_publish_ns:
             return

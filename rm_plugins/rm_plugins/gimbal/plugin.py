@@ -45,10 +45,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from enum import IntEnum
-from typing import Any
 
 from nav_msgs.msg import Odometry
 from rclpy.qos import qos_profile_sensor_data
+from rclpy.time import Time
 from rm_base.errors import InputRejectedError
 from rm_base.geometry import rpy_from_quaternion, wrap_to_pi, yaw_from_quaternion
 from rm_base.geometry.aim import AimSolution, aim_from_point
@@ -183,7 +183,7 @@ class StandGimbal(PluginBase):
 
     # -- tick -------------------------------------------------------------------------------
 
-    def update(self, now: Any, dt: float) -> None:
+    def update(self, now: Time, dt: float) -> None:
         """Decide the state, run the loops, send both joints' targets, publish the state."""
         now_ns = now.nanoseconds
         if not dt > 0.0:
@@ -202,7 +202,7 @@ class StandGimbal(PluginBase):
             self._control(mode, cmd, measurement, aim, dt)
         self._publish_state(now, measurement)
 
-    def on_command_lost(self, now: Any, dt: float) -> None:
+    def on_command_lost(self, now: Time, dt: float) -> None:
         """No command: joints off (the framework is already in PASSIVE with the reason)."""
         self._go_limp()
         self._publish_state(now, self._measure(now.nanoseconds))
@@ -453,7 +453,7 @@ class StandGimbal(PluginBase):
 
     # -- output -----------------------------------------------------------------------------
 
-    def _publish_state(self, now: Any, measurement: Measurement | str) -> None:
+    def _publish_state(self, now: Time, measurement: Measurement | str) -> None:
         now_ns = now.nanoseconds
         mode = GimbalMode(self.state.value)
         if now_ns < self._next_state_ns and mode is self._published_mode:

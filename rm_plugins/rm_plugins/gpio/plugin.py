@@ -9,6 +9,7 @@ from enum import Enum
 from typing import Any
 
 from rclpy.qos import QoSProfile
+from rclpy.time import Time
 from rm_base.plugin import DefaultState, PluginBase
 
 from rm_msgs.msg import GpioCmd, GpioState
@@ -109,7 +110,7 @@ class UpboardGpio(PluginBase):
 
     # -- hooks --------------------------------------------------------------------------------
 
-    def update(self, now: Any, dt: float) -> None:
+    def update(self, now: Time, dt: float) -> None:
         """Apply the commands received since the last tick, then publish every pin."""
         self.transition(DefaultState.ACTIVE, f'{len(self.pins)} pin(s) on the backend')
         for msg in self._take_commands():
@@ -161,7 +162,7 @@ class UpboardGpio(PluginBase):
         self._next_log_ns = now_ns + _LOG_PERIOD_NS
         self.logger.warning(text + more)
 
-    def _state_message(self, now: Any) -> GpioState:
+    def _state_message(self, now: Time) -> GpioState:
         msg = GpioState()
         msg.header.stamp = now.to_msg()
         msg.name = self._order

@@ -20,11 +20,11 @@ optional: lost, it just adds nothing.
 from __future__ import annotations
 
 import threading
-from typing import Any
 
 import serial
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Twist
+from rclpy.time import Time
 from rm_base.hardware.protocols import dbus
 from rm_base.hardware.protocols import referee as ref
 from rm_base.plugin import PluginBase
@@ -138,7 +138,7 @@ class ManualControl(PluginBase):
 
     # -- the tick ------------------------------------------------------------------------------
 
-    def update(self, now: Any, dt: float) -> None:
+    def update(self, now: Time, dt: float) -> None:
         """Decide the DR16 link, turn the operator's input into commands, publish them."""
         now_ns = now.nanoseconds
         state, reason, stats = self._dr16.decide(now_ns)
@@ -158,7 +158,7 @@ class ManualControl(PluginBase):
         self._publish(self._driver.commands(operator), now)
 
     def _publish_diagnostics(
-        self, now: Any, state: LinkState, reason: str, stats: ReaderStats
+        self, now: Time, state: LinkState, reason: str, stats: ReaderStats
     ) -> None:
         """A status per link when its diagnostics_period is due: the DR16's, the image link's."""
         now_ns = now.nanoseconds
@@ -183,7 +183,7 @@ class ManualControl(PluginBase):
         if msg.status:
             self._diagnostics.publish(msg)
 
-    def _publish(self, c: Commands, now: Any) -> None:
+    def _publish(self, c: Commands, now: Time) -> None:
         stamp = now.to_msg()
         chassis = ChassisCmd(mode=c.chassis_mode)
         chassis.header.stamp = stamp

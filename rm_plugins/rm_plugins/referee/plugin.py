@@ -24,6 +24,7 @@ import threading
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray
+from rclpy.time import Time
 from rm_base.hardware.protocols.referee import FrameParser, ProtocolVersion, RawFrame, StatusDecoder
 from rm_base.plugin import PluginBase
 
@@ -87,7 +88,7 @@ class Referee(PluginBase):
         """Stop the reader thread and close the port."""
         self._link.stop()
 
-    def update(self, now: Any, dt: float) -> None:
+    def update(self, now: Time, dt: float) -> None:
         """Decide the link state; publish /diagnostics when due."""
         now_ns = now.nanoseconds
         state, reason, stats = self._link.decide(now_ns)
@@ -114,7 +115,7 @@ class Referee(PluginBase):
         with self._lock:
             self._published += 1
 
-    def _publish_diagnostics(self, now: Any, stats: Any) -> None:
+    def _publish_diagnostics(self, now: Time, stats: Any) -> None:
         decoder = self._decoder
         with self._lock:
             published = self._published

@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from rclpy.qos import qos_profile_sensor_data
+from rclpy.time import Time
 from rm_base.control import BarrelHeat, JamDetector
 from rm_base.errors import InputRejectedError
 from rm_base.plugin import JointState, JointTarget, PluginBase
@@ -219,7 +220,7 @@ class StandShooter(PluginBase):
 
     # -- tick ---------------------------------------------------------------------------------
 
-    def update(self, now: Any, dt: float) -> None:
+    def update(self, now: Time, dt: float) -> None:
         """Read the command, switch and joints; decide the state; send the targets."""
         now_ns = now.nanoseconds
         command = self._valid_command(now_ns)
@@ -233,7 +234,7 @@ class StandShooter(PluginBase):
         self._advance(command, joints, self._switch.read(now_ns), now_ns, dt)
         self._publish_state(now)
 
-    def on_command_lost(self, now: Any, dt: float) -> None:
+    def on_command_lost(self, now: Time, dt: float) -> None:
         """No command: joints off (the framework went PASSIVE); keep reporting the state."""
         self.zero_output()
         self._friction_ready = False
@@ -525,7 +526,7 @@ class StandShooter(PluginBase):
 
     # -- state topic --------------------------------------------------------------------------
 
-    def _publish_state(self, now: Any, *, force: bool = False) -> None:
+    def _publish_state(self, now: Time, *, force: bool = False) -> None:
         now_ns = now.nanoseconds
         remaining = 0
         if self._burst is not None and self._burst.remaining is not None:
