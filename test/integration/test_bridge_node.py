@@ -1,5 +1,8 @@
 """can_bridge in-process on rm_sim: commands, states, diagnostics, services, and safety.
 
+Why one module: every test shares the bridge-and-driver fixture; they are one feature, the
+node.
+
 Each test builds a CanBridgeNode in a private Context with ``sim: true`` on a channel of
 its own, plus a driver node that publishes /actuator_cmd at 100 Hz and keeps the latest
 /joint_states, /actuator_states and /diagnostics; one EventsExecutor spins both in a

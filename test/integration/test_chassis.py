@@ -1,5 +1,8 @@
 """rm_plugins/StandChassis end to end: can_bridge on rm_sim + rm_robot, driven by topics.
 
+Why one module: every test drives one plugin through the same lockstep robot; split by mode
+they would share all their helpers.
+
 Each test runs the standard robot with only its ``chassis`` plugin in lockstep
 (support.lockstep.LockstepRobot: the loop, the plugin and rm_sim stepped together on a
 simulated clock), streams /chassis_cmd and /vel_cmd at 50 Hz, and checks the physical

@@ -1,5 +1,7 @@
 """rm_robot in-process: plugins from a package rm_base never heard of, rates, watchdog, services.
 
+Why one module: every test shares the host, probe and installed-fixture set-up.
+
 Each test builds a RobotHost in a private Context with parameter_overrides, spins it with
 an EventsExecutor in a background thread (as main() does, spin_once in a loop) and
 watches it through a probe node. The plugins come from test/fixtures/rm_extra_plugins,

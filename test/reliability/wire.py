@@ -1,5 +1,8 @@
 """The unsafe-frame checker: reads every CAN frame on the wire and flags unsafe commands.
 
+Why one module: the checker decodes every family's frames against one model of what is safe;
+split by family, each part would need the whole model.
+
 :class:`WireChecker` is fed the frames of every bus in wire order (from an rm_sim tap, a
 python-can log, a socketcan sniffer) and, optionally, the /actuator_cmd messages the
 bridge was sent. It decodes every command frame the robot config implies, independently

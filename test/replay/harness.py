@@ -1,5 +1,7 @@
 """Replay a scenario's command bag into the simulated robot and record what it does.
 
+Why one module: recording, replaying and the result views serve one call, replay().
+
     result = replay(SCENARIOS['square'], output=tmp_path / 'square_out')
     result.body[-1].x            # sim ground truth at the end
     result.messages('/odom')     # what the robot published, in order

@@ -1,5 +1,8 @@
 """Soak: the standard robot on rm_sim for minutes under a command mix and random faults.
 
+Why one module: a standalone script whose parts (processes, command mix, faults, report) run
+as one timed schedule.
+
     make soak                            # 10 minutes
     make soak SOAK_ARGS='--minutes 2 --seed 7 --report soak.json'
 

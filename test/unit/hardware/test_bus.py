@@ -1,4 +1,7 @@
-"""ManagedBus: dispatch, reconnection with back-off, counters, load, logging, shutdown."""
+"""ManagedBus: dispatch, reconnection with back-off, counters, load, logging, shutdown.
+
+Why one module: every test exercises one class, ManagedBus, with the same fake buses.
+"""
 
 import logging
 import threading

@@ -1,4 +1,8 @@
-"""Simulated drivers on the bus: DJI ESCs, Damiao and Cheetah motors (stepped, through SimBus)."""
+"""Simulated drivers on the bus: DJI ESCs, Damiao and Cheetah motors (stepped, through SimBus).
+
+Why one module: the three families' simulated drivers share the SimBus fixtures and the
+cross-family checks.
+"""
 
 import itertools
 import math
