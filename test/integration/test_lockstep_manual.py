@@ -105,6 +105,21 @@ def test_keyboard_w_drives_the_mouse_aims_r_and_a_click_fire_f_spins(robot):
     assert robot.world.body.twist[2] > 3.0
 
 
+def test_ctrl_held_drives_in_the_chassis_slow_gear(robot):
+    # W with CTRL: /vel_cmd stays at the keyboard's 2 m/s, ChassisCmd asks for the SLOW
+    # gear and the chassis' gears.slow.linear (0.5) makes it 1 m/s on the ground.
+    remote = robot.world.remote
+    remote.hold(switch_a=Switch.UP, switch_b=Switch.MID, keys=Key.F)  # GYRO (test before) off
+    robot.run(0.1)
+    remote.hold(keys=Key.W | Key.CTRL)
+    robot.run(1.5)
+    assert states(robot)[0] == 'FOLLOW'
+    assert math.hypot(*robot.world.body.twist[:2]) == pytest.approx(1.0, abs=0.05)
+    remote.hold(keys=Key.W)
+    robot.run(1.5)
+    assert math.hypot(*robot.world.body.twist[:2]) == pytest.approx(2.0, abs=0.1)
+
+
 def test_the_remote_going_silent_stops_everything_within_one_command_timeout(robot):
     remote = robot.world.remote
     remote.hold(switch_a=Switch.MID, keys=0, channels=(0, 0, 0, FULL))

@@ -73,11 +73,12 @@ def test_the_remote_and_the_image_links_keyboard_become_commands_and_silence_sto
         link.write(ref.encode_frame(*ref.encode_status(keys, ref.ProtocolVersion.V2025)))
     assert wait_until(lambda: h.vel[-1].linear.y == pytest.approx(2.0), WAIT)
     assert h.gimbal[-1].rate_yaw == pytest.approx(1.0)
-    # a 2025+ A9 53 frame on the same link: CTRL (half speed) + F (GYRO)
+    # a 2025+ A9 53 frame on the same link: CTRL (the SLOW gear) + F (GYRO)
     v1 = bytes.fromhex('A9 53 94 06 20 AF D8 A2 60 19 F9 FF 0F 00 00 00 01 20 02 DE 1C')
     link.write(v1)
     assert wait_until(lambda: h.chassis[-1].mode == ChassisCmd.GYRO, WAIT)
-    assert h.vel[-1].linear.x == pytest.approx(1.0)
+    assert h.chassis[-1].speed_gear == ChassisCmd.GEAR_SLOW
+    assert h.vel[-1].linear.x == pytest.approx(2.0)
     # the remote goes silent: everything PASSIVE
     streamer.stop()
     assert wait_until(lambda: h.chassis[-1].mode == ChassisCmd.PASSIVE, WAIT)

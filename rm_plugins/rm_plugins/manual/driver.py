@@ -85,6 +85,7 @@ class Commands:
     bullet_speed: float = 0.0
     hz: float = 0.0
     burst_id: int = 0
+    speed_gear: int = ChassisCmd.GEAR_NORMAL
 
 
 def passive(burst_id: int = 0) -> Commands:
@@ -148,9 +149,8 @@ class ManualDriver:
             self._friction = not self._friction
         keys = operator.keys
         speed = m.speed
-        for key, factor in m.gears.items():
-            if keys & key:
-                speed *= factor
+        # the chassis scales by its own gears.<gear> factors (one place for them)
+        gear = next((g for key, g in m.gears.items() if keys & key), ChassisCmd.GEAR_NORMAL)
         vx = speed * (bool(keys & Key.W) - bool(keys & Key.S))
         vy = speed * (bool(keys & Key.A) - bool(keys & Key.D))
         held = operator.mouse_left if m.fire == 'left' else operator.mouse_right
@@ -161,6 +161,7 @@ class ManualDriver:
         return Commands(
             chassis, vx, vy, GimbalCmd.RATE, operator.mouse_x * m.mouse_yaw,
             operator.mouse_y * m.mouse_pitch, shoot, s.shot_speed, s.shot_hz, self._burst_id,
+            speed_gear=gear,
         )
 
     def _new_burst_on(self, firing: bool) -> None:

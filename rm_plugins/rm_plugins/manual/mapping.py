@@ -63,7 +63,7 @@ class KeyboardMapping:
 
     chassis_mode: int
     speed: float
-    gears: Mapping[int, float]  # key bit -> speed factor
+    gears: Mapping[int, int]  # key bit -> ChassisCmd.speed_gear while it is held
     mouse_yaw: float
     mouse_pitch: float
     chassis_keys: Mapping[int, int]  # key bit -> ChassisCmd mode
@@ -160,8 +160,7 @@ def _keyboard(data: Any) -> KeyboardMapping:
         chassis_mode=_mode(ChassisCmd, section['chassis_mode'], 'keyboard.chassis_mode'),
         speed=_number(section['speed'], 'keyboard.speed', positive=True),
         gears={
-            _key(k, 'keyboard.gears'): _number(v, f'keyboard.gears.{k}', positive=True)
-            for k, v in gears.items()
+            _key(k, 'keyboard.gears'): _gear(v, f'keyboard.gears.{k}') for k, v in gears.items()
         },
         mouse_yaw=_number(section['mouse_yaw'], 'keyboard.mouse_yaw'),
         mouse_pitch=_number(section['mouse_pitch'], 'keyboard.mouse_pitch'),
@@ -220,6 +219,15 @@ def _mode(msg_type: type, name: Any, where: str) -> int:
         known = [n for n in dir(msg_type) if n.isupper() and isinstance(getattr(msg_type, n), int)]
         raise MappingError(f'{where} must be one of {", ".join(known)}, got {name!r}')
     return value
+
+
+def _gear(name: Any, where: str) -> int:
+    """A ChassisCmd speed gear by its name (``FAST`` for ``GEAR_FAST``)."""
+    known = [n.removeprefix('GEAR_') for n in dir(ChassisCmd) if n.startswith('GEAR_')]
+    if not isinstance(name, str) or name not in known:
+        raise MappingError(f'{where} must be one of {", ".join(known)}, got {name!r}')
+    gear: int = getattr(ChassisCmd, f'GEAR_{name}')
+    return gear
 
 
 def _key(name: Any, where: str) -> int:

@@ -185,7 +185,7 @@ class ManualControl(PluginBase):
 
     def _publish(self, c: Commands, now: Time) -> None:
         stamp = now.to_msg()
-        chassis = ChassisCmd(mode=c.chassis_mode)
+        chassis = ChassisCmd(mode=c.chassis_mode, speed_gear=c.speed_gear)
         chassis.header.stamp = stamp
         vel = Twist()
         vel.linear.x, vel.linear.y = c.vx, c.vy

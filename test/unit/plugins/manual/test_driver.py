@@ -48,10 +48,13 @@ def test_each_push_of_the_left_switch_starts_a_new_burst(driver):
 def test_wasd_with_gears_and_the_mouse_aim(driver):
     c = driver.commands(operator(driver, switch_a=Switch.UP, keys=Key.W | Key.A | Key.SHIFT,
                                  mouse=(10, -5, 0)))
-    assert (c.vx, c.vy) == pytest.approx((3.0, 3.0))
+    # the keyboard speed as it is; the gear asks the chassis for its FAST factors
+    assert (c.vx, c.vy, c.speed_gear) == pytest.approx((2.0, 2.0, ChassisCmd.GEAR_FAST))
     assert (c.yaw_rate, c.pitch_rate) == pytest.approx((-0.2, -0.1))
     c = driver.commands(operator(driver, switch_a=Switch.UP, keys=Key.S | Key.D | Key.CTRL))
-    assert (c.vx, c.vy) == pytest.approx((-1.0, -1.0))
+    assert (c.vx, c.vy, c.speed_gear) == pytest.approx((-2.0, -2.0, ChassisCmd.GEAR_SLOW))
+    c = driver.commands(operator(driver, switch_a=Switch.UP, keys=Key.W))
+    assert (c.vx, c.speed_gear) == pytest.approx((2.0, ChassisCmd.GEAR_NORMAL))
 
 
 def test_mode_keys_and_the_friction_key_toggle_on_each_press(driver):

@@ -26,7 +26,8 @@ def test_the_default_mapping_loads_as_documented():
     assert m.remote.shooter == {'up': ShootCmd.PUSH, 'mid': ShootCmd.READY,
                                 'down': ShootCmd.PASSIVE}
     assert m.keyboard.chassis_keys == {int(Key.F): ChassisCmd.GYRO, int(Key.G): ChassisCmd.TWIST}
-    assert m.keyboard.gears == {int(Key.SHIFT): 1.5, int(Key.CTRL): 0.5}
+    gears = {int(Key.SHIFT): ChassisCmd.GEAR_FAST, int(Key.CTRL): ChassisCmd.GEAR_SLOW}
+    assert m.keyboard.gears == gears
     assert (m.shot_speed, m.shot_hz) == (15.0, 10.0)
 
 
@@ -53,7 +54,9 @@ def test_a_missing_file_is_a_clear_error(tmp_path):
         (('remote', 'vy', 'scale'), float('nan'), 'remote.vy.scale'),
         (('remote', 'shooter', 'up'), 'BURST', 'remote.shooter.up'),
         (('keyboard', 'speed'), -1.0, 'keyboard.speed'),
-        (('keyboard', 'gears'), {'SPACE': 2.0}, 'keyboard.gears'),
+        (('keyboard', 'gears'), {'SPACE': 'FAST'}, 'keyboard.gears'),
+        (('keyboard', 'gears'), {'SHIFT': 1.5}, 'keyboard.gears.SHIFT must be one of'),
+        (('keyboard', 'gears'), {'SHIFT': 'TURBO'}, 'keyboard.gears.SHIFT must be one of'),
         (('keyboard', 'chassis_keys'), {'F': 'FLY'}, 'keyboard.chassis_keys.F'),
         (('keyboard', 'friction_key'), 'r', 'keyboard.friction_key'),
         (('keyboard', 'fire'), 'middle', 'keyboard.fire'),
