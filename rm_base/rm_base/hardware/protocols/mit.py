@@ -96,10 +96,12 @@ class MitLimits:
             raise HardwareConfigError(
                 f'unknown MIT limit(s) {sorted(unknown)}; known: {sorted(fields)}'
             )
+        values: dict[str, float] = {}
         for key, value in overrides.items():
             if isinstance(value, bool) or not isinstance(value, int | float):
                 raise HardwareConfigError(f'MIT limit {key} must be a number, got {value!r}')
-        return dataclasses.replace(self, **{k: float(v) for k, v in overrides.items()})  # type: ignore[arg-type]
+            values[key] = float(value)
+        return dataclasses.replace(self, **values)
 
 
 class MitCommand(NamedTuple):
