@@ -9,7 +9,8 @@ thread (names from :func:`bench.machine.thread_cpu_snapshot`):
   ``canlog-<bus>``. On rm_sim the scheduler's ``send`` also runs the simulated motors'
   command decoding (the sim delivers synchronously), which a socketcan send does not.
 * **host**: ``rm_robot-loop`` (the plugins' loop when rm_robot runs alone),
-  ``rm_robot-publish`` (the plugins' messages) and the IMU reader ``hipnuc ...``.
+  ``rm_robot-publish`` (the plugins' messages) and the serial readers' threads
+  ``hipnuc ...`` and ``referee ...`` (they open the ports; the loop reads them).
 * **ROS (shared)**: ``MainThread`` (the EventsExecutor: every subscription callback of
   both nodes) and the native threads (DDS, rclpy's C++ side); shared by host and bridge.
 * **sim**: ``rm_sim-physics`` (motor physics, feedback frames, the IMU's pty frames).
@@ -28,7 +29,7 @@ def classify(thread_name: str) -> str:
     """The component group of one thread name (see the module docstring)."""
     if thread_name.startswith(('can-scheduler', 'canrx-', 'can_bridge-', 'canlog-')):
         return 'bridge'
-    if thread_name.startswith(('rm_robot-', 'hipnuc')):
+    if thread_name.startswith(('rm_robot-', 'hipnuc', 'referee')):
         return 'host'
     if thread_name.startswith('rm_sim-'):
         return 'sim'

@@ -2,12 +2,11 @@
 
 cProfile profiles only the thread that enables it, so the robot process wraps one
 frequently called method per thread on the *instance* (the loop's ``tick``, the bridge
-publisher's ``_states_heard``, the outbox's ``flush``, the IMU reader's ``_read_once``,
-the world's ``_tick`` where rm_sim runs in the process; the main thread checks in its
-spin loop). While a window is open the wrapper enables a ``cProfile.Profile`` in its
-thread, and disables it when the window closes. The timer is cProfile's default (wall
-clock, cheap): sleeps and waits show up as such (``time.sleep``, lock ``acquire``,
-``spin_once``) and are read past. The thread
+publisher's ``_states_heard``, the outbox's ``flush``, the world's ``_tick`` where rm_sim
+runs in the process; the main thread checks in its spin loop). While a window is open the
+wrapper enables a ``cProfile.Profile`` in its thread, and disables it when the window
+closes. The timer is cProfile's default (wall clock, cheap): sleeps and waits show up as
+such (``time.sleep``, lock ``acquire``, ``spin_once``) and are read past. The thread
 CPU clock would hide them, but on this VM each read is a system call that made a
 profiled tick ~30x slower. cProfile slows Python code down (roughly 1.5-2x); read the
 profiles for where the time goes, the CPU table for how much.

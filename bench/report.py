@@ -177,7 +177,7 @@ ROWS: tuple[Row, ...] = (
          _get('load', 'groups', 'host_bridge'), ('<', CPU_TARGET_PCT), _LOAD),
         ('cpu.idle.host_bridge', 'host + bridge, idle',
          _get('idle', 'groups', 'host_bridge'), ('<', CPU_TARGET_PCT), _IDLE),
-        ('cpu.load.host', '  host: outbox + IMU reader (its plugins run in the loop)',
+        ('cpu.load.host', "  host: outbox + serial ports' threads (they only open the ports)",
          _get('load', 'groups', 'host'), None, _LOAD),
         ('cpu.load.bridge', '  bridge: the loop (plugins included) + publisher',
          _get('load', 'groups', 'bridge'), None, _LOAD),

@@ -371,8 +371,6 @@ class Robot:
             targets += [(self.host._outbox, 'flush')]
             if self.hw is None:  # rm_robot's own loop (split layout)
                 targets += [(self.host.loop, 'tick')]
-            if 'imu' in self._plugins:
-                targets += [(self.host.plugin('imu').reader, '_read_once')]
         for obj, attribute in targets:
             profiles.wrap(obj, attribute)
         profiles.active = True

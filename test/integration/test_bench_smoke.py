@@ -81,9 +81,8 @@ def _targets():
 def test_profile_mode_profiles_every_busy_thread_of_the_robot(tmp_path):
     stdout = _run_bench(tmp_path, '--profile', '1')
     profiled = {line.split(':')[0] for line in stdout.splitlines() if 'CPU (profiled)' in line}
-    # the loop, the edge's publishers and the IMU reader (named after its port)
+    # the loop (which also reads the serial ports) and the edge's publishers
     assert {'can-scheduler', 'can_bridge-publish', 'rm_robot-publish'} <= profiled, stdout
-    assert any(name.startswith('hipnuc ') for name in profiled), stdout
     assert list(tmp_path.glob('logs-*/profile_can-scheduler.prof'))
 
 

@@ -4,7 +4,8 @@ One dedicated thread sleeps to absolute deadlines on ``time.perf_counter_ns`` (1
 default) and runs :meth:`Scheduler.tick`; tests call ``tick(now_ns)`` themselves, with no
 thread, for deterministic (lockstep) steps. Each tick runs, in this fixed order:
 
-1. the *input stages* (:meth:`Scheduler.add_stage`): the received feedback, then each
+1. the *input stages* (:meth:`Scheduler.add_stage`): the received feedback, what the
+   serial devices sent (the loop reads their ports itself), the commands, then each
    plugin that is due, which sets joint targets on the actuators directly,
 2. ``update(now_ns, dt)`` on every actuator (control laws, safety),
 3. the *output stages* (``add_stage(..., after_update=True)``): group stages such as a
@@ -13,8 +14,8 @@ thread, for deterministic (lockstep) steps. Each tick runs, in this fixed order:
 5. ``send(msg)`` of every packed frame, each through the send function (bus) paired with
    its packer,
 6. the *after-tick callbacks* (:meth:`Scheduler.add_after_tick`): they only wake the
-   threads of the ROS edge (publishers, readers), so that those run in the loop's idle
-   time instead of taking the interpreter from it in the middle of a tick.
+   threads of the ROS edge (the publishers), so that those run in the loop's idle time
+   instead of taking the interpreter from it in the middle of a tick.
 
 A tick that ends after the next deadline is an overrun (a missed deadline): the next tick
 then starts at once, late, if its period has not passed yet (as a firmware loop on

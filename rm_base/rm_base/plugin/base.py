@@ -442,17 +442,18 @@ class PluginBase:
         """
         return is_heard(publisher)
 
-    def after_tick(self, callback: Callable[[], object]) -> bool:
-        """Call callback() at the end of every tick of the loop that runs the plugins.
+    def loop_input(self, read: Callable[[], bool], name: str | None = None) -> bool:
+        """Call read() at the start of every tick of the loop, before the plugins run.
 
-        For a plugin's own thread (a serial reader): waking it there lets it run in the
-        loop's idle time. The callback must not block (``threading.Event.set``).
+        For a device the loop reads itself (a serial port): read() takes what waits,
+        without blocking, hands it on, and returns whether there was anything. Its cost is
+        then one of the loop's timed components (``name``, default ``<plugin> input``).
 
         Returns:
             False where no loop runs the plugins (then nothing will call it).
         """
         self._require_init()
-        return self._nio.after_tick(callback)
+        return self._nio.loop_input(name or f'{self.name} input', read)
 
     def power_limit(self, joints: Iterable[str], model: Any) -> Any:
         """A power limit over some of our joints, run in the control loop, or None.

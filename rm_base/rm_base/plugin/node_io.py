@@ -1,5 +1,8 @@
 """What all plugins on one node share: joint I/O, publishers and who drives which joint.
 
+Why one module: the two kinds of joint I/O differ only in how targets leave and states
+arrive; the claims, publishers, subscriptions and loop stages they share live in the base.
+
 Joint I/O comes in two kinds, chosen by the host before any plugin is initialised:
 
 - :class:`DdsJointIO` (``rm_robot`` as a process of its own): targets go out on
@@ -77,6 +80,17 @@ class JointBackend(Protocol):
         """Take the power limit of group out of the loop."""
 
 
+class _InputStage:
+    """A plugin's device read as a loop stage (``Stage``)."""
+
+    def __init__(self, name: str, read: Callable[[], bool]) -> None:
+        self.name = name
+        self._read = read
+
+    def __call__(self, now_ns: int, dt: float) -> bool:
+        return self._read()
+
+
 class NodeIO(abc.ABC):
     """Shared plugin I/O of one node; see the subclasses. Use ``node_io(node)``."""
 
@@ -86,7 +100,7 @@ class NodeIO(abc.ABC):
         self.outbox: Outbox | None = None
         self.inbox: Inbox | None = None
         self.loop: Any = None  # the control loop running the plugins (a Scheduler)
-        self._after_tick: list[Callable[[], object]] = []
+        self._inputs: list[str] = []  # names of the plugins' input stages in the loop
         self._claims: dict[str, str] = {}
         self._lock = threading.Lock()
         self._handlers: dict[str, list[Callable[[Any, int], Any]]] = {}
@@ -108,18 +122,22 @@ class NodeIO(abc.ABC):
         """
         return None
 
-    def after_tick(self, callback: Callable[[], object]) -> bool:
-        """Call callback() at the end of every loop tick; False if there is no loop."""
+    def loop_input(self, name: str, read: Callable[[], bool]) -> bool:
+        """Run read() at the start of every tick, before the plugins; False if no loop.
+
+        read() takes what a device holds without blocking and returns whether it took
+        anything (the loop times it then, as the component ``name``).
+        """
         if self.loop is None:
             return False
-        self.loop.add_after_tick(callback)
-        self._after_tick.append(callback)
+        self.loop.add_stage(_InputStage(name, read))
+        self._inputs.append(name)
         return True
 
     def release(self) -> None:
-        """Undo what the plugins set up in the loop (after-tick callbacks). Idempotent."""
-        while self._after_tick:
-            self.loop.remove_after_tick(self._after_tick.pop())
+        """Take the plugins' input stages out of the loop. Idempotent."""
+        while self._inputs:
+            self.loop.remove_stage(self._inputs.pop())
 
     def create_publisher(
         self, msg_type: type, topic: str, qos: Any, hand_over: bool = False
@@ -352,7 +370,7 @@ class LocalJointIO(NodeIO):
         return stage
 
     def release(self) -> None:
-        """Take the plugins' power limits and after-tick callbacks out of the loop."""
+        """Take the plugins' power limits and input stages out of the loop."""
         super().release()
         while self._power_limits:
             self._hardware.remove_power_limit(self._power_limits.pop())

@@ -1,9 +1,10 @@
 """Hi220: a HiPNUC IMU on a serial port -> sensor_msgs/Imu (REP 103, SI).
 
-A reader thread (``SerialReader``) owns the port while the plugin is enabled: it opens
-the port (a pyserial URL; ``~`` and ``${VAR}`` expanded, so the simulator's
-``/tmp/rm_sim_${ROS_DOMAIN_ID}/imu`` works), decodes HiPNUC frames (0x91 and the legacy
-items) and publishes every sample at once, so no sample waits for a plugin tick. A sample
+A ``SerialReader`` owns the port while the plugin is enabled: its thread opens the port
+(a pyserial URL; ``~`` and ``${VAR}`` expanded, so the simulator's
+``/tmp/rm_sim_${ROS_DOMAIN_ID}/imu`` works); the control loop reads it after every tick
+(outside a loop, the thread does), decodes HiPNUC frames (0x91 and the legacy items) and
+publishes every sample at once, so no sample waits for a plugin tick. A sample
 is stamped when the device took it: its ``system_time_ms`` counter mapped to ROS time by
 ``DeviceClock`` (the offset of the fastest frame of the last 2 s), so frames that queued
 while the reader was starved keep their age instead of looking fresh; a frame without
@@ -144,12 +145,12 @@ class Hi220(PluginBase):
     # -- lifecycle --------------------------------------------------------------------------
 
     def on_enable(self) -> None:
-        """Start the reader thread (it opens the port)."""
-        self._device_clock = DeviceClock()  # the reader thread is not running
+        """Start the reader (its thread opens the port)."""
+        self._device_clock = DeviceClock()  # the reader is not running
         self._link.start()
 
     def on_disable(self) -> None:
-        """Stop the reader thread and close the port."""
+        """Stop the reader and close the port."""
         self._link.stop()
 
     # -- tick -------------------------------------------------------------------------------
@@ -164,10 +165,10 @@ class Hi220(PluginBase):
             self._next_diagnostics_ns = now_ns + period_ns
             self._publish_diagnostics(now, stats)
 
-    # -- reader thread ----------------------------------------------------------------------
+    # -- reading thread (the loop's, or the reader's) ---------------------------------------
 
     def _on_sample(self, sample: ImuSample) -> None:
-        """Convert and publish one sample (called in the reader thread)."""
+        """Convert and publish one sample (called in the reading thread)."""
         if sample.user_id is not None and sample.user_id != self._user_id:
             with self._lock:
                 self._user_id = sample.user_id

@@ -63,7 +63,7 @@ class ManualControl(PluginBase):
             p.group('dr16'), baudrate=dbus.BAUD_RATE, data_timeout=0.1, silence_reopen=0.0
         )
         self._dr16 = DeviceLink(
-            self, dr16, self._on_dbus, parser=dbus.DbusStream(), name='dr16', paced=False,
+            self, dr16, self._on_dbus, parser=dbus.DbusStream(), name='dr16', polled=False,
             parity=serial.PARITY_EVEN,
         )
         self.reader = self._dr16.reader

@@ -1,7 +1,8 @@
 """Referee: the referee system's serial link -> typed rm_msgs reports, SI units.
 
-A reader thread owns the port (the power-management module's user UART, 115200 baud; a
-pyserial URL, ``~`` and ``${VAR}`` expanded) while the plugin is enabled. It splits the
+A ``SerialReader`` owns the port (the power-management module's user UART, 115200 baud; a
+pyserial URL, ``~`` and ``${VAR}`` expanded) while the plugin is enabled; the control loop
+reads it after every tick (outside a loop, the reader's thread does). It splits the
 byte stream into frames (resyncing on bad CRCs and split reads), decodes them for the
 configured ``protocol_version`` and publishes each report at once on
 ``referee/game_status``, ``referee/robot_status``, ``referee/power_heat``,
@@ -81,11 +82,11 @@ class Referee(PluginBase):
         self.reader = self._link.reader
 
     def on_enable(self) -> None:
-        """Start the reader thread (it opens the port)."""
+        """Start the reader (its thread opens the port)."""
         self._link.start()
 
     def on_disable(self) -> None:
-        """Stop the reader thread and close the port."""
+        """Stop the reader and close the port."""
         self._link.stop()
 
     def update(self, now: Time, dt: float) -> None:
@@ -100,7 +101,7 @@ class Referee(PluginBase):
             self._publish_diagnostics(now, stats)
 
     def _on_frame(self, frame: RawFrame) -> None:
-        """Decode and publish one frame (called in the reader thread)."""
+        """Decode and publish one frame (called in the reading thread)."""
         now = self._clock.now()
         with self._lock:  # the decoder's counters are read by the diagnostics (tick)
             record = self._decoder.decode(frame)

@@ -1,4 +1,4 @@
-"""Serial devices of the robot: one reader thread per port, with the device's parser."""
+"""Serial devices of the robot: one reader per port, with the device's parser."""
 
 from rm_plugins.serial.device import (
     DeviceLink,

@@ -128,9 +128,9 @@ def read_serial_settings(
 
 def make_reader(
     settings: SerialSettings, on_item: Callable[[Any], None], logger: Any, *,
-    parser: FrameStream, name: str, paced: bool, parity: str = serial.PARITY_NONE,
+    parser: FrameStream, name: str, polled: bool, parity: str = serial.PARITY_NONE,
 ) -> SerialReader:
-    """The reader thread of a device with these settings (not started).
+    """The reader of a device with these settings (not started).
 
     parity: pyserial's ``PARITY_*`` (the DR16 sends 8E1). A pseudo-terminal (the
     simulator's) has no wire to check parity on, and Linux refuses the setting when one is
@@ -144,7 +144,7 @@ def make_reader(
         settings.port, settings.baudrate, on_item, logger,
         read_timeout=settings.read_timeout, backoff_min=settings.backoff_min,
         backoff_max=settings.backoff_max, silence_reopen=settings.silence_reopen,
-        paced=paced, parser=parser, name=name, opener=opener,
+        polled=polled, parser=parser, name=name, opener=opener,
     )
 
 
@@ -153,28 +153,28 @@ def _is_pseudo_terminal(url: str) -> bool:
 
 
 class DeviceLink:
-    """A device plugin's reader thread and the time of its last good frame.
+    """A device plugin's reader and the time of its last good frame.
 
-    The reader thread calls :meth:`received` for every good frame; the plugin's tick asks
-    :meth:`decide` for the state. In the control loop the reader reads after the loop's
-    ticks (in their idle time), else at its own pace; ``paced=False`` keeps it at its own
-    pace in the loop too (a device framed by the silences between its bursts, the DR16,
-    must be read as the bytes arrive).
+    The reader calls :meth:`received` for every good frame; the plugin's tick asks
+    :meth:`decide` for the state. In the control loop the loop reads the port at the start
+    of each tick, before the plugins run (``SerialReader.poll``), else the reader's thread does;
+    ``polled=False`` keeps the thread reading in the loop too (a device framed by the
+    silences between its bursts, the DR16, must be read as the bytes arrive).
     """
 
     def __init__(
         self, plugin: Any, settings: SerialSettings, on_item: Callable[[Any], None], *,
-        parser: FrameStream, name: str, paced: bool | None = None,
+        parser: FrameStream, name: str, polled: bool | None = None,
         parity: str = serial.PARITY_NONE,
     ) -> None:
         self.settings = settings
         self._logger = plugin.logger
         self.reader = make_reader(
             settings, on_item, plugin.logger, parser=parser, name=name,
-            paced=plugin.in_loop if paced is None else paced, parity=parity,
+            polled=plugin.in_loop if polled is None else polled, parity=parity,
         )
-        if self.reader.paced:
-            plugin.after_tick(self.reader.wake)
+        if self.reader.polled:
+            plugin.loop_input(self.reader.poll, f'{plugin.name} port')
         self._lock = threading.Lock()
         self._last_ns: int | None = None
 
@@ -190,7 +190,7 @@ class DeviceLink:
             self._logger.error(f'the reader of {self.settings.port} did not stop')
 
     def received(self, now_ns: int) -> None:
-        """A good frame arrived now (reader thread)."""
+        """A good frame arrived now (the reading thread)."""
         with self._lock:
             self._last_ns = now_ns
 

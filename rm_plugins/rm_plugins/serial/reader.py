@@ -1,26 +1,35 @@
-"""SerialReader: a thread that reads frames from a serial port and hands out what they carry.
+"""SerialReader: reads frames from a serial port and hands out what they carry.
+
+Why one module: the thread that opens the port and the poll that reads it share the port,
+the lock that keeps them apart and the counters; split, each would reach into the other.
 
 The port is any pyserial URL (``serial.serial_for_url``): a device (``/dev/ttyUSB0``), a
 pseudo-terminal or a symlink to one (the simulator's IMU), ``loop://``, ``socket://h:p``.
-Reads block for at most ``read_timeout`` so ``stop()`` is honoured quickly. A ``paced``
-reader instead waits for :meth:`SerialReader.wake` (the control loop calls it at the end
-of every tick) and then takes what the port holds, so it decodes in the loop's idle time
-and never asks for the interpreter in the middle of a tick. It learns how far apart data
-arrives and lets the wakes before the next arrival pass: a 400 Hz IMU costs about one
-thread wake-up per frame, not one per tick. Bytes go
-through the device's parser (``FrameStream``: the HiPNUC IMU's, the referee's...), which
-resynchronises after garbage and counts what it skips; everything it decodes is passed to
-``on_sample`` in this thread.
+A reader's thread opens the port, and reopens it with back-off when it fails. Who reads it:
+
+- by default the thread, in reads that block for at most ``read_timeout`` (so ``stop()``
+  is honoured quickly);
+- a ``polled`` reader is read by :meth:`SerialReader.poll`, which the control loop calls at
+  the start of every tick, before the plugins: one non-blocking read of what the port
+  holds, decoded in the loop's thread, so the plugins of that tick see it. No thread is
+  woken for it: a 400 Hz IMU costs no thread switch and never waits for the interpreter
+  (docs/PERFORMANCE.md, "Serial ports read by the loop").
+
+Bytes go through the device's parser (``FrameStream``: the HiPNUC IMU's, the referee's...),
+which resynchronises after garbage and counts what it skips; everything it decodes is
+passed to ``on_sample`` in the reading thread.
 
 A port that cannot be opened, fails while reading (unplugged, pty closed) or stays silent
 for ``silence_reopen`` is closed and reopened with exponential back-off between
-``backoff_min`` and ``backoff_max``. Nothing here raises out of the thread: errors are
+``backoff_min`` and ``backoff_max``. Nothing here raises to its caller: errors are
 recorded in the statistics (``stats()``) and logged, rate-limited. No rclpy here.
 """
 
 from __future__ import annotations
 
 import dataclasses
+import os
+import select
 import termios
 import threading
 import time
@@ -32,11 +41,6 @@ import serial
 _NS_PER_S = 1_000_000_000
 _LOG_PERIOD_NS = 5 * _NS_PER_S
 _READ_CHUNK = 4096
-# Paced reads: weight of the newest gap between arrivals in their moving mean, the share
-# of that mean after an arrival during which wakes pass, and gaps too long to learn from.
-_GAP_WEIGHT = 0.125
-_GAP_SHARE = 0.5
-_MAX_GAP_NS = 50_000_000
 
 
 class FrameStream(Protocol):
@@ -119,13 +123,30 @@ def open_serial(url: str, baudrate: int, timeout: float) -> Any:
     return serial.serial_for_url(url, baudrate=baudrate, timeout=timeout)
 
 
+def nonblocking_descriptor(port: Any) -> int | None:
+    """The port's file descriptor if reading it never blocks, else None.
+
+    pyserial opens a posix port (a tty, a pty) with O_NONBLOCK and waits with select()
+    itself; a poll then needs a ``poll(0)`` and, when data waits, one ``os.read``, not
+    pyserial's ioctl + select + read.
+    ``loop://``, ``socket://`` and the like have no descriptor of their own.
+    """
+    try:
+        fd = port.fileno()
+    except (AttributeError, OSError, ValueError):
+        return None
+    if not isinstance(fd, int) or os.get_blocking(fd):
+        return None
+    return fd
+
+
 class SerialReader:
     """Reads one device's serial port in a background thread.
 
     Args:
         url: pyserial URL or device path (already expanded).
         baudrate: [bit/s].
-        on_sample: called in the reader thread for each thing the parser decodes; an
+        on_sample: called in the reading thread for each thing the parser decodes; an
             exception from it is counted as a sample error and logged (rate-limited).
         logger: receives open/lose/recover lines.
         read_timeout: longest blocking read [s] (also bounds how long stop() takes).
@@ -135,8 +156,8 @@ class SerialReader:
             0 disables.
         opener: ``(url, baudrate, timeout) -> port`` (pyserial by default).
         clock_ns: monotonic clock [ns].
-        paced: read only when woken (:meth:`wake`; at most ``read_timeout`` later
-            regardless), and only what is waiting.
+        polled: the port is read by :meth:`poll` only (a stage of the control loop);
+            the thread only opens and reopens it.
         parser: the device's frame parser.
         name: the device kind, for the thread's name (``<name> <url>``).
     """
@@ -154,7 +175,7 @@ class SerialReader:
         silence_reopen: float = 1.0,
         opener: Callable[[str, int, float], Any] = open_serial,
         clock_ns: Callable[[], int] = time.monotonic_ns,
-        paced: bool = False,
+        polled: bool = False,
         parser: FrameStream,
         name: str = 'serial',
     ) -> None:
@@ -176,11 +197,12 @@ class SerialReader:
         self._silence_ns = round(silence_reopen * _NS_PER_S)
         self._opener = opener
         self._clock_ns = clock_ns
-        self._pace = threading.Event() if paced else None
-        self._next_wake_ns = 0  # wakes before this pass: no data is expected yet
-        self._data_ns: int | None = None  # when the last read found data
-        self._gap_ns = 0.0  # moving mean of the time between reads that found data
-        self.wakes_passed = 0  # wakes let pass: no data expected yet
+        self._polled = polled
+        self._lost = threading.Event()  # a poll closed the port (or stop() was called)
+        # poll() and closing never use the port together; poll() never waits for it.
+        self._port_lock = threading.Lock()
+        # A port read with os.read: its descriptor and a poll object watching it.
+        self._descriptor: tuple[int, select.poll] | None = None
         self._parser = parser
         self._name = name
         self._lock = threading.Lock()
@@ -206,8 +228,7 @@ class SerialReader:
     def stop(self, timeout: float = 2.0) -> bool:
         """Stop the thread and close the port; return False if the thread did not end."""
         self._stop.set()
-        if self._pace is not None:
-            self._pace.set()  # a paced thread waits for its wake
+        self._lost.set()  # a polled reader's thread waits for a loss
         thread, self._thread = self._thread, None
         if thread is not None:
             thread.join(timeout)
@@ -217,23 +238,40 @@ class SerialReader:
         return True
 
     @property
-    def paced(self) -> bool:
-        """Whether the reader reads only when woken."""
-        return self._pace is not None
+    def polled(self) -> bool:
+        """Whether the port is read by :meth:`poll` (not by the thread)."""
+        return self._polled
 
-    def wake(self) -> None:
-        """Let a paced reader read what arrived (the loop's after-tick callback).
+    def poll(self) -> bool:
+        """Read and decode what the port holds, without blocking; return whether it held any.
 
-        Does nothing before the next data is expected (``_GAP_SHARE`` of the usual gap
-        between arrivals after the last one), so the thread is not woken for nothing.
+        A polled reader's stage in the control loop: it returns at once when the port is
+        not open or the thread is closing it. A failed read or a silence longer than
+        ``silence_reopen`` closes the port, and the thread reopens it.
         """
-        pace = self._pace
-        if pace is None:
-            return
-        if self._clock_ns() >= self._next_wake_ns:
-            pace.set()
-        else:
-            self.wakes_passed += 1
+        if self._port is None or not self._polled:
+            return False
+        if not self._port_lock.acquire(blocking=False):
+            return False
+        try:
+            port = self._port
+            if port is None:
+                return False
+            try:
+                data = self._read_waiting(port)
+            except (serial.SerialException, OSError, TypeError, ValueError,
+                    termios.error) as err:
+                problem: str | None = f'{self.url} failed: {err}'
+                data = b''
+            else:
+                problem = self._take(data)
+            if problem is not None:
+                self._close_locked()
+                self._note_loss(problem)
+                self._lost.set()
+            return bool(data)
+        finally:
+            self._port_lock.release()
 
     @property
     def running(self) -> bool:
@@ -257,13 +295,18 @@ class SerialReader:
                     self._stop.wait(backoff)
                     backoff = min(2.0 * backoff, self._backoff_max)
                     continue
-            problem = self._read_once()
-            if problem is not None:
+            if self._polled:
+                self._lost.wait()
+                self._lost.clear()
+            else:
+                problem = self._read_blocking()
+                if problem is None:
+                    continue
                 self._lose(problem)
-                # Wait a little before reopening: a port that just vanished is rarely back
-                # at once, and a device that keeps failing must not spin this thread.
-                self._stop.wait(backoff)
-                backoff = min(2.0 * backoff, self._backoff_max)
+            # Wait a little before reopening: a port that just vanished is rarely back
+            # at once, and a device that keeps failing must not spin this thread.
+            self._stop.wait(backoff)
+            backoff = min(2.0 * backoff, self._backoff_max)
         self._close()
 
     def _open(self) -> bool:
@@ -277,38 +320,57 @@ class SerialReader:
             if first:  # the same failure again and again is logged once
                 self._logger.warning(f'{message}; retrying with back-off')
             return False
-        self._port = port
+        fd = nonblocking_descriptor(port)
+        self._descriptor = None
+        if fd is not None:
+            poller = select.poll()
+            poller.register(fd, select.POLLIN)
+            self._descriptor = (fd, poller)
         self._last_byte_ns = self._clock_ns()
         with self._lock:
             reopened = self._stats.opens > 0 or self._stats.open_failures > 0
             self._update(port_open=True, opens=self._stats.opens + 1)
+        self._port = port  # last: a poll may read it from now on
         self._logger.info(f'{"reopened" if reopened else "opened"} {self.url}')
         return True
 
-    def _read_once(self) -> str | None:
+    def _read_blocking(self) -> str | None:
         """Read what is there (or wait up to read_timeout); return a problem or None."""
-        pace = self._pace
         try:
-            if pace is not None:
-                pace.wait(self._read_timeout)
-                pace.clear()
-                waiting = self._port.in_waiting
-                data = self._port.read(min(waiting, _READ_CHUNK)) if waiting else b''
-            else:
-                waiting = self._port.in_waiting
-                data = self._port.read(min(max(1, waiting), _READ_CHUNK))
+            waiting = self._port.in_waiting
+            data = self._port.read(min(max(1, waiting), _READ_CHUNK))
         except (serial.SerialException, OSError, TypeError, ValueError, termios.error) as err:
             # pyserial raises TypeError/ValueError on some ports closed under its feet.
             return f'{self.url} failed: {err}'
+        return self._take(data)
+
+    def _read_waiting(self, port: Any) -> bytes:
+        """What the port holds now, without blocking; b'' if nothing.
+
+        Raises:
+            OSError: the port failed, or it reports data and has none (a device that is
+                gone, as pyserial reads it).
+        """
+        descriptor = self._descriptor
+        if descriptor is None:
+            waiting = port.in_waiting
+            return port.read(min(waiting, _READ_CHUNK)) if waiting else b''
+        fd, poller = descriptor
+        if not poller.poll(0):
+            return b''
+        data = os.read(fd, _READ_CHUNK)
+        if not data:
+            raise OSError('the port reports data but has none (the device is gone)')
+        return data
+
+    def _take(self, data: bytes) -> str | None:
+        """Decode data and hand out what it carries; return a problem (silence) or None."""
         now_ns = self._clock_ns()
         if not data:
-            self._next_wake_ns = 0  # look again at the next wake
             if self._silence_ns and now_ns - self._last_byte_ns > self._silence_ns:
                 return f'no byte from {self.url} for {self._silence_ns / _NS_PER_S:.1f} s'
             return None
         self._last_byte_ns = now_ns
-        if pace is not None:
-            self._expect_next(now_ns)
         parser = self._parser
         samples = parser.feed(data)
         with self._lock:
@@ -323,31 +385,28 @@ class SerialReader:
         for sample in samples:
             try:
                 self._on_sample(sample)
-            except Exception as err:  # a bad sample never ends the thread
+            except Exception as err:  # a bad sample never ends the reading
                 with self._lock:
                     self._update(sample_errors=self._stats.sample_errors + 1)
                 self._log_throttled(f'sample rejected: {type(err).__name__}: {err}')
         return None
 
-    def _expect_next(self, now_ns: int) -> None:
-        """Learn the gap between arrivals; skip the wakes before the next one is due."""
-        last, self._data_ns = self._data_ns, now_ns
-        if last is None:
-            return
-        gap = now_ns - last
-        if gap > _MAX_GAP_NS:  # a pause (stall, reopen): not the device's rate
-            return
-        self._gap_ns += (gap - self._gap_ns) * _GAP_WEIGHT
-        self._next_wake_ns = now_ns + int(self._gap_ns * _GAP_SHARE)
-
     def _lose(self, problem: str) -> None:
         self._close()
+        self._note_loss(problem)
+
+    def _note_loss(self, problem: str) -> None:
         with self._lock:
             self._update(port_losses=self._stats.port_losses + 1, last_error=problem)
         self._logger.warning(f'{problem}; closed, reopening with back-off')
 
     def _close(self) -> None:
-        port, self._port = self._port, None
+        with self._port_lock:
+            self._close_locked()
+
+    def _close_locked(self) -> None:
+        # Caller holds self._port_lock.
+        port, self._port, self._descriptor = self._port, None, None
         if port is not None:
             try:
                 port.close()

@@ -238,50 +238,86 @@ class FakePort:
         pass
 
 
-def test_a_paced_reader_takes_only_what_waits_once_the_loop_says_so(reader_factory):
+def test_a_polled_reader_reads_only_when_polled_and_in_the_polling_thread(reader_factory):
     port = FakePort()
     got = Collector()
-    reader = reader_factory('fake://', got, opener=lambda *_: port, paced=True, read_timeout=0.01)
+    threads = []
+
+    def on_sample(sample):
+        threads.append(threading.current_thread())
+        got(sample)
+
+    reader = reader_factory('fake://', on_sample, opener=lambda *_: port, polled=True)
     reader.start()
     assert wait(lambda: reader.stats().port_open)
     for i in range(5):
         port.write(frame(yaw=0.1 * i))
+    threading.Event().wait(0.05)  # the thread had time to read, and must not have
+    assert got.samples == [] and port.reads == []
+    reader.poll()  # what the loop's after-tick callback does
+    assert len(got.samples) == 5 and threads == [threading.current_thread()] * 5
+    # one read of what was waiting, never a blocking read for more
+    assert port.reads == [len(frame()) * 5]
+    reader.poll()  # nothing waits: no read at all
+    assert port.reads == [len(frame()) * 5] and reader.stats().frames_ok == 5
 
-    def tick():  # what the loop's after-tick callback does
-        reader.wake()
-        return len(got.samples) >= 5
 
-    assert wait(tick)
-    # never a blocking one-byte read for nothing: each read takes what was waiting
-    assert port.reads and all(size > 1 for size in port.reads)
-    assert reader.stats().frames_ok == 5
-
-
-def test_a_paced_reader_lets_the_wakes_pass_until_the_next_data_is_due(reader_factory):
-    port = FakePort()
+def test_a_polled_reader_on_a_pty_reads_what_waits_without_blocking(tmp_path, reader_factory):
+    port = Pty(str(tmp_path / 'imu'))
     got = Collector()
+    reader = reader_factory(port.path, got, polled=True, read_timeout=1.0)
+    reader.start()
+    assert wait(lambda: reader.stats().port_open)
+    reader.poll()  # nothing there: returns at once (a blocking read would wait 1 s)
+    assert got.samples == []
+    port.write(frame(yaw=0.1) + frame(yaw=0.2))
+    assert wait(lambda: (reader.poll(), len(got.samples) == 2)[1])
+    assert got.samples[1].euler[2] == pytest.approx(0.2, abs=1e-6)
+    assert reader.stats().port_losses == 0
+    port.close()
+
+
+def test_a_polled_reader_loses_a_vanished_port_and_reads_the_new_one(tmp_path, reader_factory):
+    path = str(tmp_path / 'imu')
+    port = Pty(path)
+    got = Collector()
+    reader = reader_factory(path, got, polled=True)
+    reader.start()
+    assert wait(lambda: reader.stats().port_open)
+    port.close()  # reads fail with EIO: the poll closes the port, the thread reopens
+    reader.poll()
+    assert reader.stats().port_losses == 1 and not reader.stats().port_open
+    assert 'failed' in reader.stats().last_error
+    port = Pty(path)
+    assert wait(lambda: reader.stats().port_open)
+    port.write(frame(yaw=0.3))
+    assert wait(lambda: (reader.poll(), len(got.samples) == 1)[1])
+    assert reader.stats().opens == 2
+    port.close()
+
+
+def test_a_polled_reader_reopens_a_silent_port(reader_factory):
+    ports = []
+
+    def opener(*_):
+        ports.append(FakePort())
+        return ports[-1]
+
     now = [0]
     reader = reader_factory(
-        'fake://', got, opener=lambda *_: port, paced=True, read_timeout=1.0,
-        clock_ns=lambda: now[0], silence_reopen=0.0,
+        'fake://', Collector(), opener=opener, polled=True, clock_ns=lambda: now[0],
+        silence_reopen=0.1,
     )
     reader.start()
     assert wait(lambda: reader.stats().port_open)
-    gap = 2_500_000  # [ns] a 400 Hz device
-    for i in range(20):  # data every 2.5 ms, the loop waking the reader then
-        now[0] += gap
-        port.write(frame(yaw=0.01 * i))
-        reader.wake()
-        assert wait(lambda n=i + 1: len(got.samples) == n)
-    reads = len(port.reads)
-    now[0] += gap // 4  # the next tick, long before the next frame is due
-    reader.wake()
-    assert reader.wakes_passed == 1
-    now[0] += gap  # due: the wake goes through, the frame is read
-    port.write(frame(yaw=0.5))
-    reader.wake()
-    assert wait(lambda: len(got.samples) == 21)
-    assert len(port.reads) == reads + 1 and reader.wakes_passed == 1
+    now[0] += 50_000_000
+    reader.poll()  # silent for 50 ms: kept
+    assert reader.stats().port_losses == 0
+    now[0] += 60_000_000
+    reader.poll()  # silent for 110 ms: closed, and the thread opens it again
+    assert reader.stats().port_losses == 1 and 'no byte' in reader.stats().last_error
+    assert wait(lambda: reader.stats().opens == 2 and reader.stats().port_open)
+    assert len(ports) == 2
 
 
 def test_a_terminal_that_refuses_its_settings_is_retried_not_fatal(reader_factory):
@@ -315,7 +351,7 @@ def test_a_device_with_parity_on_a_pseudo_terminal_is_reopened_without_it(tmp_pa
         settings = SimpleNamespace(port=pty.path, baudrate=100000, read_timeout=0.01,
                                    backoff_min=0.01, backoff_max=0.02, silence_reopen=0.0)
         reader = make_reader(settings, lambda item: None, Log(), parser=HipnucParser(),
-                             name='dr16', paced=False, parity=serial.PARITY_EVEN)
+                             name='dr16', polled=False, parity=serial.PARITY_EVEN)
         for _ in range(3):
             port = reader._opener(pty.path, 100000, 0.01)
             port.close()
