@@ -1,25 +1,19 @@
 """The robot's one control loop: inputs, then update, then pack, then send.
 
-Why one module: the tick's fixed order, its timing and the thread that keeps the period
-are one thing; the statistics' arithmetic is rm_base.hardware.timing.
-
 One dedicated thread sleeps to absolute deadlines on ``time.perf_counter_ns`` (1 kHz by
 default) and runs :meth:`Scheduler.tick`; tests call ``tick(now_ns)`` themselves, with no
 thread, for deterministic (lockstep) steps. Each tick runs, in this fixed order:
 
-1. the *input stages* (:meth:`Scheduler.add_stage`): the received feedback, the
-   commands, then each plugin that is due, which sets joint targets on the actuators
-   directly,
+1. the *input stages* (:meth:`Scheduler.add_stage`): the received feedback, what the
+   serial devices sent (the loop reads their ports itself), the commands, then each
+   plugin that is due, which sets joint targets on the actuators directly,
 2. ``update(now_ns, dt)`` on every actuator (control laws, safety),
 3. the *output stages* (``add_stage(..., after_update=True)``): group stages such as a
    power limit that scales a group's efforts,
 4. ``pack_command()`` on every packer (actuators with their own frame, command groups),
 5. ``send(msg)`` of every packed frame, each through the send function (bus) paired with
    its packer,
-6. the *after-send stages* (``add_stage(..., after_send=True)``): input for the next tick
-   that the loop takes itself once the frames are out, so it never delays them (the
-   serial devices' ports),
-7. the *after-tick callbacks* (:meth:`Scheduler.add_after_tick`): they only wake the
+6. the *after-tick callbacks* (:meth:`Scheduler.add_after_tick`): they only wake the
    threads of the ROS edge (the publishers), so that those run in the loop's idle time
    instead of taking the interpreter from it in the middle of a tick.
 
@@ -139,7 +133,6 @@ class Scheduler:
         self._packers = tuple(packers)
         self._inputs: tuple[Stage, ...] = ()
         self._outputs: tuple[Stage, ...] = ()
-        self._after_send: tuple[Stage, ...] = ()
         self._after_tick: tuple[Callable[[], object], ...] = ()
         self._report_period_ns = round(report_period_s * 1e9)
         self._thread_name = thread_name
@@ -172,14 +165,8 @@ class Scheduler:
         self._edges_ns = tuple(e * 1000 for e in HISTOGRAM_EDGES_US)
 
     # --- composition ---
-    def add_stage(
-        self, stage: Stage, *, after_update: bool = False, after_send: bool = False
-    ) -> None:
-        """Add a component: before the actuators' update, after it, or after the send.
-
-        Before the update: inputs (feedback, commands, plugins); after it (after_update):
-        outputs on the updated efforts (a power limit); after the send (after_send): input
-        for the next tick that must not delay the frames (a serial port).
+    def add_stage(self, stage: Stage, *, after_update: bool = False) -> None:
+        """Add a component: before the actuators' update (inputs), or after it (outputs).
 
         Stages run in the order added; a stage added while the loop runs joins at its
         next tick (the stage tuple is swapped whole, never changed in place).
@@ -187,16 +174,12 @@ class Scheduler:
         Raises:
             HardwareConfigError: a component of that name exists already.
         """
-        stages = self._inputs + self._outputs + self._after_send
-        if stage.name in {s.name for s in stages} | {ACTUATORS, PACK, SEND}:
+        names = {s.name for s in self._inputs + self._outputs} | {ACTUATORS, PACK, SEND}
+        if stage.name in names:
             raise HardwareConfigError(f'the loop has a component named {stage.name!r} already')
-        if after_update and after_send:
-            raise HardwareConfigError(f'stage {stage.name!r}: after_update or after_send, not both')
         self._durations.setdefault(stage.name, DurationHistogram())
         if after_update:
             self._outputs += (stage,)
-        elif after_send:
-            self._after_send += (stage,)
         else:
             self._inputs += (stage,)
 
@@ -220,12 +203,9 @@ class Scheduler:
         """
         inputs = tuple(s for s in self._inputs if s.name != name)
         outputs = tuple(s for s in self._outputs if s.name != name)
-        after_send = tuple(s for s in self._after_send if s.name != name)
-        found = len(inputs) + len(outputs) + len(after_send) < (
-            len(self._inputs) + len(self._outputs) + len(self._after_send)
-        )
+        found = len(inputs) + len(outputs) < len(self._inputs) + len(self._outputs)
         # Its timing stays: a tick in progress may still record into it.
-        self._inputs, self._outputs, self._after_send = inputs, outputs, after_send
+        self._inputs, self._outputs = inputs, outputs
         return found
 
     # --- one cycle ---
@@ -261,10 +241,7 @@ class Scheduler:
             send(msg)
         if self._flush is not None:
             self._flush()
-        t = timer()
-        durations[SEND].record(t - t1)
-        if self._after_send:
-            self._run_stages(self._after_send, now_ns, dt, t)
+        durations[SEND].record(timer() - t1)
         self._ticks += 1
         for callback in self._after_tick:
             callback()
@@ -385,7 +362,6 @@ class Scheduler:
         """Duration of each component since start, in loop order."""
         order = [s.name for s in self._inputs] + [ACTUATORS]
         order += [s.name for s in self._outputs] + [PACK, SEND]
-        order += [s.name for s in self._after_send]
         return tuple((name, self._durations[name].total()) for name in order)
 
     def _record_start(self, error_ns: int) -> None:

@@ -443,12 +443,11 @@ class PluginBase:
         return is_heard(publisher)
 
     def loop_input(self, read: Callable[[], bool], name: str | None = None) -> bool:
-        """Call read() in every tick of the loop, once the tick's frames are sent.
+        """Call read() at the start of every tick of the loop, before the plugins run.
 
         For a device the loop reads itself (a serial port): read() takes what waits,
-        without blocking, hands it on (the plugins see it at the next tick), and returns
-        whether there was anything. Its cost is then one of the loop's timed components
-        (``name``, default ``<plugin> input``), and it never delays a frame.
+        without blocking, hands it on, and returns whether there was anything. Its cost is
+        then one of the loop's timed components (``name``, default ``<plugin> input``).
 
         Returns:
             False where no loop runs the plugins (then nothing will call it).

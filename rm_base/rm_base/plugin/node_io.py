@@ -123,15 +123,14 @@ class NodeIO(abc.ABC):
         return None
 
     def loop_input(self, name: str, read: Callable[[], bool]) -> bool:
-        """Run read() every tick once its frames are sent; False if there is no loop.
+        """Run read() at the start of every tick, before the plugins; False if no loop.
 
         read() takes what a device holds without blocking and returns whether it took
-        anything (the loop times it then, as the component ``name``); the plugins see it
-        at the next tick.
+        anything (the loop times it then, as the component ``name``).
         """
         if self.loop is None:
             return False
-        self.loop.add_stage(_InputStage(name, read), after_send=True)
+        self.loop.add_stage(_InputStage(name, read))
         self._inputs.append(name)
         return True
 

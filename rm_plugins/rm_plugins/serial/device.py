@@ -156,8 +156,8 @@ class DeviceLink:
     """A device plugin's reader and the time of its last good frame.
 
     The reader calls :meth:`received` for every good frame; the plugin's tick asks
-    :meth:`decide` for the state. In the control loop the loop reads the port in each tick
-    once its frames are sent (``SerialReader.poll``), else the reader's thread does;
+    :meth:`decide` for the state. In the control loop the loop reads the port at the start
+    of each tick, before the plugins run (``SerialReader.poll``), else the reader's thread does;
     ``polled=False`` keeps the thread reading in the loop too (a device framed by the
     silences between its bursts, the DR16, must be read as the bytes arrive).
     """

@@ -9,9 +9,9 @@ A reader's thread opens the port, and reopens it with back-off when it fails. Wh
 
 - by default the thread, in reads that block for at most ``read_timeout`` (so ``stop()``
   is honoured quickly);
-- a ``polled`` reader is read by :meth:`SerialReader.poll`, which the control loop calls in
-  every tick once the tick's frames are sent: one non-blocking read of what the port
-  holds, decoded in the loop's thread; the plugins see it at the next tick. No thread is
+- a ``polled`` reader is read by :meth:`SerialReader.poll`, which the control loop calls at
+  the start of every tick, before the plugins: one non-blocking read of what the port
+  holds, decoded in the loop's thread, so the plugins of that tick see it. No thread is
   woken for it: a 400 Hz IMU costs no thread switch and never waits for the interpreter
   (docs/PERFORMANCE.md, "Serial ports read by the loop").
 

@@ -215,24 +215,6 @@ def test_stages_run_before_and_after_the_update_in_the_order_added():
     assert events.index(('stage', 'power limit', T0)) < events.index(('pack', 'ggg'))
 
 
-def test_after_send_stages_run_once_the_frames_are_out_and_before_the_wakes():
-    events = []
-    scheduler, _ = make(events)
-    scheduler.add_stage(Stage(events, 'imu port'), after_send=True)
-    scheduler.add_after_tick(lambda: events.append(('after',)))
-    scheduler.tick(T0)
-    kinds = [e[0] for e in events]
-    assert kinds[-2:] == ['stage', 'after']
-    assert kinds.index('stage') > max(i for i, k in enumerate(kinds) if k == 'send')
-    assert dict(scheduler.component_stats())['imu port'].count == 1
-    assert [name for name, _ in scheduler.component_stats()][-1] == 'imu port'
-    assert scheduler.remove_stage('imu port')
-    scheduler.tick(T0 + MS)
-    assert events.count(('stage', 'imu port', T0 + MS)) == 0
-    with pytest.raises(HardwareConfigError, match='not both'):
-        scheduler.add_stage(Stage(events, 'x'), after_update=True, after_send=True)
-
-
 def test_every_component_is_timed_and_an_idle_stage_is_not_counted():
     events = []
     scheduler, _ = make(events)

@@ -115,20 +115,20 @@ def test_other_nodes_publishing_a_local_topic_are_reported(ros_context):
     node.destroy_node()
 
 
-def test_input_stages_of_plugins_run_after_the_send_and_leave_on_release(ros_context):
+def test_input_stages_of_plugins_run_before_the_plugins_and_leave_on_release(ros_context):
     node = Node('inbox_test', context=ros_context)
     io = DdsJointIO(node)
     assert io.loop_input('imu port', lambda: True) is False  # no loop: nothing would call it
     io.loop = Scheduler([], [])
     calls = []
-    assert io.loop_input('imu port', lambda: calls.append('read') is None) is True
+    assert io.loop_input('imu port', lambda: calls.append(len(calls)) is None) is True
     plugin = lambda now_ns, dt: calls.append('plugin')  # noqa: E731
     plugin.name = 'plugin imu'
     io.loop.add_stage(plugin)
     io.loop.tick(0)
-    assert calls == ['plugin', 'read']  # what it reads, the plugins get at the next tick
+    assert calls == [0, 'plugin']
     assert dict(io.loop.component_stats())['imu port'].count == 1  # it took something: timed
     io.release()
     io.loop.tick(1_000_000)
-    assert calls == ['plugin', 'read', 'plugin']
+    assert calls == [0, 'plugin', 'plugin']
     node.destroy_node()
