@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import dataclasses
 import os
-import select
 import termios
 import threading
 import time
@@ -37,6 +36,8 @@ from collections.abc import Callable
 from typing import Any, Protocol
 
 import serial
+
+from rm_plugins.serial.descriptor import DescriptorReader
 
 _NS_PER_S = 1_000_000_000
 _LOG_PERIOD_NS = 5 * _NS_PER_S
@@ -127,8 +128,8 @@ def nonblocking_descriptor(port: Any) -> int | None:
     """The port's file descriptor if reading it never blocks, else None.
 
     pyserial opens a posix port (a tty, a pty) with O_NONBLOCK and waits with select()
-    itself; a poll then needs a ``poll(0)`` and, when data waits, one ``os.read``, not
-    pyserial's ioctl + select + read.
+    itself; a poll then needs a ``poll(0)`` and, when data waits, one ``read``
+    (``DescriptorReader``, holding the GIL), not pyserial's ioctl + select + read.
     ``loop://``, ``socket://`` and the like have no descriptor of their own.
     """
     try:
@@ -202,7 +203,7 @@ class SerialReader:
         # poll() and closing never use the port together; poll() never waits for it.
         self._port_lock = threading.Lock()
         # A port read with os.read: its descriptor and a poll object watching it.
-        self._descriptor: tuple[int, select.poll] | None = None
+        self._descriptor: DescriptorReader | None = None
         self._parser = parser
         self._name = name
         self._lock = threading.Lock()
@@ -321,11 +322,7 @@ class SerialReader:
                 self._logger.warning(f'{message}; retrying with back-off')
             return False
         fd = nonblocking_descriptor(port)
-        self._descriptor = None
-        if fd is not None:
-            poller = select.poll()
-            poller.register(fd, select.POLLIN)
-            self._descriptor = (fd, poller)
+        self._descriptor = None if fd is None else DescriptorReader(fd, _READ_CHUNK)
         self._last_byte_ns = self._clock_ns()
         with self._lock:
             reopened = self._stats.opens > 0 or self._stats.open_failures > 0
@@ -355,13 +352,7 @@ class SerialReader:
         if descriptor is None:
             waiting = port.in_waiting
             return port.read(min(waiting, _READ_CHUNK)) if waiting else b''
-        fd, poller = descriptor
-        if not poller.poll(0):
-            return b''
-        data = os.read(fd, _READ_CHUNK)
-        if not data:
-            raise OSError('the port reports data but has none (the device is gone)')
-        return data
+        return descriptor.read()
 
     def _take(self, data: bytes) -> str | None:
         """Decode data and hand out what it carries; return a problem (silence) or None."""
