@@ -202,7 +202,7 @@ class SerialReader:
         self._lost = threading.Event()  # a poll closed the port (or stop() was called)
         # poll() and closing never use the port together; poll() never waits for it.
         self._port_lock = threading.Lock()
-        # A port read with os.read: its descriptor and a poll object watching it.
+        # A port read through its descriptor (libc poll and read, holding the GIL).
         self._descriptor: DescriptorReader | None = None
         self._parser = parser
         self._name = name
