@@ -321,7 +321,7 @@ class SerialReader:
             if first:  # the same failure again and again is logged once
                 self._logger.warning(f'{message}; retrying with back-off')
             return False
-        fd = nonblocking_descriptor(port)
+        fd = nonblocking_descriptor(port) if self._polled else None  # the thread uses pyserial
         self._descriptor = None if fd is None else DescriptorReader(fd, _READ_CHUNK)
         self._last_byte_ns = self._clock_ns()
         with self._lock:
