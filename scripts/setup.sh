@@ -3,7 +3,8 @@
 #   1. create .venv (python3.11, or $PYTHON),
 #   2. install the pinned ROS 2 Jazzy wheels and libraries from requirements/lock.txt,
 #   3. make the venv an ament underlay (scripts/make_venv_underlay.py),
-#   4. colcon build the workspace into build/ and install/.
+#   4. colcon build the workspace into build/ and install/ (with vendor/'s interface
+#      packages that the wheels lack).
 # Each step is skipped when its inputs have not changed since it last succeeded, so a
 # second run with nothing changed takes a few seconds. Source scripts/env.sh afterwards.
 set -euo pipefail
@@ -47,9 +48,18 @@ fi
 # 4. colcon build. With --symlink-install the Python sources are used in place, so a
 # rebuild is needed only when manifests, messages, data files or the venv change.
 cd "$ROOT"
-build_inputs=$(find rm_msgs rm_base rm_plugins rm_bringup \
+# Interface packages the wheels lack (vendor/, e.g. tf2_msgs): built where Python cannot
+# import them; a ROS install has the real ones.
+vendor_paths=()
+for vendor_pkg in vendor/*/; do
+  vendor_pkg=${vendor_pkg%/}
+  if ! "$VENV/bin/python" -c "import $(basename "$vendor_pkg").msg" 2>/dev/null; then
+    vendor_paths+=("$vendor_pkg")
+  fi
+done
+build_inputs=$(find rm_msgs rm_base rm_plugins rm_bringup vendor \
   \( -name '__pycache__' -o -name '*.egg-info' \) -prune -o \
-  \( -path 'rm_msgs/*' -o -name setup.py -o -name setup.cfg -o -name package.xml \
+  \( -path 'rm_msgs/*' -o -path 'vendor/*' -o -name setup.py -o -name setup.cfg -o -name package.xml \
      -o -name plugins.xml -o -path '*/resource/*' -o -path 'rm_bringup/config/*' \
      -o -path 'rm_bringup/launch/*' \) -type f -print | LC_ALL=C sort)
 build_digest=$( (echo "$lock_digest"; echo "$build_inputs"; cat $build_inputs) | sha256sum | cut -c1-16)
@@ -62,7 +72,7 @@ if [ "$(cat "$STAMPS/build" 2>/dev/null)" != "$build_digest" ] || [ ! -f install
     source "$VENV/bin/activate"
     source "$VENV/local_setup.bash"
     colcon --log-base log build --symlink-install \
-      --base-paths rm_msgs rm_base rm_plugins rm_bringup \
+      --base-paths "${vendor_paths[@]}" rm_msgs rm_base rm_plugins rm_bringup \
       --cmake-args -DBUILD_TESTING=OFF
   ) > "$ROOT/log/setup-build.log" 2>&1 || {
     tail -n 40 "$ROOT/log/setup-build.log" >&2

@@ -320,7 +320,8 @@ def test_without_imu_data_expect_passive_and_joints_off(harness):
         ),
         (
             {'mode': GimbalCmd.TRACK, 'frame': 'map', 'point': (1.0, 0.0, 0.0)},
-            "rejected command: unknown target frame 'map' (known: odom, world, base_link)",
+            "rejected command: unknown target frame 'map' (known: odom, world, base_link, muzzle, "
+            'pitch_link, yaw_link)',
         ),
     ],
     ids=['unknown-mode', 'nan-rate', 'inf-target', 'unknown-frame'],
@@ -360,8 +361,26 @@ def test_a_bad_command_is_rejected_with_the_reason_and_never_reaches_a_motor(
             PluginConfigError,
             'frame.s. odom in both world_frames and base_frames',
         ),
+        (
+            {'gimbal.frames.mounts': ['camera'], 'gimbal.frames.camera.parent': 'turret'},
+            PluginConfigError,
+            "frames.camera.parent is 'turret', not one of base_link, yaw_link, pitch_link",
+        ),
+        (
+            {'gimbal.frames.mounts': ['camera']},
+            ParameterError,
+            r"parameter 'gimbal.frames.camera.parent' is required but not set",
+        ),
+        (
+            {'gimbal.frames.mounts': ['yaw_link'], 'gimbal.frames.yaw_link.parent': 'base_link'},
+            PluginConfigError,
+            'gimbal frames must have distinct names',
+        ),
     ],
-    ids=['limits-order', 'limit-missing', 'same-joint', 'frame-twice'],
+    ids=[
+        'limits-order', 'limit-missing', 'same-joint', 'frame-twice', 'mount-parent',
+        'mount-parent-missing', 'mount-twice',
+    ],
 )
 def test_a_bad_config_is_one_clear_error(ros_context, overrides, error, message):
     params = {**BASE, **overrides}

@@ -43,10 +43,13 @@ from typing import Any, ClassVar
 
 from rclpy.qos import DurabilityPolicy, QoSProfile, qos_profile_sensor_data
 from rclpy.time import Time
+from tf2_msgs.msg import TFMessage
 
 from rm_base.errors import ConfigError
+from rm_base.geometry.frame_tree import FrameTree
 from rm_base.plugin.commands import CommandInput
 from rm_base.plugin.errors import PluginConfigError, PluginInitError, TargetRejectedError
+from rm_base.plugin.frames import TF_QOS, TF_STATIC_QOS, FramePublisher
 from rm_base.plugin.joints import JointStateView, JointTarget
 from rm_base.plugin.node_io import NodeIO, node_io
 from rm_base.plugin.outbox import is_heard
@@ -432,6 +435,24 @@ class PluginBase:
         """Whether a control loop runs this plugin (its after-tick callbacks get called)."""
         self._require_init()
         return self._nio.loop is not None
+
+    def create_frame_publisher(self, *, static: bool = False) -> FramePublisher:
+        """A sender of this plugin's transforms: into :attr:`frames`, and on /tf.
+
+        static: /tf_static (latched), for transforms that never change (mounts); each
+        send is then the whole set of them.
+        """
+        self._require_init()
+        topic = '/tf_static' if static else '/tf'
+        qos = TF_STATIC_QOS if static else TF_QOS
+        publisher = self.create_publisher(TFMessage, topic, qos, hand_over=True)
+        return FramePublisher(self._nio.frames, publisher, static=static)
+
+    @property
+    def frames(self) -> FrameTree:
+        """The robot's frames as its plugins send them (``lookup(target, source)``)."""
+        self._require_init()
+        return self._nio.frames
 
     @staticmethod
     def heard(publisher: Any) -> bool:

@@ -38,6 +38,7 @@ from rclpy.time import Time
 
 from rm_base.control import ChassisPowerModel, PowerLimitResult, estimate_power
 from rm_base.errors import InputRejectedError
+from rm_base.geometry.frame_tree import FrameTree
 from rm_base.joints import JointState, JointTarget
 from rm_base.plugin.errors import JointClaimError, TargetRejectedError
 from rm_base.plugin.inbox import Inbox
@@ -101,6 +102,7 @@ class NodeIO(abc.ABC):
         self.inbox: Inbox | None = None
         self.loop: Any = None  # the control loop running the plugins (a Scheduler)
         self._inputs: list[str] = []  # names of the plugins' input stages in the loop
+        self.frames = FrameTree()  # the plugins' transforms (rm_base.plugin.frames)
         self._claims: dict[str, str] = {}
         self._lock = threading.Lock()
         self._handlers: dict[str, list[Callable[[Any, int], Any]]] = {}
@@ -208,9 +210,18 @@ class NodeIO(abc.ABC):
         self.add_handler(topic, callback)
 
     def add_handler(self, topic: str, handler: Callable[[Any, int], Any]) -> None:
-        """Record a plugin's subscription callback for topic (a resolved name)."""
+        """Record a plugin's subscription callback for topic (a resolved name).
+
+        On a latched topic that a plugin of this node published on, the handler gets the
+        last message at once, as a transient-local DDS subscriber would.
+        """
         with self._lock:
             self._handlers.setdefault(topic, []).append(handler)
+        last = self.outbox.last_latched(topic) if self.outbox is not None else None
+        if last is not None:
+            data, msg_type = last
+            msg = deserialize_message(data, msg_type) if isinstance(data, bytes) else data
+            handler(msg, self.node.get_clock().now().nanoseconds)
 
     def inject(self, topic: str, msg: Any) -> int:
         """Hand msg to every plugin callback of topic, as if it had arrived now.

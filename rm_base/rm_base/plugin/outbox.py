@@ -16,6 +16,8 @@ A message nobody would get is not serialised at all: no plugin of this process l
 to its topic, no other node subscribes (the publisher's matched subscriptions) and the
 topic keeps nothing for late joiners (volatile durability). Such messages are counted
 (``unheard``); the first subscriber gets the next one, as it would from DDS.
+A latched topic's last message is kept (:meth:`Outbox.last_latched`), so a plugin of this
+process that subscribes later gets it, as a transient-local DDS subscriber would.
 
 Who wakes the thread: each ``put``, or, once :meth:`Outbox.pace` tied it to a control
 loop, the end of each tick (``wake``), so that it publishes in the loop's idle time and
@@ -111,6 +113,8 @@ class Outbox:
         # whether the loopback has subscribers on a topic (unknown: assume so)
         self.listens: Callable[[str], bool] = _always
         self.unheard = 0
+        # latched topic -> (its last message: serialised or handed over, its type)
+        self._latched: dict[str, tuple[Any, type]] = {}
         self._thread = threading.Thread(target=self._run, name=name, daemon=True)
 
     def wrap(self, publisher: Any, hand_over: bool = False) -> _EdgePublisher:
@@ -131,6 +135,10 @@ class Outbox:
             or edge.publisher.get_subscription_count() > 0
         )
 
+    def last_latched(self, topic: str) -> tuple[Any, type] | None:
+        """The last message put on a latched topic (serialised or handed over) and its type."""
+        return self._latched.get(topic)
+
     def put(self, edge: _EdgePublisher, msg: Any) -> None:
         """Queue msg for edge's publisher (any thread; never blocks)."""
         topic = edge.topic_name
@@ -140,6 +148,8 @@ class Outbox:
             self.unheard += 1
             return
         data = msg if edge.hand_over else serialize_message(msg)
+        if edge.latched:
+            self._latched[topic] = (data, type(msg))
         # a message handed over costs its subscribers no copy: they get it at once
         if local and (self.loopback_at_put or edge.hand_over):
             self._hand_back(topic, data, type(msg))

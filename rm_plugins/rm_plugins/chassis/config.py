@@ -83,7 +83,7 @@ class ChassisConfig:
             fixes a new heading reference (the yaw stays continuous) [s].
         odom_frame: frame of the odometry pose.
         base_frame: child frame (the robot).
-        publish_tf: broadcast odom -> base_frame on /tf (where tf2_ros is available).
+        publish_tf: send odom -> base_frame on /tf and into the frame tree.
         publish_rate: rate of /chassis_state and /odom [Hz].
         gears: per speed gear, the (linear, angular) coefficients on /vel_cmd.
     """

@@ -18,8 +18,8 @@ Inputs
 Outputs
     /actuator_cmd: MODE_VELOCITY on every wheel while active, MODE_OFF in PASSIVE.
     /chassis_state (rm_msgs/ChassisState) and /odom (nav_msgs/Odometry, odom -> base_link,
-        twist in base_link) at ``publish_rate``; odom -> base_link on /tf where tf2_ros
-        imports.
+        twist in base_link) at ``publish_rate``; odom -> base_link then on /tf (and in the
+        robot's frame tree, ``PluginBase.frames``), unless ``odom.publish_tf`` is false.
 
 States (values = ChassisCmd mode constants), all decided in ``_decide``:
     PASSIVE: commanded; or no valid /chassis_cmd (watchdog); or a wheel (or, in a mode
@@ -59,13 +59,13 @@ import math
 from collections.abc import Sequence
 from typing import Any, NamedTuple
 
-from geometry_msgs.msg import TransformStamped, Twist
+from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry as OdometryMsg
 from rclpy.qos import qos_profile_sensor_data
 from rclpy.time import Time
 from rm_base.control import ChassisMotionMode, estimate_power
 from rm_base.errors import InputRejectedError
-from rm_base.geometry import Twist2D, quaternion_from_yaw, wrap_to_pi, yaw_from_quaternion
+from rm_base.geometry import SE3, Twist2D, quaternion_from_yaw, wrap_to_pi, yaw_from_quaternion
 from rm_base.joints import JointState
 from rm_base.plugin import JointTarget, LatestMessage, LogThrottle, PluginBase, PluginConfigError
 from rm_base.plugin.commands import stamp_ns_of
@@ -164,7 +164,7 @@ class StandChassis(PluginBase):
         self._chassis_state_pub = self.create_publisher(ChassisState, 'chassis_state', 10)
         self._odom_pub = self.create_publisher(OdometryMsg, 'odom', 10)
         self._state_msg, self._odom_msg = _report_messages(cfg)
-        self._tf = self._make_tf_broadcaster() if cfg.publish_tf else None
+        self._tf = self.create_frame_publisher() if cfg.publish_tf else None
         self._publish_period_ns = round(_NS_PER_S / cfg.publish_rate)
         self._next_publish_ns = 0
         self._last_odom_ns: int | None = None
@@ -498,7 +498,7 @@ class StandChassis(PluginBase):
         if self.heard(self._chassis_state_pub):
             self._publish_state(stamp)
         if self._tf is not None or self.heard(self._odom_pub):
-            self._publish_odometry(stamp)
+            self._publish_odometry(stamp, now.nanoseconds)
 
     def _publish_state(self, stamp: Any) -> None:
         cfg, report = self.config, self._report
@@ -519,7 +519,7 @@ class StandChassis(PluginBase):
         msg.power_limit = float(report.power_limit_w)
         self._chassis_state_pub.publish(msg)
 
-    def _publish_odometry(self, stamp: Any) -> None:
+    def _publish_odometry(self, stamp: Any, stamp_ns: int) -> None:
         cfg = self.config
         pose, twist = self._odometry.pose, self._odometry.twist
         q = quaternion_from_yaw(pose.yaw)
@@ -534,24 +534,8 @@ class StandChassis(PluginBase):
         _set_twist(msg.twist.twist, twist)
         self._odom_pub.publish(msg)
         if self._tf is not None:
-            tf = TransformStamped()
-            tf.header = msg.header
-            tf.child_frame_id = cfg.base_frame
-            tf.transform.translation.x = pose.x
-            tf.transform.translation.y = pose.y
-            tf.transform.rotation = msg.pose.pose.orientation
-            self._tf.sendTransform(tf)
-
-    def _make_tf_broadcaster(self) -> Any:
-        try:
-            from tf2_ros import TransformBroadcaster
-        except ImportError as err:
-            self.logger.info(
-                f'tf2_ros is not importable here ({err}): /odom is published, the '
-                f'{self.config.odom_frame} -> {self.config.base_frame} TF is not'
-            )
-            return None
-        return TransformBroadcaster(self.node)
+            base = SE3.from_translation_quaternion((pose.x, pose.y, 0.0), q)
+            self._tf.send([(cfg.odom_frame, cfg.base_frame, base)], stamp_ns)
 
 
 class _Report:

@@ -9,6 +9,8 @@ from rm_base.geometry.ballistics import STANDARD_GRAVITY, ProjectileModel
 from rm_base.plugin import PluginConfigError, PluginParams
 from rm_base.plugin.pid_params import loop_pid
 
+from rm_plugins.gimbal.frames import FramesConfig, read_frames
+
 
 @dataclass(frozen=True)
 class AxisConfig:
@@ -47,6 +49,7 @@ class GimbalConfig:
         barrel_length: pivot to muzzle [m]; with a bullet speed the shot starts there.
         world_frames: frame ids taken as the odometry (world) frame.
         base_frames: frame ids taken as the robot frame (base_link).
+        frames: the gimbal's TF frames (the first base frame is their root).
         min_track_distance: a TRACK target closer than this to the yaw axis
             (horizontally) has no defined heading; the aim is held [m].
         projectile: bullet drag and gravity for the drop compensation.
@@ -72,6 +75,7 @@ class GimbalConfig:
     barrel_length: float
     world_frames: tuple[str, ...]
     base_frames: tuple[str, ...]
+    frames: FramesConfig
     min_track_distance: float
     projectile: ProjectileModel
     state_rate: float
@@ -204,9 +208,15 @@ def read_config(p: PluginParams) -> GimbalConfig:
     base_frames = p.string_array(
         'base_frames', ('base_link',), unique=True, description='frame ids taken as the robot frame'
     )
+    if not base_frames:
+        raise PluginConfigError('base_frames must name at least one frame (the first: base_link)')
     both = sorted(set(world_frames) & set(base_frames))
     if both:
         raise PluginConfigError(f'frame(s) {", ".join(both)} in both world_frames and base_frames')
+    barrel_length = p.double(
+        'barrel_length', 0.0, ge=0.0, unit='m',
+        description='pivot to muzzle; bullets start at the muzzle',
+    )
     return GimbalConfig(
         yaw=yaw,
         pitch=pitch,
@@ -266,15 +276,10 @@ def read_config(p: PluginParams) -> GimbalConfig:
             description='low-pass of the IMU-world/odom yaw offset',
         ),
         pivot=pivot,
-        barrel_length=p.double(
-            'barrel_length',
-            0.0,
-            ge=0.0,
-            unit='m',
-            description='pivot to muzzle; bullets start at the muzzle',
-        ),
+        barrel_length=barrel_length,
         world_frames=world_frames,
         base_frames=base_frames,
+        frames=read_frames(p, base_frames[0], barrel_length),
         min_track_distance=p.double(
             'min_track_distance',
             0.1,

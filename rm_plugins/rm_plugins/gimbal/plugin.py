@@ -12,6 +12,8 @@ Outputs:
     velocity targets of the yaw and pitch joints, every run (the actuators directly in
     the one-process robot, /actuator_cmd otherwise).
     /gimbal_state (rm_msgs/GimbalState): state, reason, world angles, targets, joints.
+    /tf: base_link -> yaw_link -> pitch_link from the joints, every ``frames.rate``;
+    /tf_static: the muzzle (``barrel_length`` along the barrel) and ``frames.mounts``.
 
 States (``GimbalMode``, numbered as ``GimbalCmd``), all chosen in ``_decide``:
 
@@ -22,8 +24,9 @@ States (``GimbalMode``, numbered as ``GimbalCmd``), all chosen in ``_decide``:
 - RATE: ``rate_yaw``/``rate_pitch`` (clamped to the axis' max_rate) are integrated into
   a target held in the *world* frame, so the aim stays put while the chassis turns or
   spins; the target never leads the barrel by more than ``max_target_lead``.
-- TRACK: aim at ``target`` (a point in an odom/world frame or in base_link) and keep
-  aiming as the chassis moves; with ``bullet_speed > 0`` the pitch compensates the drop
+- TRACK: aim at ``target`` (a point in an odom/world frame, in base_link, or in any frame
+  of the robot's TF tree, e.g. a camera's: put in odom once per command) and keep aiming
+  as the chassis moves; with ``bullet_speed > 0`` the pitch compensates the drop
   (``rm_base.geometry.aim``, from the muzzle ``barrel_length`` along the barrel). Without
   fresh odometry an odom target holds the aim. The IMU's world frame is tied to odom by
   a slowly filtered yaw offset (chassis heading by IMU minus yaw joint, against the odom
@@ -52,12 +55,14 @@ from rclpy.time import Time
 from rm_base.errors import InputRejectedError
 from rm_base.geometry import rpy_from_quaternion, wrap_to_pi, yaw_from_quaternion
 from rm_base.geometry.aim import AimSolution, aim_from_point
+from rm_base.geometry.frame_tree import FrameLookupError
 from rm_base.plugin import JointTarget, LatestMessage, PluginBase
 from sensor_msgs.msg import Imu
 
 from rm_msgs.msg import GimbalCmd, GimbalState
 from rm_plugins.gimbal.config import GimbalConfig, read_config
 from rm_plugins.gimbal.control import AxisLoop, PlanarPose, Smoother, clamp, sight_rates
+from rm_plugins.gimbal.frames import joint_links, mount_links
 
 _NS_PER_S = 1_000_000_000
 
@@ -164,6 +169,15 @@ class StandGimbal(PluginBase):
         self._odom_offset = Smoother(cfg.odom_alignment_tau, angle=True)
         self._state_period_ns = round(_NS_PER_S / cfg.state_rate)
         self._next_state_ns = 0
+        self._joint_frames = self.create_frame_publisher()
+        self._frames_period_ns = round(_NS_PER_S / cfg.frames.rate)
+        self._next_frames_ns = 0
+        self.create_frame_publisher(static=True).send(
+            mount_links(cfg.frames), self.node.get_clock().now().nanoseconds
+        )
+        # A TRACK target in another frame of the tree, put in odom (or base_link) once per
+        # command, with the transforms of the moment it arrived: (command, frame, point).
+        self._placed: tuple[GimbalCmd, str, tuple[float, float, float]] | None = None
         self._published_mode: GimbalMode | None = None
         self.on_reset()
 
@@ -188,6 +202,7 @@ class StandGimbal(PluginBase):
         now_ns = now.nanoseconds
         if not dt > 0.0:
             return
+        self._send_frames(now_ns)
         cmd = self.command.latest(now_ns)
         measurement = self._measure(now_ns)
         odom = self._odom_pose(now_ns)
@@ -204,6 +219,7 @@ class StandGimbal(PluginBase):
 
     def on_command_lost(self, now: Time, dt: float) -> None:
         """No command: joints off (the framework is already in PASSIVE with the reason)."""
+        self._send_frames(now.nanoseconds)
         self._go_limp()
         self._publish_state(now, self._measure(now.nanoseconds))
 
@@ -246,20 +262,18 @@ class StandGimbal(PluginBase):
             return GimbalMode.PASSIVE, 'rejected command: target or bullet speed not finite', None
         px, py, pz = cfg.pivot
         target = (point.x, point.y, point.z)
+        if frame not in cfg.base_frames and frame not in cfg.world_frames:
+            placed = self._place(cmd, frame, target)
+            if isinstance(placed, str):
+                return GimbalMode.PASSIVE, f'rejected command: {placed}', None
+            frame, target = placed
         if frame in cfg.base_frames:
             origin = cfg.pivot
-        elif frame in cfg.world_frames:
+        else:  # a world frame (a placed target is in one of the two)
             if isinstance(odom, str):
                 return GimbalMode.TRACK, f'holding the aim: {odom}', None
             pivot_x, pivot_y = odom.pose.to_world(px, py)
             origin = (pivot_x, pivot_y, odom.z + pz)
-        else:
-            known = ', '.join((*cfg.world_frames, *cfg.base_frames))
-            return (
-                GimbalMode.PASSIVE,
-                f'rejected command: unknown target frame {frame!r} (known: {known})',
-                None,
-            )
         aim, in_range = self._solve(origin, target, cmd.bullet_speed)
         if aim is None or aim.distance < cfg.min_track_distance:
             return (
@@ -285,6 +299,53 @@ class StandGimbal(PluginBase):
             reason,
             _Aim(wrap_to_pi(yaw_target), aim.pitch, *rates, follows_base=follows_base),
         )
+
+    def _place(
+        self, cmd: GimbalCmd, frame: str, point: tuple[float, float, float]
+    ) -> tuple[str, tuple[float, float, float]] | str:
+        """A point given in another frame of the TF tree, in odom (else base_link).
+
+        Done once per command, with the transforms of the moment it is first seen (as a
+        detection is true at its stamp): re-placing it every run would move a point given
+        in a frame that turns with the gimbal (the camera) as the gimbal turns to it.
+        Returns the frame and point, or why it cannot be placed.
+        """
+        placed = self._placed
+        if placed is not None and placed[0] is cmd:
+            return placed[1], placed[2]
+        self._send_frames(self.node.get_clock().now().nanoseconds, force=True)
+        cfg = self.config
+        tree = self.frames.frames()
+        if frame.lstrip('/') not in tree:
+            known = dict.fromkeys((*cfg.world_frames, *cfg.base_frames, *sorted(tree)))
+            return f'unknown target frame {frame!r} (known: {", ".join(known)})'
+        problem = ''
+        for into in (cfg.world_frames[0], cfg.base_frames[0]) if cfg.world_frames else (
+            cfg.base_frames[0],
+        ):
+            try:
+                found = self.frames.lookup(into, frame)
+            except FrameLookupError as err:
+                problem = str(err)
+                continue
+            x, y, z = (float(v) for v in found.transform.apply(point))
+            self._placed = (cmd, into, (x, y, z))
+            return into, (x, y, z)
+        return f'target frame {frame!r}: {problem}'
+
+    def _send_frames(self, now_ns: int, *, force: bool = False) -> None:
+        """Send base -> yaw -> pitch at the joints' angles, every frames.rate (or now)."""
+        if now_ns < self._next_frames_ns and not force:
+            return
+        cfg = self.config
+        angles = []
+        for name in (cfg.yaw.joint, cfg.pitch.joint):
+            state = self.joint_states.get(name)
+            if state is None or not math.isfinite(state.position):
+                return
+            angles.append(state.position)
+        self._next_frames_ns = now_ns + self._frames_period_ns
+        self._joint_frames.send(joint_links(cfg.frames, cfg.pivot, *angles), now_ns)
 
     def _solve(
         self, origin: tuple[float, float, float], target: tuple[float, float, float], speed: float

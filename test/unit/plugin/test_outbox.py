@@ -149,6 +149,19 @@ def test_a_latched_topic_keeps_every_message_for_late_joiners():
     assert pub.published == [9] and box.unheard == 0
 
 
+def test_a_latched_topic_keeps_its_last_message_for_later_plugin_subscribers():
+    box = Outbox()
+    latched = box.wrap(FakePublisher(subscribers=0, durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    volatile = FakePublisher()
+    volatile.topic_name = '/volatile'
+    for i in (1, 2):
+        latched.publish(UInt32(data=i))
+        box.wrap(volatile).publish(UInt32(data=i))
+    data, msg_type = box.last_latched('/fake')
+    assert msg_type is UInt32 and deserialize_message(data, UInt32).data == 2
+    assert box.last_latched('/volatile') is None
+
+
 def test_a_message_handed_over_reaches_the_robot_as_it_is_and_dds_serialised():
     box = Outbox()
     pub = FakePublisher()
