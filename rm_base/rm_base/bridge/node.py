@@ -7,6 +7,7 @@ and its ROS edges; the work is in the modules it imports.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import threading
 import time
 from collections.abc import Callable
@@ -19,6 +20,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
+from std_srvs.srv import Trigger
 
 from rm_base.bridge.commands import check_stamp, parse_actuator_cmd
 from rm_base.bridge.diagnostics import CommandStats, DiagnosticsReporter
@@ -45,10 +47,12 @@ from rm_base.bridge.params import (
 from rm_base.bridge.power_limits import RemotePowerLimits, parse_power_limit
 from rm_base.bridge.sim_config import world_config
 from rm_base.bridge.sim_services import SimFaultServices
+from rm_base.calibration import CalibrationError, CalibrationFile, joint_zero_offsets
 from rm_base.config_schema import Schema
 from rm_base.hardware import CanHardware
 from rm_base.hardware.bus import BusFactory
 from rm_base.hardware.config import SAFETY_SCHEMA, SCHEDULER_SCHEMA
+from rm_base.hardware.errors import CommandRejectedError, ValueRangeError
 from rm_base.node_main import inbox_node
 from rm_base.plugin.inbox import Inbox
 from rm_base.plugin.node_io import POWER_LIMIT_QOS, POWER_LIMIT_TOPIC
@@ -210,6 +214,12 @@ class CanBridgeNode(Node):
                 self, self.sim_world, self.hardware.joint_names,
                 {b.name: str(b.channel) for b in settings.hardware_config.buses}, prefix='~/sim/',
             )
+        self._zero_services = [
+            self.create_service(
+                Trigger, f'~/{joint}/set_zero', functools.partial(self._on_set_zero, joint)
+            )
+            for joint in sorted(self._joints)
+        ]
         self.add_on_set_parameters_callback(self._on_set_parameters)
 
         if self.stepped:
@@ -313,12 +323,75 @@ class CanBridgeNode(Node):
             ge=0,
             description='random seed of the simulated world (garbage faults)',
         )
+        declare(
+            'calibration.file',
+            params.string,
+            '',
+            description='calibration file (~ and ${VAR} expanded): joint zeros set by '
+            '~/<joint>/set_zero are kept there and replace joints.<joint>.zero_offset at '
+            'start-up; empty: zeros last until the node stops',
+        )
+        declare(
+            'calibration.max_speed',
+            params.double,
+            0.05,
+            unit='rad/s',
+            gt=0.0,
+            description='a joint turning faster is moving: set_zero refuses',
+        )
         open_params = {
             name: plain(parameter.value)
             for name, parameter in self._parameters_under('').items()
             if name not in typed and not is_ros_own(name)
         }
+        self._calibration = (
+            CalibrationFile(typed['calibration.file']) if typed['calibration.file'] else None
+        )
+        if self._calibration is not None:
+            for joint, zero in joint_zero_offsets(self._calibration).items():
+                if not any(name.startswith(f'joints.{joint}.') for name in open_params):
+                    self.get_logger().warning(
+                        f'{self._calibration.path} has a zero for joint {joint!r}, which '
+                        'this robot does not have: ignored'
+                    )
+                    continue
+                open_params[f'joints.{joint}.zero_offset'] = zero
+                self.get_logger().info(
+                    f'{joint}: zero_offset {zero:.6f} rad from {self._calibration.path}'
+                )
         return settings_from_parameters(typed, open_params)
+
+    def _on_set_zero(
+        self, joint: str, request: Trigger.Request, response: Trigger.Response
+    ) -> Trigger.Response:
+        response.success, response.message = self.set_zero(joint)
+        return response
+
+    def set_zero(self, joint: str) -> tuple[bool, str]:
+        """~/<joint>/set_zero: make the joint's present position its zero, and keep it.
+
+        Returns:
+            Whether it was done, and what was done or why not.
+        """
+        assert self.hardware is not None
+        try:
+            zero = self.hardware.set_zero(joint, self.settings.calibration_max_speed)
+        except (CommandRejectedError, ValueRangeError) as err:
+            self.get_logger().warning(f'set_zero refused: {err}')
+            return False, f'refused: {err}'
+        kept = 'until the node stops (no calibration.file)'
+        if self._calibration is not None:
+            try:
+                self._calibration.write('joints', joint, {'zero_offset': zero})
+            except CalibrationError as err:
+                kept = f'until the node stops: {err}'
+            else:
+                kept = f'saved to {self._calibration.path}'
+        message = (
+            f'{joint}: zero set at the present position (zero_offset {zero:.6f} rad), {kept}'
+        )
+        self.get_logger().info(message)
+        return True, message
 
     def _parameters_under(self, prefix: str) -> dict[str, Parameter]:
         # rclpy 7.1.6 annotates the values as parameter values; they are Parameter objects

@@ -108,6 +108,7 @@ class BridgeSettings:
         sim: simulator settings, or None on real hardware.
         edge_priority: SCHED_FIFO priority the executable gives the process's other
             threads (:func:`rm_base.realtime.raise_edge_priority`); 0: none.
+        calibration_max_speed: a joint turning faster is not at rest (set_zero) [rad/s].
     """
 
     hardware: Mapping[str, Any]
@@ -117,6 +118,7 @@ class BridgeSettings:
     publish_frames: bool = False
     sim: SimSettings | None = None
     edge_priority: int = EDGE_PRIORITY
+    calibration_max_speed: float = 0.05
 
 
 def plain(value: Any) -> Any:
@@ -176,7 +178,7 @@ def settings_from_parameters(
             ``diagnostics_rate``, ``publish_frames``, ``log_file``, ``sim``,
             ``sim.timing`` (:class:`Timing` or its value), ``sim.seed``,
             ``scheduler.rate_hz``, ``scheduler.receive_in_loop``, ``scheduler.priority``,
-            ``scheduler.edge_priority`` and ``safety.*``;
+            ``scheduler.edge_priority``, ``calibration.max_speed`` and ``safety.*``;
             missing ones take their defaults.
         open_params: every other parameter by its flat name (rclpy's own excluded).
 
@@ -277,6 +279,7 @@ def settings_from_parameters(
         publish_frames=bool(typed.get('publish_frames', False)),
         sim=sim,
         edge_priority=int(typed.get('scheduler.edge_priority', EDGE_PRIORITY)),
+        calibration_max_speed=float(typed.get('calibration.max_speed', 0.05)),
     )
 
 

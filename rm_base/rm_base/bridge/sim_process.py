@@ -42,7 +42,7 @@ TYPED = frozenset({
     'publish_rate', 'diagnostics_rate', 'publish_frames', 'log_file', 'scheduler.rate_hz',
     'scheduler.receive_in_loop', 'scheduler.priority', 'scheduler.edge_priority',
     'safety.feedback_timeout_s', 'safety.command_timeout_s', 'safety.temperature_hysteresis_c',
-    'sim', 'sim.timing', 'sim.seed',
+    'sim', 'sim.timing', 'sim.seed', 'calibration.file', 'calibration.max_speed',
 })
 
 

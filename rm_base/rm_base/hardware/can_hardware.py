@@ -27,7 +27,7 @@ from typing import Any
 import can
 
 from rm_base.control import ChassisPowerModel
-from rm_base.hardware.actuators import Actuator, JointState, MitActuator
+from rm_base.hardware.actuators import Actuator, HoldReason, JointState, MitActuator
 from rm_base.hardware.bus import BusFactory, ManagedBus
 from rm_base.hardware.config import HardwareConfig
 from rm_base.hardware.errors import CommandRejectedError, HardwareConfigError
@@ -316,6 +316,40 @@ class CanHardware:
         stage = self.power_limits.pop(group, None)
         if stage is not None:
             self.scheduler.remove_stage(stage.name)
+
+    def set_zero(self, name: str, max_speed: float) -> float:
+        """Make joint name's present position its zero (see ``Actuator.zero_here``).
+
+        Only for a joint at rest that nothing drives: a zero moved under a position loop
+        would make it jump to the old pose.
+
+        Args:
+            name: the joint.
+            max_speed: fastest the joint may turn and still count as at rest [rad/s].
+
+        Returns:
+            The joint's new ``zero_offset`` [rad].
+
+        Raises:
+            CommandRejectedError: unknown joint, offline, driven, moving, or its family
+                cannot keep a zero (the message says which).
+        """
+        actuator = self.actuators.get(name)
+        if actuator is None:
+            raise CommandRejectedError(f'unknown joint {name!r}')
+        state = actuator.state()
+        if not state.online:
+            raise CommandRejectedError(f'{name} is offline: no position to take as zero')
+        if actuator.hold_reason is HoldReason.NONE:
+            raise CommandRejectedError(
+                f'{name} is driven: make the plugin that drives it PASSIVE first'
+            )
+        if not abs(state.velocity) <= max_speed:
+            raise CommandRejectedError(
+                f'{name} is moving ({state.velocity:.3f} rad/s, at rest below '
+                f'{max_speed:g}): hold it still'
+            )
+        return actuator.zero_here()
 
     def request_system_command(self, name: str, command: SystemCommand | int) -> None:
         """Send enable / disable / set-zero / clear-error to an MIT-mode motor next tick.

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import importlib
 import re
+from typing import Any
 
 from .errors import MessageTypeError
 
@@ -44,20 +45,43 @@ def get_message_class(type_name: str) -> type:
     Raises:
         MessageTypeError: malformed name, package not installed, or no such message.
     """
-    full = normalize_type_name(type_name)
-    package, _, name = full.split('/')
+    package, _, name = normalize_type_name(type_name).split('/')
+    cls: type = _import_interface(type_name, package, 'msg', name, 'get_fields_and_field_types')
+    return cls
+
+
+_SERVICE_NAME = re.compile(r'^([A-Za-z][\w]*)/(?:srv/)?([A-Za-z][\w]*)$')
+
+
+def get_service_class(type_name: str) -> Any:
+    """Import and return the generated class of a service type (``pkg/srv/Name``, ``pkg/Name``).
+
+    Raises:
+        MessageTypeError: malformed name, package not installed, or no such service.
+    """
+    match = _SERVICE_NAME.match(type_name)
+    if match is None:
+        raise MessageTypeError(
+            f"invalid service type '{type_name}': expected 'package/srv/Name' "
+            "(e.g. 'std_srvs/srv/Trigger')"
+        )
+    package, name = match.groups()
+    return _import_interface(type_name, package, 'srv', name, 'Request')
+
+
+def _import_interface(type_name: str, package: str, kind: str, name: str, mark: str) -> Any:
+    # rosidl's layout: pkg.msg.Name / pkg.srv.Name, a class with `mark` among its attributes
+    what = {'msg': 'message', 'srv': 'service'}[kind]
     try:
-        module = importlib.import_module(f'{package}.msg')
+        module = importlib.import_module(f'{package}.{kind}')
     except ModuleNotFoundError as err:
         raise MessageTypeError(
-            f"unknown message type '{type_name}': package '{package}' is not installed "
+            f"unknown {what} type '{type_name}': package '{package}' is not installed "
             '(or the workspace is not sourced)'
         ) from err
     cls = getattr(module, name, None)
-    if not isinstance(cls, type) or not hasattr(cls, 'get_fields_and_field_types'):
-        raise MessageTypeError(
-            f"unknown message type '{type_name}': {package} has no message {name}"
-        )
+    if not isinstance(cls, type) or not hasattr(cls, mark):
+        raise MessageTypeError(f"unknown {what} type '{type_name}': {package} has no {what} {name}")
     return cls
 
 

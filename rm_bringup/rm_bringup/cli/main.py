@@ -1,4 +1,4 @@
-"""``rmcli``: the project's thin, faithful stand-in for ``ros2 topic`` and ``ros2 bag``.
+"""``rmcli``: the project's thin, faithful stand-in for ros2 topic, service call and bag.
 
 ros2cli and rosbag2 are not on PyPI, so the virtualenv has this instead. Exit codes: 0 ok
 (also when stopped with Ctrl-C, the normal way to end echo/hz/record), 1 a runtime error
@@ -18,6 +18,7 @@ from . import (
     bag_play,
     bag_plot,
     bag_record,
+    service_call,
     topic_echo,
     topic_hz,
     topic_list,
@@ -35,6 +36,9 @@ VERBS: dict[str, dict[str, tuple[ModuleType, str]]] = {
         'list': (topic_list, 'Output a list of available topics'),
         'pub': (topic_pub, 'Publish a message to a topic'),
     },
+    'service': {
+        'call': (service_call, 'Call a service'),
+    },
     'bag': {
         'info': (bag_info, 'Print information about a bag to the screen'),
         'play': (bag_play, 'Play back ROS data from a bag'),
@@ -44,6 +48,7 @@ VERBS: dict[str, dict[str, tuple[ModuleType, str]]] = {
 }
 GROUP_HELP = {
     'topic': 'Various topic related sub-commands',
+    'service': 'Various service related sub-commands',
     'bag': 'Various rosbag related sub-commands',
 }
 
@@ -52,7 +57,7 @@ def build_parser() -> argparse.ArgumentParser:
     """Return the parser of every group and verb."""
     parser = argparse.ArgumentParser(
         prog=PROG,
-        description='rm_ros2 command-line tool: ros2 topic and ros2 bag, without ros2cli.',
+        description='rm_ros2 command-line tool: ros2 topic, service call and bag, without ros2cli.',
         epilog=f'Call `{PROG} <command> -h` for more detailed usage.',
     )
     parser.set_defaults(help_parser=parser)

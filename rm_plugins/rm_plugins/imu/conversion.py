@@ -92,7 +92,9 @@ def _finite(name: str, values: tuple[float, ...]) -> None:
         raise InputRejectedError(f'IMU {name} is not finite: {values!r}')
 
 
-def reading_from_sample(sample: ImuSample, mounting: Mounting) -> ImuReading:
+def reading_from_sample(
+    sample: ImuSample, mounting: Mounting, gyro_bias: Vector3 | None = None
+) -> ImuReading:
     """Convert a decoded HiPNUC sample into the published frame.
 
     The orientation is the sample's quaternion, or, from legacy firmware that sends only
@@ -101,6 +103,7 @@ def reading_from_sample(sample: ImuSample, mounting: Mounting) -> ImuReading:
     Args:
         sample: decoded frame (SI; quaternion (w, x, y, z)).
         mounting: the sensor's mounting in the published frame.
+        gyro_bias: subtracted from the angular rate (sensor axes) [rad/s], if given.
 
     Returns:
         The reading; fields absent from the sample are None.
@@ -123,7 +126,10 @@ def reading_from_sample(sample: ImuSample, mounting: Mounting) -> ImuReading:
     rate = accel = None
     if sample.gyr is not None:
         _finite('angular rate', sample.gyr)
-        rate = mounting.rotate_vector(sample.gyr)
+        gyr = sample.gyr
+        if gyro_bias is not None:
+            gyr = (gyr[0] - gyro_bias[0], gyr[1] - gyro_bias[1], gyr[2] - gyro_bias[2])
+        rate = mounting.rotate_vector(gyr)
     if sample.acc is not None:
         _finite('acceleration', sample.acc)
         accel = mounting.rotate_vector(sample.acc)

@@ -23,6 +23,12 @@ States (``ImuState``, a serial device's ``LinkState``):
 
 Bad bytes, CRC failures and undecodable frames are skipped (the parser resynchronises)
 and counted on /diagnostics (status ``rm_robot: <plugin>``), never fatal.
+
+Gyro bias: ``~/<plugin>/calibrate_gyro`` (std_srvs/Trigger) takes the mean rate of the
+last ``calibration.duration`` seconds as the bias, if they show the IMU at rest
+(``rm_plugins.imu.gyro_bias``), subtracts it from every published rate from then on and
+keeps it in ``calibration.file`` (read again at start-up). The orientation is the
+unit's own fusion and is not changed.
 """
 
 from __future__ import annotations
@@ -31,12 +37,15 @@ import math
 import threading
 
 from diagnostic_msgs.msg import DiagnosticArray
+from rm_base.calibration import CalibrationError, CalibrationFile, finite_values
 from rm_base.hardware.device_clock import DeviceClock
 from rm_base.hardware.protocols.hipnuc import HipnucParser, ImuSample
 from rm_base.plugin import PluginBase
 from sensor_msgs.msg import Imu
+from std_srvs.srv import Trigger
 
 from rm_plugins.imu.conversion import Mounting, reading_from_sample
+from rm_plugins.imu.gyro_bias import GyroWindow, NotAtRestError, RestLimits, bias_at_rest
 from rm_plugins.imu.message import imu_message
 from rm_plugins.serial.device import DeviceLink, LinkState, link_status, read_serial_settings
 from rm_plugins.serial.reader import ReaderStats
@@ -73,6 +82,11 @@ class Hi220(PluginBase):
             doubling from min to max [s], 0.1 / 2.0.
         silence_reopen: reopen an open port silent this long [s], 1.0; 0 = never.
         diagnostics_period: period of the /diagnostics status [s], 1.0.
+        calibration.file: where calibrate_gyro keeps the bias (``imu.<plugin>.gyro_bias``)
+            and where it is read at start-up; empty: the bias lasts until the node stops.
+        calibration.duration / max_rate / max_spread: the window averaged [s], 1.0; the
+            largest mean [rad/s], 0.05, and standard deviation [rad/s], 0.02, per axis of
+            an IMU at rest.
     """
 
     State = ImuState
@@ -137,16 +151,49 @@ class Hi220(PluginBase):
         self._report_published = 0
         self._report_ns: int | None = None
         self._report_bad = 0
+        self._read_calibration(p)
         self._link = DeviceLink(
             self, settings, self._on_sample, parser=HipnucParser(), name='hipnuc'
         )
         self.reader = self._link.reader
+        self._calibrate_service = self.node.create_service(
+            Trigger, f'~/{self.name}/calibrate_gyro', self._on_calibrate_gyro
+        )
+
+    def _read_calibration(self, p) -> None:
+        c = p.group('calibration')
+        path = c.string('file', '', description='where calibrate_gyro keeps the gyro bias; '
+                        'empty: the bias lasts until the node stops')
+        self._rest = RestLimits(
+            duration_s=c.double('duration', 1.0, gt=0.0, unit='s',
+                                description='calibrate_gyro averages this much of the rate'),
+            max_rate=c.double('max_rate', 0.05, gt=0.0, unit='rad/s',
+                              description='a larger mean rate is a turn, not a bias'),
+            max_spread=c.double('max_spread', 0.02, gt=0.0, unit='rad/s',
+                                description='a larger standard deviation is motion'),
+        )
+        self._gyro_window = GyroWindow(self._rest.duration_s)
+        self._calibration = CalibrationFile(path) if path else None
+        self.gyro_bias: tuple[float, float, float] | None = None
+        if self._calibration is not None:
+            entry = self._calibration.entries('imu').get(self.name, {})
+            if 'gyro_bias' in entry:
+                x, y, z = finite_values(
+                    f'{self._calibration.path}: imu.{self.name}.gyro_bias',
+                    entry['gyro_bias'], 3,
+                )
+                self.gyro_bias = (x, y, z)
+                self.logger.info(
+                    f'gyro bias ({x:.5f}, {y:.5f}, {z:.5f}) rad/s from {self._calibration.path}'
+                )
 
     # -- lifecycle --------------------------------------------------------------------------
 
     def on_enable(self) -> None:
         """Start the reader (its thread opens the port)."""
         self._device_clock = DeviceClock()  # the reader is not running
+        with self._lock:
+            self._gyro_window.clear()  # a bias is averaged over this run's samples only
         self._link.start()
 
     def on_disable(self) -> None:
@@ -174,7 +221,7 @@ class Hi220(PluginBase):
                 self._user_id = sample.user_id
         if sample.unread_tag is not None:
             self._note_unread(sample.unread_tag)
-        reading = reading_from_sample(sample, self.mounting)
+        reading = reading_from_sample(sample, self.mounting, self.gyro_bias)
         if (
             reading.orientation is None
             and reading.angular_velocity is None
@@ -194,6 +241,50 @@ class Hi220(PluginBase):
         self._link.received(now_ns)
         with self._lock:
             self._published += 1
+            if sample.gyr is not None:
+                self._gyro_window.add(stamp_ns, sample.gyr)
+
+    # -- calibration (executor thread) ------------------------------------------------------
+
+    def _on_calibrate_gyro(
+        self, request: Trigger.Request, response: Trigger.Response
+    ) -> Trigger.Response:
+        response.success, response.message = self.calibrate_gyro()
+        return response
+
+    def calibrate_gyro(self) -> tuple[bool, str]:
+        """~/<plugin>/calibrate_gyro: the bias from the last window at rest, kept.
+
+        Returns:
+            Whether the bias was set, and what it is or why not.
+        """
+        if self.state is not ImuState.STREAMING:
+            message = f'refused: the IMU is {self.state.name}, not STREAMING ({self.reason})'
+            self.logger.warning(f'calibrate_gyro {message}')
+            return False, message
+        with self._lock:
+            samples = self._gyro_window.snapshot()
+        try:
+            bias = bias_at_rest(samples, self._rest)
+        except NotAtRestError as err:
+            self.logger.warning(f'calibrate_gyro refused: {err}')
+            return False, f'refused: {err}'
+        self.gyro_bias = bias
+        kept = 'until the node stops (no calibration.file)'
+        if self._calibration is not None:
+            try:
+                self._calibration.write('imu', self.name, {'gyro_bias': list(bias)})
+            except CalibrationError as err:
+                kept = f'until the node stops: {err}'
+            else:
+                kept = f'saved to {self._calibration.path}'
+        x, y, z = bias
+        message = (
+            f'gyro bias ({x:.5f}, {y:.5f}, {z:.5f}) rad/s from {len(samples)} samples over '
+            f'{self._rest.duration_s:g} s, {kept}'
+        )
+        self.logger.info(message)
+        return True, message
 
     def _note_unread(self, tag: int) -> None:
         with self._lock:
@@ -227,6 +318,10 @@ class Hi220(PluginBase):
             values={
                 'published': published, 'rate [Hz]': f'{rate:.1f}',
                 'user_id': 'not sent' if user_id is None else user_id,
+                'gyro bias [rad/s]': (
+                    'none' if self.gyro_bias is None
+                    else ', '.join(f'{v:.5f}' for v in self.gyro_bias)
+                ),
                 'frames with unread items': (
                     0 if unread_tag is None else f'{unread_frames} (item 0x{unread_tag:02X})'
                 ),

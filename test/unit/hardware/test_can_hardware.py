@@ -1,4 +1,8 @@
-"""CanHardware end to end over python-can's virtual bus, the test playing the motors."""
+"""CanHardware end to end over python-can's virtual bus, the test playing the motors.
+
+Why one module: every test drives one CanHardware through the same rig (a virtual bus,
+the fake clock) and the same feedback helpers; split, they would be copied.
+"""
 
 import math
 import threading
@@ -229,6 +233,98 @@ def test_system_commands_for_mit_joints_only(rig):
     assert frames(peer, 3)[0x003] == mit.system_frame(SystemCommand.SET_ZERO)
     with pytest.raises(CommandRejectedError, match='not an MIT-mode motor'):
         hw.request_system_command('wheel', SystemCommand.ENABLE)
+
+
+# --- set_zero: the present position becomes the joint's zero ---
+def yaw_at(hw, peer, ticks, rpm=0):
+    """Feed the GM6020 yaw at encoder ticks (and rotor rpm), tick, return its position."""
+    hw._clock_ns.advance_ms(1)
+    now = hw._clock_ns()
+    peer.send(can.Message(arbitration_id=0x205, data=dji.encode_feedback(ticks, rpm, 0, 30),
+                          is_extended_id=False))
+    yaw = hw.actuators['yaw']
+    assert wait_until(lambda: yaw.feedback is not None and yaw.feedback.stamp_ns >= now, TIMEOUT)
+    hw.tick()
+    frames(peer, 2)
+    return hw.actuators['yaw'].feedback.position
+
+
+def test_set_zero_makes_the_present_position_zero_and_returns_the_offset(rig):
+    hw, peer, _ = rig
+    fed(hw, peer)
+    hw.tick()
+    frames(peer, 3)
+    assert yaw_at(hw, peer, 3000) == pytest.approx(3000 / 8192 * math.tau)
+    zero = hw.set_zero('yaw', max_speed=0.05)
+    assert zero == pytest.approx(3000 / 8192 * math.tau)
+    assert yaw_at(hw, peer, 3000) == pytest.approx(0.0, abs=1e-12)
+    assert yaw_at(hw, peer, 3100) == pytest.approx(100 / 8192 * math.tau)
+    assert hw.actuators['yaw'].zero_offset == zero
+
+
+def test_a_zero_taken_after_whole_turns_reads_zero_after_a_restart(channel, clock):
+    hw = CanHardware(config(channel), clock_ns=clock, receive_in_loop=False)
+    peer = can.Bus(interface='virtual', channel=channel)
+    hw.open()
+    try:
+        yaw_at(hw, peer, 8000)
+        for ticks in (2000, 4000, 6000, 8000, 1000):  # on through 0: a turn and a bit
+            yaw_at(hw, peer, ticks)
+        zero = hw.set_zero('yaw', max_speed=0.05)
+        assert yaw_at(hw, peer, 1000) == pytest.approx(0.0, abs=1e-12)
+    finally:
+        hw.shutdown()
+    assert zero == pytest.approx(1000 / 8192 * math.tau)  # single-turn: what a restart reads
+    restarted = config(channel)
+    restarted['joints']['yaw']['zero_offset'] = zero
+    hw = CanHardware(restarted, clock_ns=clock, receive_in_loop=False)
+    hw.open()
+    try:
+        assert yaw_at(hw, peer, 1000) == pytest.approx(0.0, abs=1e-12)
+        assert yaw_at(hw, peer, 900) == pytest.approx(-100 / 8192 * math.tau)
+    finally:
+        hw.shutdown()
+        peer.shutdown()
+
+
+def test_set_zero_on_an_mit_motor_sends_its_set_zero_and_reads_from_zero_after(rig):
+    hw, peer, _ = rig
+    fed(hw, peer)
+    hw.tick()
+    frames(peer, 3)
+    assert hw.set_zero('arm', max_speed=0.05) == 0.0
+    hw.tick()
+    assert frames(peer, 3)[0x003] == mit.system_frame(SystemCommand.SET_ZERO)
+    fed(hw, peer)
+    assert hw.actuators['arm'].zero_offset == 0.0
+
+
+@pytest.mark.parametrize(
+    ('setup', 'joint', 'message'),
+    [
+        ('none', 'yaw', 'yaw is offline: no position to take as zero'),
+        ('fed', 'shoulder', "unknown joint 'shoulder'"),
+        ('fed', 'wheel', 'wheel: its encoder turns 19.2032 times per output turn'),
+        ('driven', 'yaw', 'yaw is driven: make the plugin that drives it PASSIVE first'),
+        ('moving', 'yaw', r'yaw is moving \(0.105 rad/s, at rest below 0.05\): hold it still'),
+    ],
+    ids=['offline', 'unknown', 'geared', 'driven', 'moving'],
+)
+def test_set_zero_refuses_and_says_why(rig, setup, joint, message):
+    hw, peer, _ = rig
+    if setup != 'none':
+        fed(hw, peer)
+        hw.tick()
+        frames(peer, 3)
+    if setup == 'driven':
+        hw.set_command('yaw', MODE_EFFORT, effort=0.1)
+        hw.tick()
+        frames(peer, 3)
+    if setup == 'moving':
+        yaw_at(hw, peer, 0, rpm=1)  # 1 rpm = 0.105 rad/s
+    with pytest.raises(CommandRejectedError, match=message):
+        hw.set_zero(joint, max_speed=0.05)
+    assert hw.actuators['yaw'].zero_offset == 0.0
 
 
 # --- bus error -> reopen -> zero until a fresh command ---

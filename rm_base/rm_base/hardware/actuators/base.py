@@ -256,6 +256,8 @@ class Actuator(abc.ABC):
         self._recovered_ns: int | None = None
         self._zero_since_recovery = False
         self._shutdown = False
+        # a new (zero_offset, turn shift) for the next frame (set_zero; one assignment)
+        self._pending_zero: tuple[float, float] | None = None
         # scheduler-thread state
         self._turn_shift = 0.0
         self._hold = HoldReason.NO_COMMAND
@@ -340,6 +342,10 @@ class Actuator(abc.ABC):
                     err,
                 )
             return True
+        pending = self._pending_zero
+        if pending is not None:
+            self._pending_zero = None
+            self.zero_offset, self._turn_shift = pending
         d = self.direction
         g = self.gear_ratio
         position = d * (angle / g - self.zero_offset)
@@ -405,6 +411,32 @@ class Actuator(abc.ABC):
             target.kd, now_ns,
         )
         self.commands_accepted += 1
+
+    def zero_here(self) -> float:
+        """Make the present position the joint's zero, from its next feedback frame on.
+
+        Returns:
+            The new ``zero_offset`` [rad] (what a calibration file keeps for a restart).
+
+        Raises:
+            CommandRejectedError: the family cannot (here: no angle at the output that a
+                restart would find again), or there is no feedback yet.
+        """
+        raise CommandRejectedError(
+            f'{self.name}: a {self.type_name} has no absolute angle at its output to zero'
+        )
+
+    def _zero_by_offset(self) -> float:
+        # For an absolute single-turn encoder at the output: the zero is where it reads now,
+        # as an angle in [0, 2pi), and the whole turns go so that the position reads 0.
+        fb = self._feedback
+        if fb is None:
+            raise CommandRejectedError(f'{self.name}: no feedback yet')
+        d = self.direction
+        output_angle = (fb.position - self._turn_shift) / d + self.zero_offset
+        zero = output_angle % _TAU
+        self._pending_zero = (zero, -_TAU * round(d * (output_angle - zero) / _TAU))
+        return zero
 
     def _rejection(self, reason: str) -> CommandRejectedError:
         """Count and log a rejected command; return the error to raise."""

@@ -217,6 +217,8 @@ class MitActuator(Actuator):
             self._system_pending = None
             self.system_frames_sent += 1
             data = self._system_data(pending)
+            if pending is SystemCommand.SET_ZERO:  # frames after this one read from 0
+                self._pending_zero = (0.0, 0.0)
         else:
             data = mit.pack_mit_command(self._fields, self.limits)
         return can.Message(arbitration_id=self.motor_id, data=data, is_extended_id=False)
@@ -233,6 +235,18 @@ class MitActuator(Actuator):
         command = SystemCommand(command)
         self._system_data(command)  # validates for this family
         self._system_pending = command
+
+    def zero_here(self) -> float:
+        """Make the present position the zero: the motor's own set-zero (SET_ZERO frame).
+
+        The motor keeps that zero itself (Damiao: in its flash), so the joint's
+        ``zero_offset`` becomes 0 from the first frame after it.
+
+        Raises:
+            ValueRangeError: the family has no set-zero command.
+        """
+        self.request_system_command(SystemCommand.SET_ZERO)
+        return 0.0
 
     def final_frames(self) -> list[can.Message]:
         """Frames to send after the final zero command at shutdown (DISABLE)."""

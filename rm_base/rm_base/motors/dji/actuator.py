@@ -23,7 +23,7 @@ from rm_base.config_schema import Schema, integer, number
 from rm_base.geometry.encoder import EncoderUnwrapper
 from rm_base.hardware.actuators.base import Actuator, Defaults, Feedback, JointCommand
 from rm_base.hardware.config import JointConfig, SafetyConfig
-from rm_base.hardware.errors import HardwareConfigError, ValueRangeError
+from rm_base.hardware.errors import CommandRejectedError, HardwareConfigError, ValueRangeError
 from rm_base.motors.dji import protocol as dji
 
 _RPM_TO_RAD_S = dji.RAD_PER_S_PER_RPM
@@ -111,6 +111,22 @@ class DjiActuator(Actuator):
 
     def _set_zero_output(self) -> None:
         self.command_raw = 0
+
+    def zero_here(self) -> float:
+        """Make the present position the zero (an offset; the ESC knows no zero).
+
+        Only at a direct drive (gear ratio 1, e.g. a GM6020): behind a gearbox the rotor's
+        single-turn encoder cannot tell after a restart which output angle it is at.
+
+        Raises:
+            CommandRejectedError: geared, or no feedback yet.
+        """
+        if self.gear_ratio != 1.0:
+            raise CommandRejectedError(
+                f'{self.name}: its encoder turns {self.gear_ratio:g} times per output turn, '
+                'so a zero would not hold across a restart'
+            )
+        return self._zero_by_offset()
 
 
 class M3508(DjiActuator):
