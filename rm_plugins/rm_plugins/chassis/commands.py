@@ -24,6 +24,7 @@ class ChassisMode(IntEnum):
     FOLLOW = 2  # translate in the source frame; the chassis turns to follow it
     TWIST = 3  # swing about the source heading while translating in the source frame
     GYRO = 4  # spin while translating in the source frame
+    POSITION = 5  # move by (move_x, move_y, move_yaw) and hold (rm_plugins.chassis.position)
 
 
 class FollowSource(Enum):
@@ -53,6 +54,8 @@ class ChassisRequest:
         power_limit: chassis power limit [W]; None if the message had <= 0 (configured).
         source: frame of FOLLOW/TWIST/GYRO.
         gear: the speed gear /vel_cmd is scaled by.
+        move: POSITION's (dx [m], dy [m], dyaw [rad]) from where the move starts.
+        move_id: a new value starts a new move.
     """
 
     mode: ChassisMode
@@ -60,6 +63,8 @@ class ChassisRequest:
     power_limit: float | None
     source: FollowSource
     gear: SpeedGear = SpeedGear.NORMAL
+    move: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    move_id: int = 0
 
 
 _SOURCES = {source.value: source for source in FollowSource}
@@ -96,9 +101,14 @@ def parse_chassis_cmd(msg: Any) -> ChassisRequest:
             f'accel (linear.x, linear.y, angular.z) and power_limit must be finite, got '
             f'{raw_accel} and {msg.power_limit}'
         )
+    move = (float(msg.move_x), float(msg.move_y), float(msg.move_yaw))
+    if not all(map(math.isfinite, move)):
+        raise InputRejectedError(f'move_x, move_y and move_yaw must be finite, got {move}')
     accel = tuple(float(a) if a > 0.0 else None for a in raw_accel)
     power_limit = float(msg.power_limit) if msg.power_limit > 0.0 else None
-    return ChassisRequest(mode, accel, power_limit, source, gear)  # type: ignore[arg-type]
+    return ChassisRequest(
+        mode, accel, power_limit, source, gear, move, int(msg.move_id)  # type: ignore[arg-type]
+    )
 
 
 def parse_vel_cmd(msg: Any) -> tuple[float, float, float]:

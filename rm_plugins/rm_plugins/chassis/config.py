@@ -30,6 +30,7 @@ from rm_base.plugin import ParameterError, PluginParams
 from rm_base.plugin.pid_params import loop_pid
 
 from rm_plugins.chassis.commands import SpeedGear
+from rm_plugins.chassis.position import DEFAULT_POSITION, PositionConfig
 
 # SRML's speed gears: (linear, angular) coefficients on /vel_cmd by default.
 _GEAR_DEFAULTS = {
@@ -86,6 +87,7 @@ class ChassisConfig:
         publish_tf: send odom -> base_frame on /tf and into the frame tree.
         publish_rate: rate of /chassis_state and /odom [Hz].
         gears: per speed gear, the (linear, angular) coefficients on /vel_cmd.
+        position: how POSITION moves.
     """
 
     kinematics: Kinematics
@@ -114,6 +116,7 @@ class ChassisConfig:
     gears: dict[SpeedGear, tuple[float, float]] = dataclasses.field(
         default_factory=lambda: dict.fromkeys(SpeedGear, (1.0, 1.0))
     )
+    position: PositionConfig = DEFAULT_POSITION
 
 
 
@@ -345,6 +348,24 @@ def read_config(p: PluginParams) -> ChassisConfig:
                               description='rate of /chassis_state and /odom', unit='Hz',
                               gt=0.0),
         gears=_gears(p),
+        position=_position(p),
+    )
+
+
+def _position(p: PluginParams) -> PositionConfig:
+    """POSITION mode (``position.*``)."""
+    g = p.group('position')
+    return PositionConfig(
+        max_speed=g.double('max_speed', DEFAULT_POSITION.max_speed, unit='m/s', gt=0.0,
+                           description='top translation speed of a POSITION move'),
+        max_rate=g.double('max_rate', DEFAULT_POSITION.max_rate, unit='rad/s', gt=0.0,
+                          description='top turn rate of a POSITION move'),
+        gain=g.double('gain', DEFAULT_POSITION.gain, unit='1/s', gt=0.0,
+                      description='speed per unit of remaining offset near the goal'),
+        tolerance=g.double('tolerance', DEFAULT_POSITION.tolerance, unit='m', gt=0.0,
+                           description='a POSITION move has arrived within this distance'),
+        yaw_tolerance=g.double('yaw_tolerance', DEFAULT_POSITION.yaw_tolerance, unit='rad', gt=0.0,
+                               description='and within this heading error'),
     )
 
 

@@ -1,4 +1,4 @@
-"""StandChassis: a mecanum/omni chassis with PASSIVE, RAW, FOLLOW, TWIST and GYRO states.
+"""StandChassis: a mecanum/omni chassis: PASSIVE, RAW, FOLLOW, TWIST, GYRO and POSITION states.
 
 Why one module: one state machine and the tick that runs it; kinematics, planner, odometry,
 power and config are modules of their own.
@@ -25,6 +25,9 @@ States (values = ChassisCmd mode constants), all decided in ``_decide``:
     PASSIVE: commanded; or no valid /chassis_cmd (watchdog); or a wheel (or, in a mode
         that follows the gimbal, the yaw joint) without fresh feedback. Wheels get MODE_OFF.
     RAW, FOLLOW, TWIST, GYRO: as commanded, see ``rm_base.control.chassis_modes``.
+    POSITION: move by ChassisCmd's (move_x, move_y, move_yaw) from the odometry pose where
+        a new move_id (or the mode) began, then hold there (``rm_plugins.chassis.position``);
+        /vel_cmd is not used, the reason says whether it has arrived.
 
 An invalid /chassis_cmd (unknown mode, follow source or speed gear, NaN) is rejected with a log line
 and changes nothing: the chassis keeps acting on the last valid command until that one is
@@ -90,6 +93,7 @@ from rm_plugins.chassis.motion import (
     held_frame,
 )
 from rm_plugins.chassis.odometry import Odometry
+from rm_plugins.chassis.position import Goal, goal_of, position_command
 from rm_plugins.chassis.referee_power import RefereePower
 
 _NS_PER_S = 1_000_000_000
@@ -110,6 +114,7 @@ _MOTION_MODES = {
     ChassisMode.FOLLOW: ChassisMotionMode.FOLLOW,
     ChassisMode.TWIST: ChassisMotionMode.TWIST,
     ChassisMode.GYRO: ChassisMotionMode.GYRO,
+    ChassisMode.POSITION: ChassisMotionMode.RAW,  # a velocity in odom toward the goal
 }
 
 # Odometry covariances (diagonal, x y z roll pitch yaw): planar, so z/roll/pitch are
@@ -187,6 +192,8 @@ class StandChassis(PluginBase):
         # Control: restarted from the measured motion when a motion state is entered.
         self._active = False
         self._held_heading: float | None = None
+        self._goal: Goal | None = None  # POSITION: the move's goal in odom
+        self._move_id = 0
         self._planner.reset()
 
     def update(self, now: Time, dt: float) -> None:
@@ -397,6 +404,7 @@ class StandChassis(PluginBase):
         if self._active:
             self._active = False
             self._held_heading = None
+            self._goal = None  # a move interrupted by PASSIVE is over
         count = len(self.config.wheel_joints)
         self._report.set_output(
             Twist2D(), [0.0] * count, [0.0] * count,
@@ -431,16 +439,22 @@ class StandChassis(PluginBase):
         request: ChassisRequest,
         speeds: list[float],
     ) -> None:
-        self.transition(decision.state, decision.reason)
+        if request.mode is ChassisMode.POSITION:
+            command, arrived = self._move(request)
+            where = 'arrived, holding' if arrived else 'moving to the goal'
+            self.transition(decision.state, f'{decision.reason}: {where}')
+        else:
+            self._goal = None  # entering POSITION again starts a new move
+            self.transition(decision.state, decision.reason)
+            vx, vy, wz = self._take_vel_cmd(now_ns)
+            linear, angular = self.config.gears[request.gear]
+            command = (vx * linear, vy * linear, wz * angular)
         if not self._active:
             # Take over from the measured motion (the chassis may still be rolling).
             self._planner.reset(self._odometry.twist)
             self._active = True
-        vx, vy, wz = self._take_vel_cmd(now_ns)
-        linear, angular = self.config.gears[request.gear]
-        command = (vx * linear, vy * linear, wz * angular)
         mode = _MOTION_MODES[request.mode]
-        if request.source is FollowSource.ODOM:
+        if request.source is FollowSource.ODOM or request.mode is ChassisMode.POSITION:
             self._held_heading = None
             frame: CommandFrame = ODOM_FRAME
             phi = wrap_to_pi(-self._odometry.pose.yaw)
@@ -486,6 +500,19 @@ class StandChassis(PluginBase):
         power_w = last.power_w if last is not None else self._idle_power(speeds)
         self._report.set_output(motion.twist, motion.wheel_targets, efforts, power_w, limit)
         self._report.speeds = speeds
+
+    def _move(self, request: ChassisRequest) -> tuple[tuple[float, float, float], bool]:
+        """POSITION: the odom velocity toward this move's goal, and whether it arrived."""
+        pose = self._odometry.pose
+        if self._goal is None or request.move_id != self._move_id:
+            self._goal = goal_of(pose.x, pose.y, pose.yaw, request.move)
+            self._move_id = request.move_id
+        cfg = self.config
+        linear = request.accel[0] or cfg.linear_limits.brake_acceleration
+        angular = request.accel[2] or cfg.angular_limits.brake_acceleration
+        return position_command(
+            (pose.x, pose.y, pose.yaw), self._goal, cfg.position, (linear, angular)
+        )
 
     # -- reports ------------------------------------------------------------------------
 

@@ -300,6 +300,10 @@ def test_yaml_is_in_field_order_like_ros2_topic_echo():
         'power_limit: 0.0\n'
         'follow_source: gimbal\n'
         'speed_gear: 0\n'
+        'move_x: 0.0\n'
+        'move_y: 0.0\n'
+        'move_yaw: 0.0\n'
+        'move_id: 0\n'
     )
 
 
@@ -321,7 +325,7 @@ def test_csv_lists_every_leaf_in_order():
     msg = ChassisCmd(mode=3, power_limit=80.0, follow_source='x')
     # header.stamp.sec, nanosec, frame_id, mode, accel (6 floats), power_limit, follow_source,
     # speed_gear
-    assert message_to_csv(msg) == '0,0,,3,0.0,0.0,0.0,0.0,0.0,0.0,80.0,x,0'
+    assert message_to_csv(msg) == '0,0,,3,0.0,0.0,0.0,0.0,0.0,0.0,80.0,x,0,0.0,0.0,0.0,0'
 
 
 RM_MSGS = [

@@ -40,7 +40,9 @@ def test_array_field_prints_as_a_list():
 
 
 def test_csv_is_one_line_per_message():
-    assert printed(ChassisCmd(mode=2), '--csv') == '0,0,,2,0.0,0.0,0.0,0.0,0.0,0.0,0.0,,0\n'
+    assert printed(ChassisCmd(mode=2), '--csv') == (
+        '0,0,,2,0.0,0.0,0.0,0.0,0.0,0.0,0.0,,0,0.0,0.0,0.0,0\n'
+    )
 
 
 def test_long_arrays_are_truncated_unless_full_length():

@@ -1,0 +1,57 @@
+"""POSITION mode in lockstep: the standard robot on rm_sim moves by (dx, dy, dyaw) and stops.
+
+Each move is given relative to where the robot stands when its move_id arrives (dx, dy
+along base_link's axes then, dyaw from its heading then); the simulated body must end
+within a few centimetres (odometry against ground truth) and the plugin say it arrived.
+The same command repeated at 50 Hz is one move; a new move_id starts the next one.
+"""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from support.lockstep import LockstepRobot
+
+from rm_msgs.msg import ChassisCmd
+
+pytestmark = [pytest.mark.ros]
+
+
+def move(dx: float, dy: float, dyaw: float, move_id: int) -> ChassisCmd:
+    cmd = ChassisCmd(mode=ChassisCmd.POSITION, move_id=move_id)
+    cmd.move_x, cmd.move_y, cmd.move_yaw = dx, dy, dyaw
+    return cmd
+
+
+def test_moves_end_where_they_were_asked_and_hold():
+    with LockstepRobot(plugins=('imu', 'gpio', 'chassis', 'gimbal')) as robot:
+        chassis, body = robot.plugin('chassis'), robot.world.body
+        robot.watch('/chassis_state')
+        robot.publish('/chassis_cmd', move(1.0, 0.5, math.pi / 2, 1), rate_hz=50)
+        robot.run(0.5)
+        assert chassis.state.name == 'POSITION'
+        assert chassis.reason == 'commanded POSITION: moving to the goal'
+        robot.run(3.5)
+        assert chassis.reason == 'commanded POSITION: arrived, holding'
+        assert (body.x, body.y) == pytest.approx((1.0, 0.5), abs=0.05)
+        assert body.yaw == pytest.approx(math.pi / 2, abs=0.03)
+        robot.run(1.0)  # the same move_id again and again: it stays there
+        assert (body.x, body.y) == pytest.approx((1.0, 0.5), abs=0.05)
+        # back 0.5 m along its own x (the world's y now) and turn back to 0
+        robot.publish('/chassis_cmd', move(-0.5, 0.0, -math.pi / 2, 2), rate_hz=50)
+        robot.run(4.0)
+        assert chassis.reason == 'commanded POSITION: arrived, holding'
+        assert (body.x, body.y) == pytest.approx((1.0, 0.0), abs=0.05)
+        assert body.yaw == pytest.approx(0.0, abs=0.03)
+        state = robot.latest('/chassis_state')
+        assert state.state == ChassisCmd.POSITION
+        assert max(abs(w) for w in state.wheel_speed) < 0.5  # stopped [rad/s]
+
+
+def test_a_move_with_a_nan_is_rejected_and_never_moves_the_robot():
+    with LockstepRobot(plugins=('imu', 'gpio', 'chassis', 'gimbal')) as robot:
+        robot.publish('/chassis_cmd', move(math.nan, 0.0, 0.0, 1), rate_hz=50)
+        robot.run(0.5)
+        assert robot.plugin('chassis').state.name == 'PASSIVE'
+        assert math.hypot(robot.world.body.x, robot.world.body.y) < 1e-3
