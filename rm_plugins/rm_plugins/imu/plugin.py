@@ -40,7 +40,7 @@ from diagnostic_msgs.msg import DiagnosticArray
 from rm_base.calibration import CalibrationError, CalibrationFile, finite_values
 from rm_base.hardware.device_clock import DeviceClock
 from rm_base.hardware.protocols.hipnuc import HipnucParser, ImuSample
-from rm_base.plugin import PluginBase
+from rm_base.plugin import PluginBase, PluginParams
 from sensor_msgs.msg import Imu
 from std_srvs.srv import Trigger
 
@@ -160,7 +160,7 @@ class Hi220(PluginBase):
             Trigger, f'~/{self.name}/calibrate_gyro', self._on_calibrate_gyro
         )
 
-    def _read_calibration(self, p) -> None:
+    def _read_calibration(self, p: PluginParams) -> None:
         c = p.group('calibration')
         path = c.string('file', '', description='where calibrate_gyro keeps the gyro bias; '
                         'empty: the bias lasts until the node stops')
