@@ -69,9 +69,15 @@ def test_the_remote_and_the_image_links_keyboard_become_commands_and_silence_sto
     assert h.state() is LinkState.STREAMING
     # the image link adds A (left) and a mouse moving left
     keys = ref.KeyboardMouse(-50, 0, 0, False, False, int(dbus.Key.A))
-    for _ in range(3):
-        link.write(ref.encode_frame(*ref.encode_status(keys, ref.ProtocolVersion.V2025)))
-    assert wait_until(lambda: h.vel[-1].linear.y == pytest.approx(2.0), WAIT)
+
+    def sent(frame):
+        # again until heard: pyserial flushes what came before it opened the link's port
+        link.write(frame)
+        return h.vel[-1].linear.y == pytest.approx(2.0)
+
+    assert wait_until(
+        lambda: sent(ref.encode_frame(*ref.encode_status(keys, ref.ProtocolVersion.V2025))), WAIT
+    )
     assert h.gimbal[-1].rate_yaw == pytest.approx(1.0)
     # a 2025+ A9 53 frame on the same link: CTRL (the SLOW gear) + F (GYRO)
     v1 = bytes.fromhex('A9 53 94 06 20 AF D8 A2 60 19 F9 FF 0F 00 00 00 01 20 02 DE 1C')

@@ -107,6 +107,8 @@ def test_reports_arrive_in_si_and_a_lost_link_is_a_state(rig):
 
 def test_a_layout_of_another_season_is_counted_not_published(rig):
     h, pty = rig
+    # pyserial flushes the input queue when it opens the port: write once it is open
+    assert wait_until(lambda: h.state() is LinkState.NO_DATA, WAIT)
     pty.write(F4 + F1)  # F4: the 16-byte 2024 power/heat, unknown to the 2026 protocol
     assert wait_until(lambda: h.received['game_status'], WAIT)
     assert wait_until(
