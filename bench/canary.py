@@ -4,7 +4,9 @@ Run beside the robot during a measuring window, it sleeps to absolute deadlines 
 as the CAN scheduler does but shares no GIL with anything, so its period error is what
 the operating system (other processes, CPU steal, timer slack) costs a 1 kHz thread at
 that moment. The scheduler's error minus the canary's is what the robot process itself
-(GIL hand-over between its threads) adds.
+(GIL hand-over between its threads) adds. It also counts the gaps between two of its wake-ups
+over 1.5 ms, as the wire measurement counts them between two wheel frames: the share the
+machine alone gives a 1 kHz sleeper in that window.
 
     python -m bench.canary <seconds>    # prints one '@@BENCH {json}' line
 """
@@ -19,12 +21,14 @@ from bench.protocol import reply
 from bench.scheduler_timing import tick_summary
 
 PERIOD_NS = 1_000_000
+GAP_NS = 1_500_000  # as bench.wire_check.GAP_S
 
 
 def run(seconds: float) -> dict:
     clock = time.perf_counter_ns
     errors = array.array('q')
-    ticks = skipped = 0
+    ticks = skipped = late_gaps = 0
+    last = None
     deadline = clock() + PERIOD_NS
     end = deadline + int(seconds * 1e9)
     while deadline < end:
@@ -33,13 +37,18 @@ def run(seconds: float) -> dict:
             time.sleep(delay / 1e9)
         start = clock()
         errors.append(start - deadline)
+        if last is not None and start - last > GAP_NS:
+            late_gaps += 1
+        last = start
         ticks += 1
         deadline += PERIOD_NS
         if start > deadline:  # as the scheduler: skip missed deadlines, no burst
             missed = (start - deadline) // PERIOD_NS + 1
             skipped += missed
             deadline += missed * PERIOD_NS
-    return tick_summary(errors, ticks=ticks, skipped=skipped)
+    out = tick_summary(errors, ticks=ticks, skipped=skipped)
+    out['late_gap_pct'] = 100.0 * late_gaps / (ticks - 1) if ticks > 1 else float('nan')
+    return out
 
 
 if __name__ == '__main__':

@@ -285,6 +285,8 @@ ROWS += (
         ('wire.rate', 'wheel group frames (0x200) per second',
          _get('frames_per_s'), ('>=', 995.0), None),
         ('wire.gaps', 'gaps between them over 1.5 ms [%]', _get('late_gap_pct'), ('<', 0.5), None),
+        ('wire.canary.gaps', '  same window, bare 1 kHz sleeper process: gaps over 1.5 ms [%]',
+         _get('canary_gap_pct'), None, None),
         ('wire.gap.max', '  longest gap [ms]', _get('max_gap_ms'), None, None),
         ('wire.delay.median', 'command -> first frame of the new mode, median [ms]',
          _get('delay_ms', 'median'), None, None),

@@ -8,7 +8,9 @@ wall clock as it sends it) gives:
 
 - the wheel group frame (0x200) rate and the share of gaps between two of them over 1.5 ms;
 - per switch, the first 0x200 frame that shows the new mode (PASSIVE: all four currents
-  zero; RAW: one not zero) and its delay after the switch was published.
+  zero; RAW: one not zero) and its delay after the switch was published;
+- beside them, the share of gaps over 1.5 ms between the wake-ups of a bare 1 kHz sleeper
+  process (:mod:`bench.canary`) over the same switches: what the machine alone gives.
 """
 
 from __future__ import annotations
@@ -48,6 +50,7 @@ def run_once(plan: WirePlan, log_dir: Path, tag: str) -> dict[str, Any]:
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.qos import qos_profile_sensor_data
 
+    from bench.robot import Child
     from rm_msgs.msg import ChassisCmd, ChassisState
 
     workdir = Path(tempfile.mkdtemp(prefix='rm_wire_', dir=log_dir))
@@ -66,6 +69,7 @@ def run_once(plan: WirePlan, log_dir: Path, tag: str) -> dict[str, Any]:
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
     switches: list[tuple[float, int]] = []
+    canary = None
     try:
         states: list[Any] = []
         node.create_subscription(ChassisState, '/chassis_state', states.append,
@@ -95,13 +99,19 @@ def run_once(plan: WirePlan, log_dir: Path, tag: str) -> dict[str, Any]:
                 next_switch += plan.period_s
                 next_publish = now
                 switches.append((time.time(), mode))
+                if canary is None:
+                    canary = Child('bench.canary', [str(plan.steps * plan.period_s)],
+                                   workdir / 'canary.log')
             if now >= next_publish:
                 cmd.header.stamp = node.get_clock().now().to_msg()
                 cmd_pub.publish(cmd)
                 vel_pub.publish(vel)
                 next_publish += 0.02
             executor.spin_once(timeout_sec=max(0.0, min(next_publish, next_switch) - now))
+        sleeper = canary.wait(30.0) if canary is not None else {}
     finally:
+        if canary is not None:
+            canary.close()
         executor.shutdown()
         node.destroy_node()
         context.try_shutdown()
@@ -113,7 +123,9 @@ def run_once(plan: WirePlan, log_dir: Path, tag: str) -> dict[str, Any]:
                 proc.kill()
                 proc.wait()
         out.close()
-    return analyse(workdir / 'can_can0.log', switches)
+    result = analyse(workdir / 'can_can0.log', switches)
+    result['canary_gap_pct'] = sleeper.get('late_gap_pct')
+    return result
 
 
 def analyse(log_path: Path, switches: list[tuple[float, int]]) -> dict[str, Any]:

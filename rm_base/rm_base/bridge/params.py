@@ -178,7 +178,8 @@ def settings_from_parameters(
             ``diagnostics_rate``, ``publish_frames``, ``log_file``, ``sim``,
             ``sim.timing`` (:class:`Timing` or its value), ``sim.seed``,
             ``scheduler.rate_hz``, ``scheduler.receive_in_loop``, ``scheduler.priority``,
-            ``scheduler.edge_priority``, ``calibration.max_speed`` and ``safety.*``;
+            ``scheduler.edge_priority``, ``scheduler.collect_garbage``,
+            ``calibration.max_speed`` and ``safety.*``;
             missing ones take their defaults.
         open_params: every other parameter by its flat name (rclpy's own excluded).
 
@@ -222,7 +223,7 @@ def settings_from_parameters(
             raise BridgeConfigError(
                 f'unknown parameter {name!r}; the bridge takes buses.*, joints.*, '
                 'scheduler.rate_hz, scheduler.receive_in_loop, scheduler.(edge_)priority, '
-                'safety.*, '
+                'scheduler.collect_garbage, safety.*, '
                 'publish_rate, '
                 'diagnostics_rate, publish_frames, log_file, sim, sim.timing, sim.seed, '
                 'sim.body.*, sim.imu.*, sim.referee.*, sim.remote.*, sim.image_link.*'
@@ -244,6 +245,7 @@ def settings_from_parameters(
         'rate_hz': typed.get('scheduler.rate_hz', 1000.0),
         'receive_in_loop': typed.get('scheduler.receive_in_loop', True),
         'priority': typed.get('scheduler.priority', LOOP_PRIORITY),
+        'collect_garbage': typed.get('scheduler.collect_garbage', True),
     }
     safety = {
         key: typed[f'safety.{key}']

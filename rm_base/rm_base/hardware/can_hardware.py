@@ -118,6 +118,7 @@ class CanHardware:
             clock_ns=clock_ns,
             flush=self._send_outgoing,
             priority=config.priority,
+            collect_garbage=config.collect_garbage,
         )
         self.power_limits: dict[str, PowerLimitStage] = {}
         self.receive_in_loop = (

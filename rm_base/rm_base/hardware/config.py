@@ -214,6 +214,9 @@ SCHEDULER_SCHEMA = Schema((
     integer('priority', 0, ge=0, le=99,
             description='real-time (SCHED_FIFO) priority of the loop thread; 0: normal '
             'scheduling; without the right to it the loop runs on, with a warning'),
+    boolean('collect_garbage', True,
+            description="the loop runs the interpreter's garbage collection after its "
+            'send, never mid-tick (false: CPython collects whenever it allocates)'),
 ))
 
 
@@ -252,6 +255,7 @@ class HardwareConfig:
     safety: SafetyConfig = SafetyConfig()
     receive_in_loop: bool = True
     priority: int = 0
+    collect_garbage: bool = True
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> HardwareConfig:
@@ -299,5 +303,5 @@ class HardwareConfig:
         safety = SafetyConfig.from_dict(data.get('safety'))
         return cls(
             buses, joints, scheduler['rate_hz'], safety, scheduler['receive_in_loop'],
-            scheduler['priority'],
+            scheduler['priority'], scheduler['collect_garbage'],
         )

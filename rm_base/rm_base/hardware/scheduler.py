@@ -1,5 +1,8 @@
 """The robot's one control loop: inputs, then update, then pack, then send.
 
+Why one module: the tick, the thread that paces it and the statistics both keep share the
+deadline and the per-component timings; apart, each would reach into the other's state.
+
 One dedicated thread sleeps to absolute deadlines on ``time.perf_counter_ns`` (1 kHz by
 default) and runs :meth:`Scheduler.tick`; tests call ``tick(now_ns)`` themselves, with no
 thread, for deterministic (lockstep) steps. Each tick runs, in this fixed order:
@@ -15,7 +18,9 @@ thread, for deterministic (lockstep) steps. Each tick runs, in this fixed order:
    its packer,
 6. the *after-tick callbacks* (:meth:`Scheduler.add_after_tick`): they only wake the
    threads of the ROS edge (the publishers), so that those run in the loop's idle time
-   instead of taking the interpreter from it in the middle of a tick.
+   instead of taking the interpreter from it in the middle of a tick,
+7. in the loop's thread, the interpreter's garbage collection when one is due
+   (:mod:`rm_base.hardware.garbage`): never in the middle of a tick.
 
 A tick that ends after the next deadline is an overrun (a missed deadline): the next tick
 then starts at once, late, if its period has not passed yet (as a firmware loop on
@@ -38,6 +43,7 @@ from typing import Protocol
 
 import can
 
+from rm_base.hardware import garbage
 from rm_base.hardware.errors import HardwareConfigError
 from rm_base.hardware.timing import (
     HISTOGRAM_EDGES_US,
@@ -78,6 +84,8 @@ class Stage(Protocol):
 
 #: Names of the loop's own components in :meth:`Scheduler.component_stats`.
 ACTUATORS, PACK, SEND = 'actuators', 'pack', 'send'
+#: The garbage collections the loop thread ran after its ticks (not part of a tick).
+GC = 'gc'
 
 
 class Scheduler:
@@ -97,6 +105,7 @@ class Scheduler:
         flush: Callable[[], object] | None = None,
         priority: int = 0,
         set_priority: Callable[[int], None] | None = None,
+        collect_garbage: bool = True,
     ) -> None:
         """Create a stopped scheduler.
 
@@ -119,6 +128,9 @@ class Scheduler:
                 normal scheduling. Without the right to it the loop runs on, with one
                 warning.
             set_priority: applies the priority to the calling thread (tests replace it).
+            collect_garbage: while the thread runs, the process's garbage collection is
+                the loop's, after its ticks (:mod:`rm_base.hardware.garbage`); False
+                leaves it to the interpreter.
 
         Raises:
             HardwareConfigError: rate_hz not positive, priority outside 0-99.
@@ -137,9 +149,10 @@ class Scheduler:
         self._report_period_ns = round(report_period_s * 1e9)
         self._thread_name = thread_name
         self._flush = flush
+        self._collect_garbage = collect_garbage
         self._lateness = DurationHistogram()
         self._durations: dict[str, DurationHistogram] = {}
-        for name in (ACTUATORS, PACK, SEND):
+        for name in (ACTUATORS, PACK, SEND, GC):
             self._durations[name] = DurationHistogram()
         self.period_ns = round(1e9 / rate_hz)
         self._period_s = self.period_ns / 1e9
@@ -174,7 +187,7 @@ class Scheduler:
         Raises:
             HardwareConfigError: a component of that name exists already.
         """
-        names = {s.name for s in self._inputs + self._outputs} | {ACTUATORS, PACK, SEND}
+        names = {s.name for s in self._inputs + self._outputs} | {ACTUATORS, PACK, SEND, GC}
         if stage.name in names:
             raise HardwareConfigError(f'the loop has a component named {stage.name!r} already')
         self._durations.setdefault(stage.name, DurationHistogram())
@@ -300,6 +313,8 @@ class Scheduler:
         period = self.period_ns
         deadline = clock()
         next_report = deadline + self._report_period_ns
+        gc_time = self._durations[GC]
+        holder = garbage.take_over(1e9 / period) if self._collect_garbage else None
         try:
             while not self._stop.is_set():
                 start = clock()
@@ -317,6 +332,10 @@ class Scheduler:
                         _log.error('scheduler stopped after an error')
                         break
                 self._tick_deadline_ns = None
+                if holder is not None:
+                    t0 = time.perf_counter_ns()
+                    if garbage.collect_if_due(holder) is not None:
+                        gc_time.record(time.perf_counter_ns() - t0)
                 end = clock()
                 self._max_tick_ns = max(self._max_tick_ns, end - start)
                 deadline += period
@@ -331,6 +350,8 @@ class Scheduler:
                 if delay_ns > 0:
                     self._sleep(delay_ns / 1e9)
         finally:
+            if holder is not None:
+                garbage.give_back(holder)
             if self._final is not None:
                 try:
                     self._final()
@@ -361,7 +382,7 @@ class Scheduler:
     def component_stats(self) -> tuple[tuple[str, DurationSummary], ...]:
         """Duration of each component since start, in loop order."""
         order = [s.name for s in self._inputs] + [ACTUATORS]
-        order += [s.name for s in self._outputs] + [PACK, SEND]
+        order += [s.name for s in self._outputs] + [PACK, SEND, GC]
         return tuple((name, self._durations[name].total()) for name in order)
 
     def _record_start(self, error_ns: int) -> None:

@@ -72,6 +72,14 @@ def test_the_loop_priority_reaches_the_hardware_config_and_is_checked():
         settings_from_parameters({'scheduler.priority': 100}, YAW)
 
 
+def test_the_loop_collects_garbage_unless_told_not_to():
+    assert settings_from_parameters({}, YAW).hardware_config.collect_garbage is True
+    settings = settings_from_parameters({'scheduler.collect_garbage': False}, YAW)
+    assert settings.hardware_config.collect_garbage is False
+    with pytest.raises(HardwareConfigError, match=r'scheduler\.collect_garbage'):
+        settings_from_parameters({'scheduler.collect_garbage': 'no'}, YAW)
+
+
 def test_when_a_hardware_key_is_missing_expect_the_hardware_error_naming_it():
     params = {k: v for k, v in YAW.items() if k != 'joints.yaw.bus'}
     with pytest.raises(HardwareConfigError, match=r'joints\.yaw\.bus is required'):

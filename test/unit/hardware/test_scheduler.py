@@ -1,5 +1,6 @@
 """Scheduler: update all, then pack all, then send; timing statistics; on_error; thread."""
 
+import gc
 import threading
 
 import can
@@ -223,7 +224,9 @@ def test_every_component_is_timed_and_an_idle_stage_is_not_counted():
     for i in range(3):
         scheduler.tick(T0 + i * MS)
     counts = {name: s.count for name, s in scheduler.component_stats()}
-    assert counts == {'plugin busy': 3, 'plugin idle': 0, 'actuators': 3, 'pack': 3, 'send': 3}
+    assert counts == {
+        'plugin busy': 3, 'plugin idle': 0, 'actuators': 3, 'pack': 3, 'send': 3, 'gc': 0,
+    }  # a stepped tick leaves garbage collection to the interpreter
     assert [name for name, _ in scheduler.stats().components] == list(counts)
 
 
@@ -305,3 +308,33 @@ def test_time_left_is_known_only_inside_a_tick_of_the_loop_thread():
     scheduler.stop()
     assert all(left is not None and left <= 1_000_000 for left in seen[1:])
     assert scheduler.time_left_ns() is None
+
+
+def test_while_the_thread_runs_the_loop_collects_garbage_after_its_ticks():
+    class Cycles:
+        # each tick leaves reference cycles behind: only a collection frees them
+        name = 'cycles'
+
+        def __call__(self, now_ns, dt):
+            for _ in range(200):
+                a = []
+                a.append(a)
+            return True
+
+    assert gc.isenabled()
+    scheduler = Scheduler([], [], rate_hz=1000.0)
+    scheduler.add_stage(Cycles())
+    scheduler.start()
+    assert wait_until(lambda: not gc.isenabled(), timeout=10.0)  # the loop's, not CPython's
+    assert wait_until(lambda: dict(scheduler.component_stats())['gc'].count >= 3, timeout=10.0)
+    scheduler.stop()
+    assert gc.isenabled()  # given back
+
+
+def test_a_loop_told_not_to_leaves_garbage_collection_to_the_interpreter():
+    scheduler = Scheduler([], [], rate_hz=1000.0, collect_garbage=False)
+    scheduler.start()
+    assert wait_until(lambda: scheduler.stats().ticks >= 20, timeout=10.0)
+    assert gc.isenabled()
+    scheduler.stop()
+    assert dict(scheduler.component_stats())['gc'].count == 0
