@@ -33,6 +33,7 @@ from rm_base.control.power_limit import (
     power_limit_scale,
 )
 from rm_base.control.ramp import RampLimiter, RampLimits, ramp_step
+from rm_base.control.spin_heading import SpinHeadingLoop, SpinHeadingParams
 from rm_base.control.tracking_differentiator import TdParams, TrackingDifferentiator, fhan
 
 __all__ = [
@@ -59,6 +60,8 @@ __all__ = [
     'PowerLimitResult',
     'RampLimiter',
     'RampLimits',
+    'SpinHeadingLoop',
+    'SpinHeadingParams',
     'TdParams',
     'TrackingDifferentiator',
     'TwistParams',

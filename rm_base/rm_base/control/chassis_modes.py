@@ -20,7 +20,9 @@ One controller, :class:`ChassisModeController`, decides for every mode in one me
   target ``-amplitude * f(t)``); the wave's rate is fed forward too.
 - **GYRO**: the chassis spins at a constant rate (optionally slower while translating
   fast, so the wheels keep headroom for the translation) and the gimbal-frame translation
-  is rotated into the spinning chassis frame.
+  is rotated into the spinning chassis frame. The closed heading loop that keeps the
+  spin what was asked (``GyroParams.heading``) runs after the spin's ramp
+  (:mod:`rm_base.control.spin_heading`, used by the chassis plugin's planner).
 
 Rotating the translation: the command is applied a little later (actuation latency) and
 then held for a control period while phi keeps changing, so it is rotated by the angle
@@ -41,6 +43,7 @@ from enum import Enum
 
 from rm_base.control._validation import require_non_negative, require_positive, require_real
 from rm_base.control.pid_form import PidConfig, build_pid
+from rm_base.control.spin_heading import OPEN_LOOP, SpinHeadingParams
 from rm_base.errors import ConfigError, InputRejectedError
 from rm_base.geometry.kinematics import Twist2D, body_to_world_twist
 
@@ -149,11 +152,13 @@ class GyroParams:
             translating_speed [rad/s], >= 0; linear in between. None: no reduction.
         translating_speed: Translation speed at which the spin has fallen to
             translating_spin_rate [m/s], > 0.
+        heading: the closed heading loop while spinning (gain 0: open loop).
     """
 
     spin_rate: float
     translating_spin_rate: float | None = None
     translating_speed: float = 1.0
+    heading: SpinHeadingParams = OPEN_LOOP
 
     def __post_init__(self) -> None:
         owner = type(self).__name__
@@ -172,6 +177,8 @@ class GyroParams:
             'translating_speed',
             require_positive(owner, 'translating_speed', self.translating_speed),
         )
+        if not isinstance(self.heading, SpinHeadingParams):
+            raise ConfigError(f'{owner}.heading must be a SpinHeadingParams, got {self.heading!r}')
 
     def spin_at(self, speed: float) -> float:
         """Return the spin rate wz [rad/s] while translating at speed [m/s] (>= 0)."""

@@ -21,6 +21,7 @@ from rm_base.control import (
     GyroParams,
     PidGains,
     RampLimits,
+    SpinHeadingParams,
     TwistParams,
     TwistWaveform,
 )
@@ -282,6 +283,15 @@ def read_config(p: PluginParams) -> ChassisConfig:
         p.double('gyro.translating_speed', 1.0,
                  description='translation speed at which GYRO spins at translating_spin_rate',
                  unit='m/s', gt=0.0),
+        SpinHeadingParams(
+            p.double('gyro.heading.gain', 5.0,
+                     description='GYRO heading loop: spin-rate correction per rad the '
+                     'odometry heading strays from the spin asked for; 0: open loop',
+                     unit='1/s', ge=0.0),
+            p.double('gyro.heading.max_error', 0.5,
+                     description='GYRO heading loop: largest heading error it acts on '
+                     '(the correction is at most gain * max_error)', unit='rad', gt=0.0),
+        ),
     )
     modes = ChassisModeParams(
         follow, twist, gyro,

@@ -11,7 +11,9 @@ One step of :class:`MotionPlanner`:
 2. ``rm_base.control.ChassisModeController`` turns the ramped translation into the
    chassis-frame twist of the mode (FOLLOW/TWIST PID, GYRO spin, rotation by the yaw
    joint angle); in RAW the commanded wz passes through.
-3. wz is ramp-limited (its own axis; spin-up in GYRO, a FOLLOW step).
+3. wz is ramp-limited (its own axis; spin-up in GYRO, a FOLLOW step). In GYRO the closed
+   heading loop (``rm_base.control.SpinHeadingLoop``) then corrects the ramped spin by how
+   far the measured heading strays from the one the ramped spin asked for.
 4. Inverse kinematics gives the wheel speeds; ``rm_base.geometry.desaturate_speeds`` scales
    them all by one factor k <= 1 so none exceeds the maximum, keeping the direction of motion.
    The ramps' state is scaled by k too, so a command beyond reach does not wind them up
@@ -36,6 +38,7 @@ from rm_base.control import (
     ChassisMotionMode,
     RampLimiter,
     RampLimits,
+    SpinHeadingLoop,
 )
 from rm_base.errors import InputRejectedError
 from rm_base.geometry import (
@@ -128,6 +131,7 @@ class MotionPlanner:
     ) -> None:
         self._kinematics = kinematics
         self._modes = ChassisModeController(mode_params)
+        self._spin_heading = SpinHeadingLoop(mode_params.gyro.heading)
         self._defaults = (linear_limits, linear_limits, angular_limits)
         self._max_wheel_speed = max_wheel_speed
         self._accel: tuple[float | None, ...] = (None, None, None)
@@ -141,6 +145,11 @@ class MotionPlanner:
         """The motion-mode controller (its target yaw joint angle, for reports)."""
         return self._modes
 
+    @property
+    def spin_heading_error(self) -> float:
+        """GYRO: the heading loop's last error [rad] (0 outside GYRO)."""
+        return self._spin_heading.error
+
     def reset(self, measured: Twist2D | None = None) -> None:
         """Forget ramps, PIDs and frame; restart the ramps from measured (chassis frame).
 
@@ -149,6 +158,7 @@ class MotionPlanner:
         The frame is unknown after a reset, so the first update re-expresses it.
         """
         self._modes.reset()
+        self._spin_heading.reset()
         twist = Twist2D() if measured is None else Twist2D(*measured)
         self._chassis_linear = (twist.vx, twist.vy)
         self._linear.reset((0.0, 0.0))
@@ -166,6 +176,7 @@ class MotionPlanner:
         yaw_joint: float = 0.0,
         yaw_joint_rate: float = 0.0,
         gimbal_yaw_rate: float = 0.0,
+        heading: float | None = None,
     ) -> MotionOutput:
         """One control step.
 
@@ -182,6 +193,8 @@ class MotionPlanner:
             yaw_joint_rate: its measured rate [rad/s].
             gimbal_yaw_rate: heading rate of the command frame in the world [rad/s], fed
                 forward in FOLLOW/TWIST (0 if unknown).
+            heading: the chassis' measured heading in odom [rad], for GYRO's heading loop;
+                None: the spin runs open loop.
 
         Returns:
             Twist after the limits, wheel targets and the desaturation factor.
@@ -216,12 +229,17 @@ class MotionPlanner:
                 gimbal_yaw_rate=gimbal_yaw_rate, yaw_joint_rate=yaw_joint_rate,
             )
         (wz,) = self._angular.update((twist.wz,), dt)
-        targets = self._kinematics.wheel_speeds((twist.vx, twist.vy, wz))
+        turn = wz
+        if mode is ChassisMotionMode.GYRO and heading is not None:
+            turn = self._spin_heading.update(wz, heading, dt)
+        else:
+            self._spin_heading.reset()
+        targets = self._kinematics.wheel_speeds((twist.vx, twist.vy, turn))
         limited, k = desaturate_speeds(targets, self._max_wheel_speed)
         if k < 1.0:
             self._linear.reset((k * vx, k * vy))
             self._angular.reset((k * wz,))
-        out = Twist2D(k * twist.vx, k * twist.vy, k * wz)
+        out = Twist2D(k * twist.vx, k * twist.vy, k * turn)
         self._chassis_linear = (out.vx, out.vy)
         return MotionOutput(out, limited, k)
 

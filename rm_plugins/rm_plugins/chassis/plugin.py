@@ -54,6 +54,9 @@ plugin stalls, the bridge's own command timeout (100 ms) zeroes the wheels.
 Odometry (``odometry``) counts the wheels' angle changes, so late ticks lose no distance;
 its yaw comes from the IMU when one is configured and fresh (minus the yaw joint angle
 when it sits on the gimbal), from the wheels otherwise.
+
+GYRO's spin is closed on that yaw (``gyro.heading.*``, ``rm_base.control.spin_heading``):
+a wheel that drags or slips does not slow the spin, the other wheels are asked for more.
 """
 
 from __future__ import annotations
@@ -486,6 +489,7 @@ class StandChassis(PluginBase):
         motion = self._planner.update(
             mode, frame, command, dt, accel=request.accel,
             yaw_joint=phi, yaw_joint_rate=phi_rate, gimbal_yaw_rate=gimbal_rate,
+            heading=self._odometry.pose.yaw,
         )
         limit = self._power_limit(now_ns, request)
         joints = self.config.wheel_joints

@@ -10,6 +10,7 @@ from rm_base.control import (
     GyroParams,
     PidGains,
     RampLimits,
+    SpinHeadingParams,
     TwistParams,
 )
 from rm_base.geometry import Twist2D, WheelKinematics, mecanum_wheels
@@ -129,6 +130,33 @@ def test_when_gyro_expect_the_spin_up_on_the_angular_ramp():
     assert out.twist.wz == pytest.approx(3.0)  # 10 rad/s^2 for 0.3 s
     out = run(p, GYRO, (0.0, 0.0, 0.0), 100, frame=GIMBAL_FRAME)
     assert out.twist.wz == pytest.approx(6.0)
+
+
+def closed_loop_planner():
+    modes = ChassisModeParams(
+        MODES.follow, MODES.twist, GyroParams(6.0, heading=SpinHeadingParams(5.0, 0.5))
+    )
+    return MotionPlanner(KINEMATICS, modes, LINEAR, ANGULAR, 100.0)
+
+
+def test_when_gyro_with_a_heading_expect_the_spin_corrected_by_its_lag():
+    p = closed_loop_planner()
+    run(p, GYRO, (0.0, 0.0, 0.0), 100, frame=GIMBAL_FRAME, heading=0.0)  # held still
+    out = p.update(GYRO, GIMBAL_FRAME, (0.0, 0.0, 0.0), DT, heading=0.0)
+    assert p.spin_heading_error == pytest.approx(0.5)  # held to max_error
+    assert out.twist.wz == pytest.approx(6.0 + 5.0 * 0.5)  # ramped spin plus the correction
+    assert out.wheel_targets == pytest.approx(KINEMATICS.wheel_speeds((0.0, 0.0, 8.5)))
+    # without a heading the spin is open loop, and the loop starts again when one comes
+    assert p.update(GYRO, GIMBAL_FRAME, (0.0, 0.0, 0.0), DT).twist.wz == pytest.approx(6.0)
+    assert p.update(GYRO, GIMBAL_FRAME, (0.0, 0.0, 0.0), DT, heading=1.0).twist.wz == 6.0
+
+
+def test_when_not_gyro_expect_no_heading_correction_and_the_loop_forgotten():
+    p = closed_loop_planner()
+    run(p, GYRO, (0.0, 0.0, 0.0), 100, frame=GIMBAL_FRAME, heading=0.0)
+    out = p.update(RAW, BASE_LINK_FRAME, (0.0, 0.0, 1.0), DT, heading=0.0)
+    assert p.spin_heading_error == 0.0
+    assert out.twist.wz < 6.0  # RAW's 1 rad/s, braking on the ramp, with nothing added
 
 
 def test_when_reset_from_a_rolling_chassis_expect_the_ramps_to_start_there():
