@@ -1,4 +1,4 @@
-"""Geometry: angles, encoder, rotations, transforms, wheel kinematics, ballistics, aiming.
+"""Geometry: angles, encoders, rotations, transforms, kinematics, ballistics, aiming.
 
 No ROS, no I/O, no threads. SI units and REP 103 frames (x forward, y left, z up);
 quaternions in ROS order (x, y, z, w). Bad runtime input raises
@@ -46,6 +46,13 @@ from rm_base.geometry.rotations import (
     rpy_from_quaternion,
     yaw_from_quaternion,
 )
+from rm_base.geometry.swerve import (
+    ModuleState,
+    SwerveKinematics,
+    SwerveModule,
+    nearest_module_state,
+    square_modules,
+)
 from rm_base.geometry.transforms import SE2, SE3
 
 __all__ = [
@@ -59,8 +66,11 @@ __all__ = [
     'BallisticSolution',
     'EncoderUnwrapper',
     'GimbalMount',
+    'ModuleState',
     'ProjectileModel',
     'Quaternion',
+    'SwerveKinematics',
+    'SwerveModule',
     'Twist2D',
     'Wheel',
     'WheelKinematics',
@@ -70,6 +80,7 @@ __all__ = [
     'desaturate',
     'desaturate_speeds',
     'mecanum_wheels',
+    'nearest_module_state',
     'normalize_quaternion',
     'omni_wheels',
     'pitch_axis_in_world',
@@ -84,6 +95,7 @@ __all__ = [
     'rpy_from_quaternion',
     'shortest_angular_distance',
     'solve_ballistic',
+    'square_modules',
     'trajectory_height',
     'world_to_body_twist',
     'wrap_to_2pi',

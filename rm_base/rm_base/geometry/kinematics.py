@@ -73,7 +73,8 @@ class Twist2D(NamedTuple):
     wz: float = 0.0
 
 
-def _finite(owner: str, name: str, value: float) -> float:
+def finite_config_value(owner: str, name: str, value: float) -> float:
+    """Return value as a float; ConfigError naming owner.name if it is not finite."""
     if isinstance(value, bool) or not isinstance(value, Real) or not math.isfinite(value):
         raise ConfigError(f'{owner}.{name} must be a finite number, got {value!r}')
     return float(value)
@@ -103,7 +104,7 @@ class Wheel:
     def __post_init__(self) -> None:
         owner = type(self).__name__
         for name in ('x', 'y', 'radius', 'rolling_direction', 'roller_angle'):
-            object.__setattr__(self, name, _finite(owner, name, getattr(self, name)))
+            object.__setattr__(self, name, finite_config_value(owner, name, getattr(self, name)))
         if self.radius <= 0.0:
             raise ConfigError(f'{owner}.radius must be > 0 m, got {self.radius!r}')
         if abs(math.cos(self.roller_angle)) < 1e-6:
@@ -247,7 +248,7 @@ def mecanum_wheels(
         ConfigError: If a dimension is not finite and > 0 or a sign is not ±1.
     """
     for name, value in (('wheelbase', wheelbase), ('track', track)):
-        if not _finite('mecanum_wheels', name, value) > 0.0:
+        if not finite_config_value('mecanum_wheels', name, value) > 0.0:
             raise ConfigError(f'mecanum_wheels.{name} must be > 0 m, got {value!r}')
     signs = tuple(roller_signs)
     if len(signs) != 4 or any(sign not in (1, -1) for sign in signs):
@@ -277,11 +278,11 @@ def omni_wheels(
     Raises:
         ConfigError: If a value is not finite, or centre_distance is not > 0.
     """
-    if not _finite('omni_wheels', 'centre_distance', centre_distance) > 0.0:
+    if not finite_config_value('omni_wheels', 'centre_distance', centre_distance) > 0.0:
         raise ConfigError(f'omni_wheels.centre_distance must be > 0 m, got {centre_distance!r}')
     wheels = []
     for raw_angle in mounting_angles:
-        angle = _finite('omni_wheels', 'mounting_angles', raw_angle)
+        angle = finite_config_value('omni_wheels', 'mounting_angles', raw_angle)
         wheels.append(
             Wheel(
                 centre_distance * math.cos(angle),
