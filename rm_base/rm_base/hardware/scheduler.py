@@ -1,7 +1,7 @@
 """The robot's one control loop: inputs, then update, then pack, then send.
 
-Why one module: the tick, the thread that paces it and the statistics both keep share the
-deadline and the per-component timings; apart, each would reach into the other's state.
+Why one module: the tick, the thread that paces it and the statistics they keep share the
+deadline and the per-component timings; apart, each would reach into the others' state.
 
 One dedicated thread sleeps to absolute deadlines on ``time.perf_counter_ns`` (1 kHz by
 default) and runs :meth:`Scheduler.tick`; tests call ``tick(now_ns)`` themselves, with no
@@ -311,10 +311,11 @@ class Scheduler:
                 )
         clock = self._clock_ns
         period = self.period_ns
+        gc_time = self._durations[GC]
+        # before the first deadline: taking over collects once, which takes a while
+        holder = garbage.take_over(1e9 / period) if self._collect_garbage else None
         deadline = clock()
         next_report = deadline + self._report_period_ns
-        gc_time = self._durations[GC]
-        holder = garbage.take_over(1e9 / period) if self._collect_garbage else None
         try:
             while not self._stop.is_set():
                 start = clock()
