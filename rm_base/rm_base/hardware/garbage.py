@@ -101,9 +101,7 @@ def collect_if_due(holder: Holder) -> int | None:
     """
     if not holder.collects:
         return None
-    c0, c1, c2 = gc.get_count()
-    t0, t1, t2 = gc.get_threshold()
-    generation = due_generation((c0, c1, c2), (t0, t1, t2))
+    generation = due_generation(gc.get_count(), gc.get_threshold())
     if generation is not None:
         gc.collect(generation)
     return generation
