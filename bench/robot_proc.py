@@ -264,14 +264,16 @@ class Robot:
         frames1 = self._frame_counts()
         elapsed = facts.elapsed_s
         per_thread = thread_cpu_percent(threads0, threads1, elapsed)
-        loops: dict[str, tuple[float, int]] = {}
+        # per loop: nominal rate, ticks, and the window they were counted in [s]
+        loops: dict[str, tuple[float, int, float]] = {}
         feedback_hz: dict[str, float] = {}
         if hw is not None:
-            loops['can-scheduler'] = (hw.config.rate_hz, sched['ticks'])
+            loops['can-scheduler'] = (hw.config.rate_hz, sched['ticks'], sched['elapsed_s'])
         if world is not None:
             loops['rm_sim-physics'] = (
                 1e9 / world.period_ns,
                 (world.time_ns - sim_time0) // world.period_ns,
+                elapsed,
             )
             feedback_hz = {
                 bus: sum(1000.0 for a in hw.actuators.values() if a.bus_name == bus)
@@ -279,7 +281,7 @@ class Robot:
             }  # every simulated DJI motor answers at 1 kHz
         for n in plugins:
             task = host.task(n)
-            loops[f'plugin:{n}'] = (task.plugin.rate, task.ticks - plugin_ticks0[n])
+            loops[f'plugin:{n}'] = (task.plugin.rate, task.ticks - plugin_ticks0[n], elapsed)
         process_pct = (
             100.0 * ((ru1.ru_utime - ru0.ru_utime) + (ru1.ru_stime - ru0.ru_stime)) / elapsed
         )
@@ -289,7 +291,7 @@ class Robot:
             'window': facts.as_dict(),
             'threads': {k: round(v, 3) for k, v in sorted(per_thread.items())},
             'groups': {k: round(v, 3) for k, v in group_percent(per_thread).items()},
-            'loops': loop_costs(loops, per_thread, elapsed),
+            'loops': loop_costs(loops, per_thread),
             'projected': project(per_thread, loops, frames0, frames1, feedback_hz, elapsed),
             'process_pct': round(process_pct, 3),
             'scheduler': sched,
@@ -385,16 +387,22 @@ class Robot:
 
 
 def loop_costs(
-    loops: dict[str, tuple[float, int]], per_thread: dict[str, float], elapsed: float
+    loops: dict[str, tuple[float, int, float]], per_thread: dict[str, float]
 ) -> dict[str, Any]:
-    """Per periodic thread: nominal and achieved rate, CPU per tick, CPU at full rate."""
+    """Per periodic thread: nominal and achieved rate, CPU per tick, CPU at full rate.
+
+    Each loop's ticks count over their own window (the scheduler's recorder starts after
+    the CPU snapshot and stops before the next one): the achieved rate is ticks over that
+    window, and the CPU per tick is the thread's CPU rate over the achieved rate.
+    """
     out = {}
-    for thread, (rate_hz, ticks) in loops.items():
+    for thread, (rate_hz, ticks, seconds) in loops.items():
         cpu = per_thread.get(thread, 0.0)
-        us_per_tick = 1e4 * cpu * elapsed / ticks if ticks else float('nan')
+        achieved_hz = ticks / seconds if seconds > 0 else 0.0
+        us_per_tick = 1e4 * cpu / achieved_hz if achieved_hz > 0 else float('nan')
         out[thread] = {
             'rate_hz': rate_hz,
-            'achieved_hz': ticks / elapsed,
+            'achieved_hz': achieved_hz,
             'cpu_pct': cpu,
             'us_per_tick': us_per_tick,
             'projected_pct': us_per_tick * rate_hz / 1e4,
@@ -404,7 +412,7 @@ def loop_costs(
 
 def project(
     per_thread: dict[str, float],
-    loops: dict[str, tuple[float, int]],
+    loops: dict[str, tuple[float, int, float]],
     frames0: dict[str, tuple[int, int]],
     frames1: dict[str, tuple[int, int]],
     feedback_hz: dict[str, float],
@@ -421,7 +429,7 @@ def project(
     from bench.cpu import group_percent
 
     scaled = dict(per_thread)
-    costs = loop_costs(loops, per_thread, elapsed)
+    costs = loop_costs(loops, per_thread)
     for thread, cost in costs.items():
         if cost['achieved_hz'] > 0:
             scaled[thread] = cost['projected_pct']

@@ -34,6 +34,7 @@ class TickRecorder:
         self.errors_ns = array.array('q')
         self.ticks_ns = array.array('q')
         self._stats0 = None
+        self._t0_ns = 0
 
     def start(self) -> None:
         """Clear and start recording (hooks the instance)."""
@@ -59,9 +60,17 @@ class TickRecorder:
         self._stats0 = self._scheduler.stats()
         self._scheduler._record_start = record
         self._scheduler.tick = timed_tick
+        self._t0_ns = clock()
 
     def stop(self) -> dict[str, Any]:
-        """Stop recording (unhook) and return :func:`tick_summary` of the window."""
+        """Stop recording (unhook) and return :func:`tick_summary` of the window.
+
+        Besides the summary: ``elapsed_s``, the recorder's own window, and ``achieved_hz``,
+        the ticks counted in it over its length. A window measured around it (the CPU
+        snapshots) is longer by the time its snapshots take, and ticks over that would
+        come out short of the loop's real rate.
+        """
+        elapsed_ns = time.perf_counter_ns() - self._t0_ns
         self._scheduler.__dict__.pop('_record_start', None)
         self._scheduler.__dict__.pop('tick', None)
         stats1 = self._scheduler.stats()
@@ -71,6 +80,8 @@ class TickRecorder:
         overruns = stats1.overruns - s0.overruns
         out = tick_summary(self.errors_ns, ticks=ticks, skipped=skipped, overruns=overruns)
         out['tick_us'] = summary(t / 1e3 for t in self.ticks_ns)
+        out['elapsed_s'] = elapsed_ns / 1e9
+        out['achieved_hz'] = ticks * 1e9 / elapsed_ns if elapsed_ns > 0 else float('nan')
         return out
 
 
