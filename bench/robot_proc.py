@@ -147,13 +147,14 @@ class Robot:
         for node in (self.bridge, self.host):
             if node is not None:
                 self.executor.add_node(node)
-        from rm_base.realtime import raise_edge_priority
+        from rm_base.realtime import keep_on_cpu, raise_edge_priority
 
-        # as the executables do: the process's threads below the loop's priority
-        if self.bridge is not None:
-            raise_edge_priority(self.bridge.edge_priority)
-        else:
-            raise_edge_priority(self.host.edge_priority)
+        # as the executables do: the process's threads below the loop's priority, and all
+        # of them on one CPU
+        owner = self.bridge if self.bridge is not None else self.host
+        raise_edge_priority(owner.edge_priority)
+        if owner.cpu_index is not None:
+            keep_on_cpu(owner.cpu_index)
         self.hw = self.bridge.hardware if self.bridge is not None else None
         self.recorder = TickRecorder(self.hw.scheduler) if self.hw is not None else None
         self._sent_taps: list[Any] = []

@@ -23,7 +23,7 @@ from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
 from rm_base.errors import ConfigError
-from rm_base.realtime import raise_edge_priority
+from rm_base.realtime import keep_on_cpu, raise_edge_priority
 from rm_base.ros_env import init_error_line, params_file_error, prepare_ros_process
 
 
@@ -124,9 +124,10 @@ def run_node(
     """Run one node until SIGINT/SIGTERM; return the exit status (1 on a config error).
 
     A configuration error is one line the operator can act on, not a traceback. The
-    node's other threads go below its loop's priority (``node.edge_priority``,
-    docs/ARCHITECTURE.md "Real-time priority"). On the way out the node's ``shutdown()``
-    (zero output on the wire or on /actuator_cmd) runs while the context still works.
+    node's other threads go below its loop's priority (``node.edge_priority``) and all of
+    them onto one CPU (``node.cpu_index``; docs/ARCHITECTURE.md "Real-time priority"). On
+    the way out the node's ``shutdown()`` (zero output on the wire or on /actuator_cmd)
+    runs while the context still works.
 
     Args:
         name: node name (for the error line).
@@ -149,6 +150,8 @@ def run_node(
     executor = make_executor(node)
     executor.add_node(node)
     raise_edge_priority(node.edge_priority)
+    if node.cpu_index is not None:
+        keep_on_cpu(node.cpu_index)
     try:
         spin_until_shutdown(executor, node.context)
     finally:

@@ -8,7 +8,14 @@ scheduled, a priority inversion no lock protocol resolves. So the process's othe
 threads (executor, publishers, readers, DDS) run at a lower real-time priority than the
 loop: above every normal process, below the loop. They are event-driven and woken after
 the loop's ticks, so they use little CPU; the kernel's real-time throttling
-(``sched_rt_runtime_us``) bounds them anyway. Measured in docs/PERFORMANCE.md.
+(``sched_rt_runtime_us``) bounds them anyway.
+
+And every Python thread of the process runs on one CPU (:func:`keep_on_cpu`). On two CPUs
+at once the other threads run beside the loop and ask it for the GIL mid-tick (it must
+drop it within the switch interval); on the loop's CPU they cannot run while the loop
+does, since its priority is above theirs, so the loop keeps the GIL for its whole tick and
+they run in its sleep. Native threads (DDS) need no GIL and stay free. Measured in
+docs/PERFORMANCE.md.
 """
 
 from __future__ import annotations
@@ -16,6 +23,7 @@ from __future__ import annotations
 import logging
 import os
 import sys
+import threading
 from pathlib import Path
 
 _log = logging.getLogger(__name__)
@@ -66,6 +74,77 @@ def raise_process_threads(priority: int) -> int:
             continue
         changed += 1
     return changed
+
+
+def choose_cpu(index: int) -> int | None:
+    """The CPU at index among those the process may use (sorted; -1: the last).
+
+    Returns:
+        The CPU number, or None when the process may use only one CPU (nothing to choose).
+
+    Raises:
+        ValueError: index is outside the list of allowed CPUs.
+    """
+    allowed = sorted(os.sched_getaffinity(0))
+    if len(allowed) < 2:
+        return None
+    if not -len(allowed) <= index < len(allowed):
+        raise ValueError(
+            f'CPU index {index} is outside the {len(allowed)} CPUs this process may use '
+            f'({", ".join(map(str, allowed))}); -1 is the last'
+        )
+    return allowed[index]
+
+
+def pin_python_threads(cpu: int) -> int:
+    """Run every Python thread of this process on cpu; threads they start inherit it.
+
+    Native threads (the DDS middleware's) stay where they are: they never take the GIL,
+    and elsewhere they deliver messages while the loop runs.
+
+    Returns:
+        The number of threads moved.
+
+    Raises:
+        OSError: the kernel refused (e.g. a cpuset without that CPU).
+    """
+    moved = 0
+    for thread in threading.enumerate():
+        tid = thread.native_id
+        if tid is None:  # not started yet: it will inherit its starter's CPU
+            continue
+        try:
+            os.sched_setaffinity(tid, {cpu})
+        except ProcessLookupError:  # the thread ended meanwhile
+            continue
+        moved += 1
+    return moved
+
+
+def keep_on_cpu(index: int) -> int | None:
+    """Run the process's Python threads on the CPU at index (see :func:`choose_cpu`).
+
+    Call it from an executable's main once its nodes (and their threads) exist, beside
+    :func:`raise_edge_priority`. With one CPU there is nothing to choose; a refusal is
+    one warning, and the threads run wherever the kernel puts them.
+
+    Returns:
+        The CPU the threads now run on, or None.
+
+    Raises:
+        ValueError: index is outside the allowed CPUs (a configuration error).
+    """
+    cpu = choose_cpu(index)
+    if cpu is None:
+        return None
+    try:
+        count = pin_python_threads(cpu)
+    except OSError as err:
+        _log.warning('threads not kept on CPU %d (%s): the loop may wait for the GIL '
+                     'mid-tick; see docs/PERFORMANCE.md', cpu, err)
+        return None
+    _log.info('%d Python thread(s) of the process on CPU %d', count, cpu)
+    return cpu
 
 
 def raise_edge_priority(priority: int = EDGE_PRIORITY) -> bool:

@@ -57,3 +57,68 @@ def test_the_calling_thread_gets_the_policy_when_permitted():
     thread.start()
     thread.join()
     assert 'refused' in result or (result['policy'], result['priority']) == (os.SCHED_FIFO, 5)
+
+
+def test_a_cpu_is_chosen_by_its_index_among_the_allowed_ones(monkeypatch):
+    monkeypatch.setattr(realtime.os, 'sched_getaffinity', lambda pid: {4, 1, 7})
+    assert realtime.choose_cpu(-1) == 7
+    assert realtime.choose_cpu(-2) == 4
+    assert realtime.choose_cpu(0) == 1
+    with pytest.raises(ValueError, match=r'CPU index 3 is outside the 3 CPUs .*\(1, 4, 7\)'):
+        realtime.choose_cpu(3)
+    with pytest.raises(ValueError, match='-1 is the last'):
+        realtime.choose_cpu(-4)
+
+
+def test_with_one_allowed_cpu_there_is_nothing_to_choose_or_pin(monkeypatch):
+    monkeypatch.setattr(realtime.os, 'sched_getaffinity', lambda pid: {0})
+    monkeypatch.setattr(realtime, 'pin_python_threads', pytest.fail)
+    assert realtime.choose_cpu(-1) is None
+    assert realtime.choose_cpu(5) is None
+    assert realtime.keep_on_cpu(-1) is None
+
+
+def test_every_python_thread_of_the_process_moves_to_the_cpu(monkeypatch):
+    moved = {}
+    monkeypatch.setattr(
+        realtime.os, 'sched_setaffinity', lambda tid, cpus: moved.update({tid: cpus})
+    )
+    stop = threading.Event()
+    worker = threading.Thread(target=stop.wait)
+    worker.start()
+    try:
+        count = realtime.pin_python_threads(3)
+    finally:
+        stop.set()
+        worker.join()
+    assert {threading.get_native_id(), worker.native_id} <= set(moved)
+    assert count == len(moved) and all(cpus == {3} for cpus in moved.values())
+
+
+def test_a_refused_pinning_is_one_warning(monkeypatch, caplog):
+    monkeypatch.setattr(realtime.os, 'sched_getaffinity', lambda pid: {0, 1})
+
+    def refuse(cpu):
+        raise PermissionError(1, 'Operation not permitted')
+
+    monkeypatch.setattr(realtime, 'pin_python_threads', refuse)
+    with caplog.at_level('WARNING', logger='rm_base.realtime'):
+        assert realtime.keep_on_cpu(-1) is None
+    assert 'threads not kept on CPU 1' in caplog.text
+
+
+@pytest.mark.skipif(len(os.sched_getaffinity(0)) < 2, reason='needs two CPUs to move between')
+def test_a_thread_pinned_in_a_child_process_runs_on_that_cpu():
+    # in a child, so the test session's own threads stay where they are
+    import subprocess
+    import sys
+
+    cpu = sorted(os.sched_getaffinity(0))[-1]
+    code = (
+        'import os, threading; from rm_base import realtime\n'
+        't = threading.Thread(target=threading.Event().wait, args=(0.5,)); t.start()\n'
+        'cpu = realtime.keep_on_cpu(-1)\n'
+        'print(cpu, os.sched_getaffinity(t.native_id) == {cpu}, os.sched_getaffinity(0) == {cpu})\n'
+    )
+    out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, check=True)
+    assert out.stdout.split() == [str(cpu), 'True', 'True']

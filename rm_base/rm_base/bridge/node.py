@@ -302,6 +302,20 @@ class CanBridgeNode(Node):
             'threads, below the loop (a thread holding the GIL must not be preempted); 0: '
             'normal scheduling',
         )
+        declare(
+            'scheduler.one_cpu',
+            params.boolean,
+            True,
+            description='the executable runs every Python thread of the process on one CPU '
+            '(scheduler.cpu), where the loop keeps the GIL for its whole tick',
+        )
+        declare(
+            'scheduler.cpu',
+            params.integer,
+            -1,
+            description='with scheduler.one_cpu, which CPU: an index into the CPUs the '
+            'process may use, -1 the last',
+        )
         declare_schema('safety', SAFETY_SCHEMA)
         declare(
             'sim',
@@ -581,6 +595,11 @@ class CanBridgeNode(Node):
     def edge_priority(self) -> int:
         """SCHED_FIFO priority for the process's threads other than the loop (0: normal)."""
         return self.settings.edge_priority
+
+    @property
+    def cpu_index(self) -> int | None:
+        """The CPU (an index into the allowed ones) for every thread; None: no pinning."""
+        return self.settings.cpu_index
 
     def shutdown(self) -> None:
         """Stop publishing, send zero output (DISABLE to MIT motors), close. Idempotent."""

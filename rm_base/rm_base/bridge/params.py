@@ -52,7 +52,7 @@ from typing import Any
 
 from rm_base.bridge.errors import BridgeConfigError
 from rm_base.hardware.config import HardwareConfig
-from rm_base.realtime import EDGE_PRIORITY, LOOP_PRIORITY
+from rm_base.realtime import EDGE_PRIORITY, LOOP_PRIORITY, choose_cpu
 from rm_base.sim import Timing
 
 #: Parameters every rclpy node has; never part of the bridge config.
@@ -108,6 +108,9 @@ class BridgeSettings:
         sim: simulator settings, or None on real hardware.
         edge_priority: SCHED_FIFO priority the executable gives the process's other
             threads (:func:`rm_base.realtime.raise_edge_priority`); 0: none.
+        cpu_index: the CPU the executable keeps every thread of the process on, an
+            index into the CPUs it may use (:func:`rm_base.realtime.keep_on_cpu`); None:
+            wherever the kernel puts them.
         calibration_max_speed: a joint turning faster is not at rest (set_zero) [rad/s].
     """
 
@@ -118,6 +121,7 @@ class BridgeSettings:
     publish_frames: bool = False
     sim: SimSettings | None = None
     edge_priority: int = EDGE_PRIORITY
+    cpu_index: int | None = -1
     calibration_max_speed: float = 0.05
 
 
@@ -178,7 +182,8 @@ def settings_from_parameters(
             ``diagnostics_rate``, ``publish_frames``, ``log_file``, ``sim``,
             ``sim.timing`` (:class:`Timing` or its value), ``sim.seed``,
             ``scheduler.rate_hz``, ``scheduler.receive_in_loop``, ``scheduler.priority``,
-            ``scheduler.edge_priority``, ``scheduler.collect_garbage``,
+            ``scheduler.edge_priority``, ``scheduler.one_cpu``, ``scheduler.cpu``,
+            ``scheduler.collect_garbage``,
             ``calibration.max_speed`` and ``safety.*``;
             missing ones take their defaults.
         open_params: every other parameter by its flat name (rclpy's own excluded).
@@ -281,8 +286,25 @@ def settings_from_parameters(
         publish_frames=bool(typed.get('publish_frames', False)),
         sim=sim,
         edge_priority=int(typed.get('scheduler.edge_priority', EDGE_PRIORITY)),
+        cpu_index=cpu_index(typed),
         calibration_max_speed=float(typed.get('calibration.max_speed', 0.05)),
     )
+
+
+def cpu_index(typed: Mapping[str, Any]) -> int | None:
+    """``scheduler.cpu`` if ``scheduler.one_cpu``, checked against this machine's CPUs.
+
+    Raises:
+        BridgeConfigError: the index is outside the CPUs the process may use.
+    """
+    if not typed.get('scheduler.one_cpu', True):
+        return None
+    index = int(typed.get('scheduler.cpu', -1))
+    try:
+        choose_cpu(index)
+    except ValueError as err:
+        raise BridgeConfigError(f'scheduler.cpu: {err}') from err
+    return index
 
 
 def with_sim_world(hardware: Mapping[str, Any], world: Any) -> dict[str, Any]:

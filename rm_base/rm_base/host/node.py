@@ -21,7 +21,12 @@ from rm_base.plugin.inbox import STAGE_NAME as INBOX_STAGE
 from rm_base.plugin.inbox import Inbox
 from rm_base.plugin.node_io import DdsJointIO, NodeIO, node_io, use_local_io
 from rm_base.plugin.outbox import Outbox
-from rm_base.realtime import EDGE_PRIORITY, LOOP_PRIORITY, shorten_gil_switch_interval
+from rm_base.realtime import (
+    EDGE_PRIORITY,
+    LOOP_PRIORITY,
+    choose_cpu,
+    shorten_gil_switch_interval,
+)
 from rm_base.ros_logging import FastLogger
 
 NODE_NAME = 'rm_robot'
@@ -261,6 +266,25 @@ class RobotHost(Node):
             description="real-time priority rm_robot gives the process's other threads, "
             'below the loop (a thread holding the GIL must not be preempted); 0: normal',
         )
+        one_cpu = node_params.boolean(
+            'one_cpu',
+            True,
+            description='rm_robot as a process of its own runs every Python thread on one CPU '
+            "(cpu), where its loop keeps the GIL for its whole tick (the one-process robot "
+            "follows can_bridge's scheduler.one_cpu)",
+        )
+        cpu = node_params.integer(
+            'cpu',
+            -2,
+            description='with one_cpu, which CPU: an index into the CPUs the process may '
+            "use, -2 the last but one (can_bridge's loop takes the last)",
+        )
+        try:
+            choose_cpu(cpu)
+        except ValueError as err:
+            raise ParameterError(f'cpu: {err}') from err
+        #: The CPU every thread of rm_robot's own process runs on (index); None: any.
+        self.cpu_index: int | None = cpu if one_cpu else None
         loop_priority = node_params.integer(
             'loop_priority',
             LOOP_PRIORITY,

@@ -14,6 +14,8 @@ from rm_base.bridge.params import (
 from rm_base.hardware import HardwareConfigError
 from rm_base.sim import Timing
 
+from rm_base import realtime
+
 YAW = {
     'buses.can0.interface': 'socketcan',
     'joints.yaw.type': 'gm6020',
@@ -78,6 +80,16 @@ def test_the_loop_collects_garbage_unless_told_not_to():
     assert settings.hardware_config.collect_garbage is False
     with pytest.raises(HardwareConfigError, match=r'scheduler\.collect_garbage'):
         settings_from_parameters({'scheduler.collect_garbage': 'no'}, YAW)
+
+
+def test_the_process_runs_on_the_last_cpu_unless_told_which_or_none(monkeypatch):
+    monkeypatch.setattr(realtime.os, 'sched_getaffinity', lambda pid: {0, 1})
+    assert settings_from_parameters({}, YAW).cpu_index == -1
+    assert settings_from_parameters({'scheduler.cpu': 0}, YAW).cpu_index == 0
+    settings = settings_from_parameters({'scheduler.one_cpu': False, 'scheduler.cpu': 9}, YAW)
+    assert settings.cpu_index is None  # not pinned: the index is not used, nor checked
+    with pytest.raises(BridgeConfigError, match=r'scheduler\.cpu: CPU index 2 is outside'):
+        settings_from_parameters({'scheduler.cpu': 2}, YAW)
 
 
 def test_when_a_hardware_key_is_missing_expect_the_hardware_error_naming_it():
