@@ -6,7 +6,8 @@ about the axis (positive pitch noses down).
 * Chassis: the wheels' output-shaft speeds (times each wheel's ``direction``) go through
   the forward wheel kinematics of :mod:`rm_base.geometry.kinematics` (ideal, no slip;
   least squares when the wheels disagree) to a body twist, integrated into the world pose
-  (x, y, yaw) with the midpoint heading.
+  (x, y, yaw) with the midpoint heading. A swerve chassis' wheels roll where their
+  steering joints point them (:mod:`rm_base.geometry.swerve`, the same least squares).
 * Gimbal: yaw and pitch joint angles are ``direction * (motor angle - zero)``. The yaw
   motor's stator turns with the chassis while its load keeps its inertia in the world, so
   the chassis' yaw acceleration is fed to that motor (``world_frame_inertia``). The pitch
@@ -23,7 +24,7 @@ from enum import Enum
 import numpy as np
 from numpy.typing import NDArray
 
-from rm_base.geometry import WheelKinematics, rotation_matrix_from_rpy
+from rm_base.geometry import SwerveKinematics, WheelKinematics, rotation_matrix_from_rpy
 from rm_base.sim.devices import SimDevice
 from rm_base.sim.errors import SimConfigError
 from rm_base.sim.joint import Joint
@@ -35,6 +36,66 @@ class Mount(Enum):
 
     CHASSIS = 'chassis'
     GIMBAL = 'gimbal'
+
+
+class Chassis:
+    """The wheels that move the body, and how: fixed wheels, or steered ones (swerve).
+
+    Args:
+        kinematics: fixed wheels' kinematics, or a swerve chassis' modules.
+        wheels: the wheel (drive) motors, in the kinematics' order.
+        directions: wheel speed = direction x motor speed; default all 1.
+        steering: a swerve chassis' steering joints (module angle), one per wheel.
+
+    Raises:
+        SimConfigError: the counts disagree, a direction is not ±1, or steering joints
+            for fixed wheels (or none for swerve modules).
+    """
+
+    def __init__(
+        self,
+        kinematics: WheelKinematics | SwerveKinematics,
+        wheels: Sequence[SimDevice],
+        directions: Sequence[float] | None = None,
+        steering: Sequence[Joint] = (),
+    ) -> None:
+        count = (
+            len(kinematics.modules) if isinstance(kinematics, SwerveKinematics)
+            else len(kinematics.wheels)
+        )
+        if len(wheels) != count:
+            raise SimConfigError(f'{count} wheels in the kinematics, {len(wheels)} motors')
+        directions = [1.0] * count if directions is None else list(directions)
+        if len(directions) != count or any(d not in (1, -1) for d in directions):
+            raise SimConfigError(f'wheel directions must be one ±1 per wheel, got {directions}')
+        swerve = isinstance(kinematics, SwerveKinematics)
+        if swerve and len(steering) != count:
+            raise SimConfigError(
+                f'a swerve chassis needs one steering joint per module ({count}), '
+                f'got {len(steering)}'
+            )
+        if not swerve and steering:
+            raise SimConfigError('fixed wheels have no steering joints')
+        self.kinematics = kinematics
+        self.wheels = tuple(wheels)
+        self.directions = tuple(float(d) for d in directions)
+        self.steering = tuple(steering)
+
+    @property
+    def motors(self) -> tuple[SimDevice, ...]:
+        """Every motor of the chassis (wheels, then steering): its power output."""
+        return self.wheels + tuple(j.device for j in self.steering)
+
+    def twist(self) -> tuple[float, float, float]:
+        """The body twist (vx, vy [m/s], wz [rad/s]) the wheels give now."""
+        # Plain floats: four speeds every tick cost less than building an array.
+        speeds = [w.model.velocity * d for w, d in zip(self.wheels, self.directions, strict=True)]
+        kinematics = self.kinematics
+        if isinstance(kinematics, SwerveKinematics):
+            vx, vy, wz = kinematics.forward([j.angle for j in self.steering], speeds)
+        else:
+            vx, vy, wz = kinematics.forward(speeds)
+        return vx, vy, wz
 
 
 class RobotBody:
@@ -55,9 +116,7 @@ class RobotBody:
     def __init__(
         self,
         *,
-        kinematics: WheelKinematics | None = None,
-        wheels: Sequence[SimDevice] = (),
-        wheel_directions: Sequence[float] | None = None,
+        chassis: Chassis | None = None,
         yaw: Joint | None = None,
         pitch: Joint | None = None,
         initial_pose: Sequence[float] = (0.0, 0.0, 0.0),
@@ -68,23 +127,11 @@ class RobotBody:
         """Create the body (:func:`rm_base.sim.body_config.body_from_config` reads a config).
 
         Raises:
-            SimConfigError: wheels and kinematics disagree in number, or a bad pose.
+            SimConfigError: a bad pose.
         """
-        if (kinematics is None) != (not wheels):
-            raise SimConfigError('a chassis needs both kinematics and wheel motors')
-        if kinematics is not None and len(kinematics.wheels) != len(wheels):
-            raise SimConfigError(
-                f'{len(kinematics.wheels)} wheels in the kinematics, {len(wheels)} motors'
-            )
-        directions = [1.0] * len(wheels) if wheel_directions is None else wheel_directions
-        if len(directions) != len(wheels) or any(d not in (1, -1) for d in directions):
-            raise SimConfigError(f'wheel directions must be one ±1 per wheel, got {directions}')
         if len(initial_pose) != 3 or not all(math.isfinite(v) for v in initial_pose):
             raise SimConfigError(f'initial_pose must be 3 finite numbers, got {initial_pose!r}')
-        self.kinematics = kinematics
-        self.wheels = tuple(wheels)
-        self.wheel_directions = np.array(directions, dtype=float)
-        self._directions = tuple(float(d) for d in directions)
+        self.chassis = chassis
         self.yaw_joint = yaw
         self.pitch_joint = pitch
         self.x, self.y, self.yaw = (float(v) for v in initial_pose)
@@ -95,6 +142,11 @@ class RobotBody:
         self.yaw_acceleration = 0.0
         self.linear_acceleration = (0.0, 0.0)
         self._world_velocity = self._to_world(self.twist[0], self.twist[1], self.yaw)
+
+    @property
+    def wheels(self) -> tuple[SimDevice, ...]:
+        """The chassis' wheel (drive) motors, none without a chassis."""
+        return () if self.chassis is None else self.chassis.wheels
 
     # -- stepping (called by the world) ----------------------------------------------------
 
@@ -132,12 +184,7 @@ class RobotBody:
         self.twist = twist
 
     def _chassis_twist(self) -> tuple[float, float, float]:
-        if self.kinematics is None:
-            return (0.0, 0.0, 0.0)
-        # Plain floats: four speeds every tick cost less than building an array.
-        speeds = [w.model.velocity * d for w, d in zip(self.wheels, self._directions, strict=True)]
-        vx, vy, wz = self.kinematics.forward(speeds)
-        return vx, vy, wz
+        return (0.0, 0.0, 0.0) if self.chassis is None else self.chassis.twist()
 
     @staticmethod
     def _to_world(vx: float, vy: float, heading: float) -> tuple[float, float]:

@@ -27,8 +27,15 @@ from rm_base.config_schema import (
     tables,
 )
 from rm_base.errors import ConfigError
-from rm_base.geometry import Wheel, WheelKinematics, mecanum_wheels, omni_wheels
-from rm_base.sim.body import RobotBody
+from rm_base.geometry import (
+    SwerveKinematics,
+    Wheel,
+    WheelKinematics,
+    mecanum_wheels,
+    omni_wheels,
+    square_modules,
+)
+from rm_base.sim.body import Chassis, RobotBody
 from rm_base.sim.devices import SimDevice
 from rm_base.sim.errors import SimConfigError
 from rm_base.sim.joint import Joint
@@ -67,7 +74,7 @@ PITCH_SCHEMA = Schema((
            description='gravity torque at 0 pitch, times cos(pitch) (nose-heavy > 0)'),
 ))
 
-_CHASSIS_TYPES = ('mecanum', 'omni', 'wheels')
+_CHASSIS_TYPES = ('mecanum', 'omni', 'swerve', 'wheels')
 _TYPE = string('type', choices=_CHASSIS_TYPES, description='the wheel layout')
 _MOTORS = strings('motors', description="the wheel motors, in the layout's order")
 _DIRECTIONS = signs('directions', None,
@@ -89,6 +96,18 @@ CHASSIS_SCHEMAS: Mapping[str, Schema] = {
         numbers('mounting_angles', unit='rad',
                 description='angle of each wheel from the chassis x axis'),
         number('centre_distance', unit='m', gt=0.0, description='centre to each wheel'),
+        _WHEEL_RADIUS,
+    )),
+    'swerve': Schema((
+        _TYPE, _MOTORS, _DIRECTIONS,
+        strings('steer_motors', description='the steering motors, one per drive motor'),
+        signs('steer_directions', None,
+              description='module angle = direction x (motor angle - zero); default all 1'),
+        numbers('steer_zeros', None, unit='rad',
+                description='steering motor angle at which a module points along x; '
+                'default all 0'),
+        number('wheelbase', unit='m', gt=0.0, description='front to rear modules'),
+        number('track', unit='m', gt=0.0, description='left to right modules'),
         _WHEEL_RADIUS,
     )),
     'wheels': Schema((
@@ -146,6 +165,7 @@ class BodyTable(NamedTuple):
 _LAYOUTS = {
     'mecanum': 'four mecanum wheels on a rectangle (FL, FR, RL, RR)',
     'omni': 'omni wheels on a circle, each rolling tangentially',
+    'swerve': 'four steered wheels on a rectangle (FL, FR, RL, RR)',
     'wheels': 'any wheels, one table each',
 }
 
@@ -190,9 +210,7 @@ def _signs(values: tuple[int, ...] | None, count: int, where: str) -> list[float
     return [float(v) for v in values]
 
 
-def _chassis(
-    data: Mapping[str, Any], devices: Mapping[str, SimDevice]
-) -> tuple[WheelKinematics, list[SimDevice], list[float]]:
+def _chassis(data: Mapping[str, Any], devices: Mapping[str, SimDevice]) -> Chassis:
     where = 'body.chassis'
     kind = _read(Schema((_TYPE,), open=True), where, data)['type']
     values = _read(CHASSIS_SCHEMAS[kind], where, data)
@@ -207,7 +225,9 @@ def _chassis(
             ))
             motors.append(_motor(devices, wheel['motor'], f'{where}.wheels[{i}].motor'))
             directions.append(float(wheel['direction']))
-        return WheelKinematics(wheels), motors, directions
+        return Chassis(WheelKinematics(wheels), motors, directions)
+    if kind == 'swerve':
+        return _swerve(values, devices, where)
     if kind == 'mecanum':
         extra = {} if values['roller_signs'] is None else {'roller_signs': values['roller_signs']}
         layout = mecanum_wheels(
@@ -217,13 +237,43 @@ def _chassis(
         layout = omni_wheels(
             values['mounting_angles'], values['centre_distance'], values['wheel_radius']
         )
-    names = values['motors']
-    if len(names) != len(layout):
-        raise SimConfigError(f'{where}.motors must name {len(layout)} motors, got {list(names)}')
-    return (
+    return Chassis(
         WheelKinematics(layout),
-        [_motor(devices, name, f'{where}.motors') for name in names],
+        _motors(values['motors'], len(layout), devices, f'{where}.motors'),
         _signs(values['directions'], len(layout), f'{where}.directions'),
+    )
+
+
+def _motors(
+    names: tuple[str, ...], count: int, devices: Mapping[str, SimDevice], where: str
+) -> list[SimDevice]:
+    if len(names) != count:
+        raise SimConfigError(f'{where} must name {count} motors, got {list(names)}')
+    return [_motor(devices, name, where) for name in names]
+
+
+def _swerve(values: Mapping[str, Any], devices: Mapping[str, SimDevice], where: str) -> Chassis:
+    modules = square_modules(values['wheelbase'], values['track'], values['wheel_radius'])
+    count = len(modules)
+    zeros = values['steer_zeros']
+    if zeros is not None and len(zeros) != count:
+        raise SimConfigError(
+            f'{where}.steer_zeros must have one entry per module ({count}), has {len(zeros)}'
+        )
+    steering = [
+        Joint(device, direction, zero)
+        for device, direction, zero in zip(
+            _motors(values['steer_motors'], count, devices, f'{where}.steer_motors'),
+            _signs(values['steer_directions'], count, f'{where}.steer_directions'),
+            zeros if zeros is not None else [0.0] * count,
+            strict=True,
+        )
+    ]
+    return Chassis(
+        SwerveKinematics(modules),
+        _motors(values['motors'], count, devices, f'{where}.motors'),
+        _signs(values['directions'], count, f'{where}.directions'),
+        steering,
     )
 
 
@@ -265,11 +315,7 @@ def body_from_config(data: object, devices: Mapping[str, SimDevice]) -> RobotBod
     """
     values = _read(BODY_SCHEMA, 'body', data)
     try:
-        kinematics: WheelKinematics | None = None
-        wheels: list[SimDevice] = []
-        directions: list[float] | None = None
-        if values['chassis'] is not None:
-            kinematics, wheels, directions = _chassis(values['chassis'], devices)
+        chassis = None if values['chassis'] is None else _chassis(values['chassis'], devices)
         gimbal = _read(GIMBAL_SCHEMA, 'body.gimbal', values['gimbal'] or {})
         yaw = pitch = None
         world_frame, gravity = True, 0.0
@@ -283,9 +329,7 @@ def body_from_config(data: object, devices: Mapping[str, SimDevice]) -> RobotBod
             gravity = settings['gravity_torque']
         shooter = values['shooter']
         return RobotBody(
-            kinematics=kinematics,
-            wheels=wheels,
-            wheel_directions=directions,
+            chassis=chassis,
             yaw=yaw,
             pitch=pitch,
             initial_pose=values['initial_pose'],

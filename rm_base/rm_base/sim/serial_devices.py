@@ -88,7 +88,8 @@ class SerialDevices:
             raise SimStateError('the world has a referee already')
         gimbal = [j.device for j in (body.yaw_joint, body.pitch_joint) if j is not None]
         self.referee = referee_from_config(
-            config, chassis=body.wheels, gimbal=gimbal, launcher=body.launcher
+            config, chassis=body.chassis.motors if body.chassis is not None else (),
+            gimbal=gimbal, launcher=body.launcher,
         )
         return self.referee
 

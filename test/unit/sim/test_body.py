@@ -173,7 +173,7 @@ def test_when_pitch_carries_gravity_torque_expect_it_noses_down(make_world):
     ('change', 'message'),
     [
         ({'chassis': {'type': 'tank'}},
-         r"body\.chassis\.type must be one of mecanum, omni, wheels, got 'tank'"),
+         r"body\.chassis\.type must be one of mecanum, omni, swerve, wheels, got 'tank'"),
         ({'chassis': {'type': 'mecanum'}}, r'body\.chassis\.motors is required'),
         ({'gimbal': {'yaw': {'motor': 'nope'}}},
          r"body\.gimbal\.yaw\.motor is 'nope', which is not a configured motor"),
@@ -264,3 +264,88 @@ def test_explicit_wheel_list_chassis(make_world):
     world.motor('wheel_fr').model.reset(velocity=-2.0)
     world.step(1000)
     assert (world.body.x, world.body.y, world.body.yaw) == pytest.approx((0.1, 0.0, 0.0))
+
+
+STEERS = ['steer_fl', 'steer_fr', 'steer_rl', 'steer_rr']
+
+
+def swerve_config(**chassis):
+    motors = [{'type': 'm3508', 'id': i + 1, 'name': n, **FREE} for i, n in enumerate(WHEELS)]
+    motors += [
+        {'type': 'gm6020', 'id': i + 1, 'name': n, **FREE} for i, n in enumerate(STEERS)
+    ]
+    body = {
+        'chassis': {
+            'type': 'swerve', 'motors': WHEELS, 'steer_motors': STEERS,
+            'wheelbase': 2 * LX, 'track': 2 * LY, 'wheel_radius': R, **chassis,
+        },
+    }
+    return {'channels': {unique_channel(): motors}, 'body': body}
+
+
+def test_a_swerve_chassis_drives_where_its_modules_point(make_world):
+    # every module at 90° (left), its wheel at 10 rad/s: vy = r*w = 0.76 m/s, no turn
+    world = make_world(swerve_config())
+    for steer, wheel in zip(STEERS, WHEELS, strict=True):
+        world.motor(steer).model.reset(angle=math.pi / 2)
+        world.motor(wheel).model.reset(velocity=10.0)
+    world.step(1000)
+    body = world.body
+    assert (body.x, body.y, body.yaw) == pytest.approx((0.0, 0.76, 0.0), abs=1e-9)
+
+
+def test_a_swerve_chassis_turns_in_place_with_its_modules_tangential(make_world):
+    # modules at 45° off the diagonal (tangential), wheels at w: wz = r*w / hypot(lx, ly)
+    steer_zeros = [0.3, -0.2, 0.0, 0.1]  # where each steering motor reads 0
+    world = make_world(swerve_config(steer_zeros=steer_zeros, steer_directions=[1, 1, -1, 1]))
+    for i, (x, y) in enumerate(((LX, LY), (LX, -LY), (-LX, LY), (-LX, -LY))):
+        tangent = math.atan2(x, -y)  # direction of the hub's motion when turning +z
+        direction = -1 if i == 2 else 1
+        world.motor(STEERS[i]).model.reset(angle=direction * tangent + steer_zeros[i])
+        world.motor(WHEELS[i]).model.reset(velocity=4.0)
+    world.step(100)
+    wz = R * 4.0 / math.hypot(LX, LY)
+    assert world.body.twist == pytest.approx((0.0, 0.0, wz), abs=1e-9)
+    assert world.body.yaw == pytest.approx(0.1 * wz, rel=1e-9)
+
+
+@pytest.mark.parametrize(
+    ('chassis', 'message'),
+    [
+        ({'steer_motors': STEERS[:3]}, r'body\.chassis\.steer_motors must name 4 motors'),
+        ({'steer_motors': [*STEERS[:3], 'nope']},
+         r"body\.chassis\.steer_motors is 'nope', which is not a configured motor"),
+        ({'steer_zeros': [0.0, 0.0]},
+         r'body\.chassis\.steer_zeros must have one entry per module \(4\), has 2'),
+        ({'steer_directions': [1, 1, 1, 2]},
+         r'body\.chassis\.steer_directions entry \[3\] must be 1 or -1, got 2'),
+        ({'steer_motors': None}, r'body\.chassis\.steer_motors is required'),
+    ],
+)
+def test_when_a_swerve_chassis_is_bad_expect_the_key_named(make_world, chassis, message):
+    config = swerve_config()
+    table = {**config['body']['chassis'], **chassis}
+    config['body']['chassis'] = {k: v for k, v in table.items() if v is not None}
+    with pytest.raises(SimConfigError, match=message):
+        make_world(config)
+
+
+def test_a_chassis_checks_its_wheels_against_its_kinematics(make_world):
+    from rm_base.geometry import SwerveKinematics, square_modules
+    from rm_base.sim.body import Chassis
+    from rm_base.sim.joint import Joint
+
+    world = make_world(swerve_config())
+    wheels = [world.motor(n) for n in WHEELS]
+    steering = [Joint(world.motor(n)) for n in STEERS]
+    fixed = WheelKinematics(mecanum_wheels(2 * LX, 2 * LY, R))
+    swerve = SwerveKinematics(square_modules(2 * LX, 2 * LY, R))
+    with pytest.raises(SimConfigError, match='fixed wheels have no steering joints'):
+        Chassis(fixed, wheels, steering=steering)
+    with pytest.raises(SimConfigError, match=r'one steering joint per module \(4\), got 3'):
+        Chassis(swerve, wheels, steering=steering[:3])
+    with pytest.raises(SimConfigError, match='4 wheels in the kinematics, 3 motors'):
+        Chassis(fixed, wheels[:3])
+    assert Chassis(swerve, wheels, steering=steering).motors == (
+        *wheels, *(j.device for j in steering)
+    )
