@@ -23,7 +23,7 @@ from rm_base.host.node import RobotHost
 from rm_base.plugin.params import DeclaredParameter, declared_parameters
 from rm_base.ros_env import prepare_ros_process
 
-from rm_bringup.bringup import MANUAL_NODE_NAME, parameter_files
+from rm_bringup.bringup import MANUAL_NODE_NAME, has_section, parameter_files
 
 ROBOT = 'standard'
 
@@ -34,7 +34,8 @@ declare, as declared in the code: type, SI
 unit, default (or *required*: the robot config must set it), the bounds a value must keep
 and what it is. A value that breaks them stops the node at start-up with a message naming
 the key. Parameters are read once, at start-up, and are read-only. The plugins' parameters
-are listed for the plugins the `{ROBOT}` robot loads, under their instance names.
+are listed for the plugins the `{ROBOT}` robot loads, under their instance names; the keys
+only another robot's config declares (a swerve chassis' steering joints) close the page.
 
 can_bridge's bus and joint tables (`buses.<bus>.*`, `joints.<joint>.*`: one table per bus
 and per joint, named by the robot config) are listed after its flat parameters, from the
@@ -51,7 +52,8 @@ def collect(robot: str = ROBOT) -> dict[str, list[DeclaredParameter]]:
     """Build the nodes from robot's config (simulated) and return what each declared."""
     prepare_ros_process()
     args = ['param_reference', '--ros-args']
-    for path in parameter_files(robot, None, True):
+    files = parameter_files(robot, None, True)
+    for path in files:
         args += ['--params-file', str(path)]
     context = Context()
     rclpy.init(args=args, context=context)
@@ -61,13 +63,15 @@ def collect(robot: str = ROBOT) -> dict[str, list[DeclaredParameter]]:
         nodes.append(bridge)
         host = RobotHost(hardware=bridge.hardware, context=context)
         nodes.append(host)
-        manual = RobotHost(node_name=MANUAL_NODE_NAME, context=context)
-        nodes.append(manual)
-        return {
+        declared = {
             'can_bridge': declared_parameters(bridge),
             'rm_robot': declared_parameters(host),
-            MANUAL_NODE_NAME: declared_parameters(manual),
         }
+        if has_section(files, MANUAL_NODE_NAME):  # the operator's commander, if it has one
+            manual = RobotHost(node_name=MANUAL_NODE_NAME, context=context)
+            nodes.append(manual)
+            declared[MANUAL_NODE_NAME] = declared_parameters(manual)
+        return declared
     finally:
         for node in reversed(nodes):  # plugins off first, then the bridge
             node.shutdown()
@@ -232,8 +236,35 @@ def motor_tables() -> list[str]:
     return out
 
 
-def render(declared: dict[str, list[DeclaredParameter]]) -> str:
-    """The reference as Markdown: a section per node, the plugins' keys by plugin."""
+Declared = dict[str, list[DeclaredParameter]]
+
+
+def other_robots(declared: Declared) -> Declared:
+    """For each other installed robot, the rm_robot keys it declares and ROBOT does not."""
+    from rm_bringup.bringup import config_dir
+
+    known = {p.key for p in declared['rm_robot']}
+    robots = sorted(
+        path.stem for path in config_dir().glob('*.yaml')
+        if not path.stem.endswith('_sim') and path.stem != ROBOT
+    )
+    out = {}
+    for robot in robots:
+        extra = [p for p in collect(robot)['rm_robot'] if p.key not in known]
+        if extra:
+            out[robot] = extra
+    return out
+
+
+def render(
+    declared: dict[str, list[DeclaredParameter]],
+    others: dict[str, list[DeclaredParameter]] | None = None,
+) -> str:
+    """The reference as Markdown: a section per node, then other robots' keys.
+
+    The plugins' keys are grouped by plugin; ``others`` is what other robots' configs
+    declare beyond them (:func:`other_robots`).
+    """
     out = [_HEADER]
     for node, parameters in declared.items():
         out.append(f'## {node}\n')
@@ -251,12 +282,18 @@ def render(declared: dict[str, list[DeclaredParameter]]) -> str:
             out.extend(tables())
             out.extend(joint_types())
             out.extend(sim_tables())
+    if others:
+        out.append('## rm_robot: keys of other robots\n')
+        for robot, parameters in others.items():
+            out += [f'### {robot}\n', f'What `{robot}.yaml` declares beyond the {ROBOT} robot.\n',
+                    *_table(parameters), '']
     return '\n'.join(out).rstrip() + '\n'
 
 
 def main() -> int:
     """Print the reference to standard output."""
-    sys.stdout.write(render(collect()))
+    declared = collect()
+    sys.stdout.write(render(declared, other_robots(declared)))
     return 0
 
 

@@ -3,7 +3,7 @@
 import pathlib
 
 import pytest
-from rm_bringup.param_reference import collect, render
+from rm_bringup.param_reference import collect, other_robots, render
 
 pytestmark = pytest.mark.ros
 
@@ -17,7 +17,9 @@ def test_the_committed_parameter_reference_is_current():
     assert {'plugins', 'loop_rate', 'chassis.wheel_radius', 'gimbal.yaw_joint'} <= keys
     assert any(p.default is None for p in declared['rm_robot'])
     assert 'scheduler.rate_hz' in {p.key for p in declared['can_bridge']}
+    others = other_robots(declared)
+    assert 'chassis.steer_joints' in {p.key for p in others['swerve']}
     committed = (ROOT / 'docs' / 'PARAMETERS.md').read_text()
-    assert render(declared) == committed, (
+    assert render(declared, others) == committed, (
         'docs/PARAMETERS.md is stale: python -m rm_bringup.param_reference > docs/PARAMETERS.md'
     )

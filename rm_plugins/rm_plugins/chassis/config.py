@@ -1,5 +1,8 @@
 """StandChassis parameters: read once at init from the robot config, checked, frozen.
 
+Why one module: it declares every key of the chassis, wheel layouts (mecanum, omni,
+swerve) included, so one file is the whole of what a robot config may say to it.
+
 Every key is under the plugin's prefix (``chassis.``). Required geometry has no default,
 so a config that omits it fails at start-up with one line naming the key and its unit.
 See ``rm_bringup/config/standard.yaml`` for a complete, commented example.
@@ -26,7 +29,14 @@ from rm_base.control import (
     TwistWaveform,
 )
 from rm_base.errors import ConfigError
-from rm_base.geometry import MECANUM_ROLLER_SIGNS, WheelKinematics, mecanum_wheels, omni_wheels
+from rm_base.geometry import (
+    MECANUM_ROLLER_SIGNS,
+    SwerveKinematics,
+    WheelKinematics,
+    mecanum_wheels,
+    omni_wheels,
+    square_modules,
+)
 from rm_base.plugin import ParameterError, PluginParams
 from rm_base.plugin.pid_params import loop_pid
 
@@ -46,6 +56,7 @@ class Kinematics(Enum):
 
     MECANUM = 'mecanum'  # four wheels FL, FR, RL, RR on a rectangle
     OMNI = 'omni'  # N omni wheels on a circle, rolling tangentially
+    SWERVE = 'swerve'  # four steered wheels FL, FR, RL, RR on a rectangle
 
 
 class ImuMount(Enum):
@@ -63,7 +74,10 @@ class ChassisConfig:
     Attributes:
         kinematics: wheel layout.
         wheel_joints: joint names, in the kinematics' wheel order.
-        wheels: the wheel kinematics (Jacobian) built from the geometry.
+        wheels: the wheel kinematics (Jacobian) built from the geometry, or a swerve
+            chassis' modules.
+        steer_joints: a swerve chassis' steering joints, in the wheel order (angle 0: the
+            module rolls along base x); empty for fixed wheels.
         max_wheel_speed: largest |wheel speed| target [rad/s].
         wheel_feedback_timeout: wheel feedback older than this is missing [s].
         vel_cmd_timeout: a /vel_cmd older than this is no velocity (brake to zero) [s].
@@ -93,7 +107,7 @@ class ChassisConfig:
 
     kinematics: Kinematics
     wheel_joints: tuple[str, ...]
-    wheels: WheelKinematics
+    wheels: WheelKinematics | SwerveKinematics
     max_wheel_speed: float
     wheel_feedback_timeout: float
     vel_cmd_timeout: float
@@ -118,18 +132,16 @@ class ChassisConfig:
         default_factory=lambda: dict.fromkeys(SpeedGear, (1.0, 1.0))
     )
     position: PositionConfig = DEFAULT_POSITION
+    steer_joints: tuple[str, ...] = ()
 
 
 
-def _wheels(p: PluginParams, kind: Kinematics, joints: tuple[str, ...]) -> WheelKinematics:
+def _wheels(
+    p: PluginParams, kind: Kinematics, joints: tuple[str, ...]
+) -> WheelKinematics | SwerveKinematics:
     radius = p.double('wheel_radius', description='wheel radius', unit='m', gt=0.0)
-    if kind is Kinematics.MECANUM:
-        if len(joints) != 4:
-            raise ParameterError(
-                f'{_where(p)}: parameter {p.key("wheel_joints")!r} must name 4 wheels in the '
-                f'order FL, FR, RL, RR for mecanum, got {len(joints)}',
-                plugin=p.plugin, key=p.key('wheel_joints'),
-            )
+    if kind in (Kinematics.MECANUM, Kinematics.SWERVE):
+        _four(p, 'wheel_joints', joints, kind, 'wheels')
         wheelbase = p.double(
             'wheelbase', description='distance between front and rear axles', unit='m', gt=0.0
         )
@@ -137,6 +149,8 @@ def _wheels(p: PluginParams, kind: Kinematics, joints: tuple[str, ...]) -> Wheel
             'track', description='distance between left and right wheel centres', unit='m',
             gt=0.0,
         )
+        if kind is Kinematics.SWERVE:
+            return SwerveKinematics(square_modules(wheelbase, track, radius))
         signs = p.integer_array(
             'roller_signs', list(MECANUM_ROLLER_SIGNS),
             description='sign of each roller angle, FL, FR, RL, RR (X layout: -1, 1, 1, -1)',
@@ -167,6 +181,36 @@ def _wheels(p: PluginParams, kind: Kinematics, joints: tuple[str, ...]) -> Wheel
         )
         wheels = omni_wheels(angles, distance, radius)
     return WheelKinematics(wheels)
+
+
+def _four(
+    p: PluginParams, key: str, joints: tuple[str, ...], kind: Kinematics, what: str
+) -> None:
+    if len(joints) != 4:
+        raise ParameterError(
+            f'{_where(p)}: parameter {p.key(key)!r} must name 4 {what} in the order FL, FR, '
+            f'RL, RR for {kind.value}, got {len(joints)}',
+            plugin=p.plugin, key=p.key(key),
+        )
+
+
+def _steer_joints(p: PluginParams, kind: Kinematics, wheels: tuple[str, ...]) -> tuple[str, ...]:
+    if kind is not Kinematics.SWERVE:
+        return ()
+    joints = p.string_array(
+        'steer_joints',
+        description='swerve: steering joint names, FL, FR, RL, RR (angle 0: the module '
+        'rolls along base x)',
+        unique=True,
+    )
+    _four(p, 'steer_joints', joints, kind, 'steering joints')
+    shared = sorted(set(joints) & set(wheels))
+    if shared:
+        raise ParameterError(
+            f'{_where(p)}: joint(s) {", ".join(shared)} both steer and drive',
+            plugin=p.plugin, key=p.key('steer_joints'),
+        )
+    return joints
 
 
 def _ramp(p: PluginParams, axis: str, unit: str, defaults: tuple[float, ...]) -> RampLimits:
@@ -242,13 +286,17 @@ def read_config(p: PluginParams) -> ChassisConfig:
             message names the plugin, the key and the expected unit.
         PluginConfigError: the values do not fit together (e.g. the wheel count).
     """
-    kind = p.choice('kinematics', Kinematics, description='wheel layout: mecanum or omni')
+    kind = p.choice(
+        'kinematics', Kinematics, description='wheel layout: mecanum, omni or swerve'
+    )
     joints = p.string_array(
         'wheel_joints',
-        description='wheel joint names; mecanum: FL, FR, RL, RR; omni: as mounting_angles',
+        description='wheel joint names; mecanum, swerve: FL, FR, RL, RR; omni: as '
+        'mounting_angles',
         unique=True,
     )
     wheels = _wheels(p, kind, joints)
+    steer_joints = _steer_joints(p, kind, joints)
     max_wheel_speed = p.double(
         'max_wheel_speed', description='largest wheel speed target', unit='rad/s', gt=0.0
     )
@@ -316,6 +364,7 @@ def read_config(p: PluginParams) -> ChassisConfig:
         kinematics=kind,
         wheel_joints=joints,
         wheels=wheels,
+        steer_joints=steer_joints,
         max_wheel_speed=max_wheel_speed,
         wheel_feedback_timeout=p.double(
             'wheel_feedback_timeout', 0.1,

@@ -43,11 +43,12 @@ from rm_base.control import (
 from rm_base.errors import InputRejectedError
 from rm_base.geometry import (
     Twist2D,
-    WheelKinematics,
     body_to_world_twist,
     desaturate_speeds,
     world_to_body_twist,
 )
+
+from rm_plugins.chassis.drive import Drive
 
 _MAX_UPDATE_DT = 0.05
 """Longest dt [s] the ramps and PIDs integrate in one step; a stalled tick (CPU steal) must
@@ -123,7 +124,7 @@ class MotionPlanner:
 
     def __init__(
         self,
-        kinematics: WheelKinematics,
+        kinematics: Drive,
         mode_params: ChassisModeParams,
         linear_limits: RampLimits,
         angular_limits: RampLimits,

@@ -30,7 +30,9 @@ from enum import Enum
 from typing import NamedTuple
 
 from rm_base.errors import InputRejectedError
-from rm_base.geometry import Twist2D, WheelKinematics, body_to_world_twist, wrap_to_pi
+from rm_base.geometry import Twist2D, body_to_world_twist, wrap_to_pi
+
+from rm_plugins.chassis.drive import Drive
 
 
 class YawSource(Enum):
@@ -55,7 +57,7 @@ class Odometry:
         kinematics: the wheels, in the order of the wheel speeds given to ``update``.
     """
 
-    def __init__(self, kinematics: WheelKinematics) -> None:
+    def __init__(self, kinematics: Drive) -> None:
         self._kinematics = kinematics
         self._pose = Pose2D()
         self._twist = Twist2D()

@@ -1,4 +1,4 @@
-"""StandChassis: a mecanum/omni chassis: PASSIVE, RAW, FOLLOW, TWIST, GYRO and POSITION states.
+"""StandChassis: a mecanum/omni/swerve chassis: PASSIVE, RAW, FOLLOW, TWIST, GYRO and POSITION.
 
 Why one module: one state machine and the tick that runs it; kinematics, planner, odometry,
 power and config are modules of their own.
@@ -16,14 +16,17 @@ Inputs
         FOLLOW feeds forward.
 
 Outputs
-    /actuator_cmd: MODE_VELOCITY on every wheel while active, MODE_OFF in PASSIVE.
+    /actuator_cmd: MODE_VELOCITY on every wheel while active, MODE_OFF in PASSIVE; a
+        swerve chassis' steering joints MODE_POSITION (``rm_plugins.chassis.drive``: no
+        module turns more than 90°, its wheel reverses instead) and MODE_OFF in PASSIVE.
     /chassis_state (rm_msgs/ChassisState) and /odom (nav_msgs/Odometry, odom -> base_link,
         twist in base_link) at ``publish_rate``; odom -> base_link then on /tf (and in the
         robot's frame tree, ``PluginBase.frames``), unless ``odom.publish_tf`` is false.
 
 States (values = ChassisCmd mode constants), all decided in ``_decide``:
-    PASSIVE: commanded; or no valid /chassis_cmd (watchdog); or a wheel (or, in a mode
-        that follows the gimbal, the yaw joint) without fresh feedback. Wheels get MODE_OFF.
+    PASSIVE: commanded; or no valid /chassis_cmd (watchdog); or a wheel or steering joint
+        (or, in a mode that follows the gimbal, the yaw joint) without fresh feedback.
+        Wheels (and steering joints) get MODE_OFF.
     RAW, FOLLOW, TWIST, GYRO: as commanded, see ``rm_base.control.chassis_modes``.
     POSITION: move by ChassisCmd's (move_x, move_y, move_yaw) from the odometry pose where
         a new move_id (or the mode) began, then hold there (``rm_plugins.chassis.position``);
@@ -71,7 +74,14 @@ from rclpy.qos import qos_profile_sensor_data
 from rclpy.time import Time
 from rm_base.control import ChassisMotionMode, estimate_power
 from rm_base.errors import InputRejectedError
-from rm_base.geometry import SE3, Twist2D, quaternion_from_yaw, wrap_to_pi, yaw_from_quaternion
+from rm_base.geometry import (
+    SE3,
+    SwerveKinematics,
+    Twist2D,
+    quaternion_from_yaw,
+    wrap_to_pi,
+    yaw_from_quaternion,
+)
 from rm_base.joints import JointState
 from rm_base.plugin import JointTarget, LatestMessage, LogThrottle, PluginBase, PluginConfigError
 from rm_base.plugin.commands import stamp_ns_of
@@ -87,6 +97,7 @@ from rm_plugins.chassis.commands import (
     parse_vel_cmd,
 )
 from rm_plugins.chassis.config import ChassisConfig, ImuMount, read_config
+from rm_plugins.chassis.drive import Drive, SwerveDrive
 from rm_plugins.chassis.motion import (
     BASE_LINK_FRAME,
     GIMBAL_FRAME,
@@ -136,7 +147,7 @@ class _Decision(NamedTuple):
 
 
 class StandChassis(PluginBase):
-    """Mecanum/omni chassis; see the module docstring. Parameters: ``config.read_config``."""
+    """Mecanum/omni/swerve chassis; see the module docstring. Parameters: ``config.read_config``."""
 
     State = ChassisMode
 
@@ -146,13 +157,20 @@ class StandChassis(PluginBase):
         """Read the parameters, claim the wheels, subscribe, create publishers."""
         cfg: ChassisConfig = read_config(self.params)
         self.config = cfg
-        self.claim_joints(cfg.wheel_joints)
+        self.claim_joints(cfg.wheel_joints + cfg.steer_joints)
+        # swerve: the steering targets and angles live between ticks in the drive
+        self._swerve: SwerveDrive | None = None
+        self._drive: Drive
+        if isinstance(cfg.wheels, SwerveKinematics):
+            self._drive = self._swerve = SwerveDrive(cfg.wheels)
+        else:
+            self._drive = cfg.wheels
         self._chassis_cmd = self.subscribe_command('chassis_cmd', ChassisCmd)
         self._vel_cmd = self.subscribe_command(
             'vel_cmd', Twist, timeout=cfg.vel_cmd_timeout, watchdog=False
         )
         self._planner = MotionPlanner(
-            cfg.wheels, cfg.modes, cfg.linear_limits, cfg.angular_limits, cfg.max_wheel_speed
+            self._drive, cfg.modes, cfg.linear_limits, cfg.angular_limits, cfg.max_wheel_speed
         )
         # The wheels' own 1 kHz loops and a power stage after them, in the loop that drives
         # them (this process's, or the bridge's when rm_robot runs alone).
@@ -164,7 +182,7 @@ class StandChassis(PluginBase):
             self._referee_power = referee = RefereePower(cfg.referee_power, cfg.referee_timeout)
             self.subscribe('referee/robot_status', RefereeRobotStatus, referee.on_robot_status, 10)
             self.subscribe('referee/power_heat', RefereePowerHeat, referee.on_power_heat, 10)
-        self._odometry = Odometry(cfg.wheels)
+        self._odometry = Odometry(self._drive)
         self._imu = LatestMessage(use_stamp=False)
         if cfg.imu_mount is not ImuMount.NONE:
             # Sensor QoS (best effort, keep last): an old IMU sample is worthless.
@@ -272,7 +290,9 @@ class StandChassis(PluginBase):
         if wheel_problem is not None:
             return _Decision(ChassisMode.PASSIVE, wheel_problem, None)
         yaw_joint = None
-        if request.mode is not ChassisMode.RAW and request.source is FollowSource.GIMBAL:
+        # POSITION moves in odom, RAW in base_link: neither needs the gimbal's heading
+        follows_gimbal = request.mode not in (ChassisMode.RAW, ChassisMode.POSITION)
+        if follows_gimbal and request.source is FollowSource.GIMBAL:
             # Read once: the view may change under us (a newer message, maybe offline).
             yaw_joint = self._yaw_joint_state(now_ns)
             if yaw_joint is None:
@@ -301,12 +321,23 @@ class StandChassis(PluginBase):
         return state
 
     def _wheel_states(self, now_ns: int) -> tuple[list[JointState] | None, str | None]:
+        """The wheels' states; a swerve chassis' steering angles go to its drive."""
         states = []
         for joint in self.config.wheel_joints:
             state = self._fresh(joint, now_ns)
             if state is None:
                 return None, f"wheel '{joint}' has no fresh feedback (offline or stale)"
             states.append(state)
+        if self._swerve is not None:
+            angles = []
+            for joint in self.config.steer_joints:
+                state = self._fresh(joint, now_ns)
+                if state is None:
+                    return None, (
+                        f"steering joint '{joint}' has no fresh feedback (offline or stale)"
+                    )
+                angles.append(state.position)
+            self._swerve.observe(angles)
         return states, None
 
     def _yaw_joint_state(self, now_ns: int) -> JointState | None:
@@ -408,6 +439,8 @@ class StandChassis(PluginBase):
             self._active = False
             self._held_heading = None
             self._goal = None  # a move interrupted by PASSIVE is over
+            if self._swerve is not None:
+                self._swerve.reset()  # limp modules may be turned by hand meanwhile
         count = len(self.config.wheel_joints)
         self._report.set_output(
             Twist2D(), [0.0] * count, [0.0] * count,
@@ -495,10 +528,16 @@ class StandChassis(PluginBase):
         joints = self.config.wheel_joints
         stage = self._power_stage
         stage.limit_w = limit
-        self.send_joint_targets({
+        targets = {
             joint: JointTarget.with_velocity(target)
             for joint, target in zip(joints, motion.wheel_targets, strict=True)
-        })
+        }
+        if self._swerve is not None:
+            for name, angle in zip(
+                self.config.steer_joints, self._swerve.steer_targets, strict=True
+            ):
+                targets[name] = JointTarget.with_position(angle)
+        self.send_joint_targets(targets)
         last = stage.last  # the loop's latest tick
         efforts = last.torques if last is not None else (0.0,) * len(joints)
         power_w = last.power_w if last is not None else self._idle_power(speeds)
