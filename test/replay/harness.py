@@ -14,8 +14,9 @@ What happens:
 2. The bag (test/data/<scenario>/ unless given) is read with rmcli's reader
    (``rm_bringup.cli.bag_io``; a type recorded with an older definition is rebuilt in the
    installed one, as ``rmcli bag play`` does) and each message is handed to the plugins
-   subscribed to its topic at its bag time on the simulated clock, through the callbacks their
-   subscriptions run. Every std_msgs/Header in a command is stamped with the robot's
+   subscribed to its topic (renamed by the scenario's ``remaps``, parsed as ``rmcli bag
+   play --remap`` parses them) at its bag time on the simulated clock, through the
+   callbacks their subscriptions run. Every std_msgs/Header in a command is stamped with the robot's
    ROS clock at that moment, as a live commander's would be (the bags carry stamps
    relative to their start; played with plain ``rmcli bag play`` into a live robot, they
    would be rejected as stale).
@@ -241,6 +242,7 @@ def replay(
     from rclpy.serialization import deserialize_message
     from rm_bringup.cli.bag_convert import read_installed
     from rm_bringup.cli.bag_io import open_bag
+    from rm_bringup.cli.bag_play import parse_remaps
     from rm_bringup.cli.interfaces import get_message_class
     from support.lockstep import LockstepRobot
 
@@ -250,11 +252,13 @@ def replay(
     unknown = sorted(set(topics) - {topic for topic, _ in OUTPUTS})
     if unknown:
         raise ReplayError(f'cannot record {unknown}: the outputs are {sorted(dict(OUTPUTS))}')
+    remaps = parse_remaps(list(scenario.remaps))
     with open_bag(bag) as reader:
         classes = {c.topic: get_message_class(c.msgtype) for c in reader.connections}
         start_ns = reader.start_time
         schedule = [
-            (stamp - start_ns, c.topic, deserialize_message(raw, classes[c.topic]))
+            (stamp - start_ns, remaps.get(c.topic, c.topic),
+             deserialize_message(raw, classes[c.topic]))
             for c, stamp, raw in read_installed(reader, bag, list(reader.connections),
                                                 start=start_ns)
         ]
@@ -276,7 +280,7 @@ def replay(
             if topic in ('/actuator_states', '/joint_states'):
                 robot.watch(topic, keep_history=False)
                 robot.on_tick(_forward_bridge_states(robot, topic, log, replay_t))
-        sent: dict[str, list[Sent]] = {topic: [] for topic in classes}
+        sent: dict[str, list[Sent]] = {remaps.get(topic, topic): [] for topic in classes}
         faults = _Faults(world, scenario.faults)
         body: list[BodySample] = []
         end_ns = round((scenario.end_s + scenario.tail_s) * 1e9)

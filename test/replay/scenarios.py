@@ -15,6 +15,8 @@ A scenario is what an operator (or a planner) did, written down as data:
 - ``tail_s``: how long the harness keeps recording after the last command.
 - ``record``: the robot's output topics the harness records (the sim's ground truth is
   always sampled); only what the tests need.
+- ``remaps``: ``FROM:=TO`` topic renames the harness plays the bag with, as
+  ``rmcli bag play --remap`` takes them (a teleop bag's /cmd_vel played as /vel_cmd).
 
 Simulated loads: standard_sim.yaml gives the turret, barrel, friction wheels and trigger
 their loads but leaves the wheels with nothing but their rotors, which makes the wheel
@@ -113,6 +115,7 @@ class Scenario:
     faults: tuple[Jam, ...] = ()
     tail_s: float = 1.0
     record: tuple[str, ...] = OUTPUT_TOPICS
+    remaps: tuple[str, ...] = ()
 
     @property
     def end_s(self) -> float:
@@ -348,7 +351,43 @@ DROPOUT = Scenario(
     record=('/chassis_state', '/actuator_states'),
 )
 
-SCENARIOS: dict[str, Scenario] = {s.name: s for s in (SQUARE, GYRO_TRACK, BURST_JAM, DROPOUT)}
+# -- 5. a teleop session ------------------------------------------------------------------------
+# What `ros2 bag record` keeps of an operator driving with teleop_twist_keyboard: its Twist
+# on /cmd_vel (0.5 m/s, 1 rad/s: the tool's defaults; a message per key repeat, ~10 Hz) and
+# the chassis mode from `rmcli topic pub -r 20 /chassis_cmd ...`. Played with
+# ``--remap /cmd_vel:=/vel_cmd``. Keys, as (start, end, key): i forward, u forward-left,
+# j left in place, k stop.
+CMD_VEL = ('/cmd_vel', 'geometry_msgs/msg/Twist')
+TELEOP_RATE_HZ = 10.0  # [Hz] key repeat
+TELEOP_MODE_HZ = 20.0  # [Hz] rmcli topic pub -r 20
+TELEOP_KEYS: tuple[tuple[float, float, tuple[float, float]], ...] = (  # (vx [m/s], wz [rad/s])
+    (1.0, 3.0, (0.5, 0.0)),  # i
+    (3.0, 4.5, (0.5, 1.0)),  # u
+    (4.5, 6.0, (0.5, 0.0)),  # i
+    (6.0, 6.5, (0.0, 0.0)),  # k
+    (6.5, 8.0, (0.0, 1.0)),  # j
+    (8.0, 8.5, (0.0, 0.0)),  # k
+)
+TELEOP_END_S = 9.0
+
+TELEOP = Scenario(
+    name='teleop',
+    description='teleop_twist_keyboard on /cmd_vel (played as /vel_cmd), chassis RAW',
+    robot=Robot(plugins=('chassis',), overrides=robot_overrides(SIM_LOADS['chassis'])),
+    commands=(
+        Command(CHASSIS_CMD[0], CHASSIS_CMD[1], {'mode': 'raw'}, 0.0, TELEOP_END_S,
+                TELEOP_MODE_HZ),
+        *(Command(CMD_VEL[0], CMD_VEL[1], _twist(vx=vx, wz=wz), start, end, TELEOP_RATE_HZ)
+          for start, end, (vx, wz) in TELEOP_KEYS),
+    ),
+    tail_s=1.0,
+    record=('/odom',),
+    remaps=('/cmd_vel:=/vel_cmd',),
+)
+
+SCENARIOS: dict[str, Scenario] = {
+    s.name: s for s in (SQUARE, GYRO_TRACK, BURST_JAM, DROPOUT, TELEOP)
+}
 
 # The gimbal tracks a point at this bearing from the start position [rad].
 TRACK_BEARING = math.atan2(TRACK_TARGET[1], TRACK_TARGET[0])

@@ -15,7 +15,7 @@ from rm_bringup.cli.bag_convert import read_installed
 from rm_bringup.cli.bag_io import open_bag
 from rm_bringup.cli.bag_types import rm_bag_types
 
-from replay.scenarios import DATA_DIR, RATE_HZ, SCENARIOS, Command, Robot, Scenario
+from replay.scenarios import DATA_DIR, SCENARIOS, Command, Robot, Scenario
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 MAX_DATA_BYTES = 300 * 1024  # test/data stays small: a few hundred KB at most
@@ -68,10 +68,13 @@ def test_commands_stream_at_the_rate_with_stamps_from_the_bag_start(name, store)
     scenario = SCENARIOS[name]
     _, messages = decoded(DATA_DIR / name, store)
     assert messages[0][1] == 0  # the bag starts at 0 s
-    period_ns = round(1e9 / RATE_HZ)  # 50 Hz: 20 ms
-    for topic, _ in scenario.topics:
+    periods = {}
+    for topic, _ in scenario.topics:  # each topic at its own rate (50 Hz unless said)
+        rate = next(c.rate_hz for c in scenario.commands if c.topic == topic)
+        periods[topic] = period_ns = round(1e9 / rate)
         times = [t for tp, t, _ in messages if tp == topic]
         assert {b - a for a, b in itertools.pairwise(times)} == {period_ns}, topic
+    period_ns = max(periods.values())
     for _, t, msg in messages:
         if hasattr(msg, 'header'):
             assert msg.header.stamp.sec * 10**9 + msg.header.stamp.nanosec == t
