@@ -12,6 +12,8 @@ import math
 
 import pytest
 from geometry_msgs.msg import Twist
+from rm_base.joints import Mode
+from rm_base.sim import Fault
 from support.lockstep import LockstepRobot
 
 from rm_msgs.msg import ChassisCmd
@@ -102,3 +104,25 @@ def test_gyro_translates_along_odom_while_spinning():
         # translation ahead by the command's latency: with 0 it curves 0.21 m off here)
         assert body.x - x0 == pytest.approx(2.0, abs=0.05)
         assert abs(body.y - y0) < 0.05
+
+
+def test_a_steering_joint_that_goes_offline_makes_the_chassis_passive_and_every_joint_limp():
+    with LockstepRobot('swerve', plugins=('chassis',)) as robot:
+        chassis = robot.plugin('chassis')
+        robot.publish('/chassis_cmd', ChassisCmd(mode=ChassisCmd.RAW), rate_hz=50)
+        robot.publish('/vel_cmd', twist(y=0.5), rate_hz=50)
+        robot.run(1.0)
+        assert chassis.state.name == 'RAW'
+        assert robot.joint('steer_fl')['mode'] == Mode.POSITION
+        robot.world.inject('steer_rl', Fault.offline())
+        robot.run(0.3)  # past the feedback timeouts (0.1 s)
+        assert chassis.state.name == 'PASSIVE'
+        assert chassis.reason == (
+            "steering joint 'steer_rl' has no fresh feedback (offline or stale)"
+        )
+        assert all(robot.joint(j)['mode'] == Mode.OFF for j in (*WHEELS, *STEERS))
+        # back online: driving again, the modules steered from where they stand
+        robot.world.clear_faults('steer_rl')
+        robot.run(1.5)
+        assert chassis.state.name == 'RAW'
+        assert robot.world.body.twist[1] == pytest.approx(0.5, abs=0.02)

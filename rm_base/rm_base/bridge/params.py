@@ -108,9 +108,9 @@ class BridgeSettings:
         sim: simulator settings, or None on real hardware.
         edge_priority: SCHED_FIFO priority the executable gives the process's other
             threads (:func:`rm_base.realtime.raise_edge_priority`); 0: none.
-        cpu_index: the CPU the executable keeps every thread of the process on, an
-            index into the CPUs it may use (:func:`rm_base.realtime.keep_on_cpu`); None:
-            wherever the kernel puts them.
+        cpu_index: the CPU the executable keeps every Python thread of the process on,
+            an index into the CPUs it may use (:func:`rm_base.realtime.keep_on_cpu`);
+            None: wherever the kernel puts them.
         calibration_max_speed: a joint turning faster is not at rest (set_zero) [rad/s].
     """
 
