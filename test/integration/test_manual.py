@@ -63,9 +63,13 @@ def test_the_remote_and_the_image_links_keyboard_become_commands_and_silence_sto
     assert wait_until(lambda: h.state() is LinkState.NO_DATA, WAIT)
     assert h.chassis == []  # nothing heard: nothing commanded
     streamer.start(dr16)
-    # keyboard mode (right switch up), W held on the remote's PC port: 2 m/s forward
-    assert wait_until(lambda: h.vel and h.vel[-1].linear.x == pytest.approx(2.0), WAIT)
-    assert h.chassis[-1].mode == ChassisCmd.FOLLOW and h.gimbal[-1].mode == GimbalCmd.RATE
+    # keyboard mode (right switch up), W held on the remote's PC port: 2 m/s forward. Each
+    # topic is its own DDS stream, so each is waited for: one may arrive before another.
+    assert wait_until(lambda: (
+        h.vel and h.vel[-1].linear.x == pytest.approx(2.0)
+        and h.chassis and h.chassis[-1].mode == ChassisCmd.FOLLOW
+        and h.gimbal and h.gimbal[-1].mode == GimbalCmd.RATE
+    ), WAIT), (h.vel[-1:], h.chassis[-1:], h.gimbal[-1:])
     assert h.state() is LinkState.STREAMING
     # the image link adds A (left) and a mouse moving left
     keys = ref.KeyboardMouse(-50, 0, 0, False, False, int(dbus.Key.A))
@@ -78,18 +82,20 @@ def test_the_remote_and_the_image_links_keyboard_become_commands_and_silence_sto
     assert wait_until(
         lambda: sent(ref.encode_frame(*ref.encode_status(keys, ref.ProtocolVersion.V2025))), WAIT
     )
-    assert h.gimbal[-1].rate_yaw == pytest.approx(1.0)
+    assert wait_until(lambda: h.gimbal[-1].rate_yaw == pytest.approx(1.0), WAIT), h.gimbal[-1]
     # a 2025+ A9 53 frame on the same link: CTRL (the SLOW gear) + F (GYRO)
     v1 = bytes.fromhex('A9 53 94 06 20 AF D8 A2 60 19 F9 FF 0F 00 00 00 01 20 02 DE 1C')
     link.write(v1)
     assert wait_until(lambda: h.chassis[-1].mode == ChassisCmd.GYRO, WAIT)
     assert h.chassis[-1].speed_gear == ChassisCmd.GEAR_SLOW
-    assert h.vel[-1].linear.x == pytest.approx(2.0)
+    assert h.vel[-1].linear.x == pytest.approx(2.0)  # unchanged since W
     # the remote goes silent: everything PASSIVE
     streamer.stop()
-    assert wait_until(lambda: h.chassis[-1].mode == ChassisCmd.PASSIVE, WAIT)
-    assert h.shoot[-1].mode == ShootCmd.PASSIVE and h.gimbal[-1].mode == GimbalCmd.PASSIVE
-    assert h.vel[-1].linear.x == 0.0
+    assert wait_until(lambda: (
+        h.chassis[-1].mode == ChassisCmd.PASSIVE
+        and h.shoot and h.shoot[-1].mode == ShootCmd.PASSIVE
+        and h.gimbal[-1].mode == GimbalCmd.PASSIVE and h.vel[-1].linear.x == 0.0
+    ), WAIT), (h.chassis[-1], h.shoot[-1:], h.gimbal[-1], h.vel[-1])
     assert wait_until(lambda: h.state() is LinkState.NO_DATA, WAIT)
     # each link on /diagnostics every diagnostics_period (1 s)
     assert wait_until(lambda: (s := h.diagnostic('rm_robot: manual dr16', h.diagnostics))
