@@ -19,7 +19,9 @@ its kind.
 
 ``--clock [HZ]`` also publishes the bag's time on /clock (rosgraph_msgs/Clock, 40 Hz by
 default, as ros2 bag play), advancing at ``--rate``, so nodes run with ``use_sim_time``
-see the time the messages were recorded at: a stamped command replayed stays fresh.
+see the time the messages were recorded at: a stamped command replayed stays fresh. The
+wait for subscribers then includes /clock's, so such a node has the bag's time from the
+first message on.
 
 Not implemented from ros2 bag play: keyboard controls, node-name remapping, services, QoS
 override files, --playback-duration/until.
@@ -147,7 +149,9 @@ def run(args: argparse.Namespace) -> int:
             clock = None
             if args.clock is not None:
                 clock = ClockPublisher(node, args.clock)
-            _wait_for_subscribers(publishers.values(), args.wait_for_subscribers, stop)
+            # /clock too: a sim-time subscriber that matched late would miss the first ticks
+            waited = [*publishers.values(), *([clock.publisher] if clock is not None else [])]
+            _wait_for_subscribers(waited, args.wait_for_subscribers, stop)
             options = PlayOptions(args.rate, args.loop, args.start_offset, args.delay)
             played = play(
                 reader, path, playable, publishers, options=options, stop=stop, clock=clock,
@@ -243,14 +247,14 @@ class ClockPublisher:
 
         self._msg_type = Clock
         # reliable, depth 1: matches rclpy's best-effort /clock subscription and a reliable one
-        self._publisher = node.create_publisher(Clock, CLOCK_TOPIC, QoSProfile(depth=1))
+        self.publisher = node.create_publisher(Clock, CLOCK_TOPIC, QoSProfile(depth=1))
         self.period_ns = round(1e9 / rate_hz)
 
     def publish(self, bag_ns: int) -> None:
         """Say that it is bag_ns [ns since the epoch]."""
         msg = self._msg_type()
         msg.clock.sec, msg.clock.nanosec = divmod(int(bag_ns), 1_000_000_000)
-        self._publisher.publish(msg)
+        self.publisher.publish(msg)
 
 
 @dataclass(frozen=True)
