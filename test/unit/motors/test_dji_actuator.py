@@ -246,3 +246,33 @@ def test_unknown_option_and_bad_id_are_config_errors():
         make('gm6020', raw_limit=30001)
     with pytest.raises(HardwareConfigError, match='resistance must be > 0'):
         make('gm6020', resistance=0.0)
+
+
+def test_a_lone_corrupted_speed_does_not_drive_the_gm6020_voltage_to_its_clamp():
+    # The soak's case: a frame with a legal angle and a speed inside the bound (-520 rpm)
+    # on a rotor at rest. Taken as the speed, Ke*w would ask for -37 V: the -24 V clamp,
+    # which drives ~13 A into a stopped rotor.
+    a = make('gm6020')  # voltage mode, R 1.8, Ke 0.716, max_effort 1.2 N·m
+    for k in range(3):
+        feed(a, T0 + k * MS, rpm=0)
+    feed(a, T0 + 3 * MS, rpm=-520)
+    raw = run(a, Mode.EFFORT, T0 + 3 * MS, effort=0.5)
+    # 0.5 N·m -> 0.675 A -> V = 1.8 * 0.675 = 1.21 V -> raw 1265: no back-EMF term
+    assert raw == round(1.8 * 0.5 / 0.741 * 25000 / 24)
+    assert a.state().command == pytest.approx(0.5, abs=0.01)
+
+
+def test_the_gm6020_voltage_follows_a_real_speed_change_one_frame_late():
+    a = make('gm6020', resistance=2.0, back_emf_constant=0.5)
+    w = 60 * dji.RAD_PER_S_PER_RPM  # 60 rpm = 2 pi rad/s
+    for k in range(3):
+        feed(a, T0 + k * MS, rpm=0)
+    feed(a, T0 + 3 * MS, rpm=60)
+    assert a.back_emf_speed == 0.0  # one frame: could be a corrupted one
+    feed(a, T0 + 4 * MS, rpm=60)
+    assert a.back_emf_speed == pytest.approx(w)  # two of three: the rotor turns
+    # after a gap the speeds before it are forgotten; of two frames the slower counts
+    feed(a, T0 + 50 * MS, rpm=30)
+    assert a.back_emf_speed == pytest.approx(w / 2)
+    feed(a, T0 + 51 * MS, rpm=600)
+    assert a.back_emf_speed == pytest.approx(w / 2)

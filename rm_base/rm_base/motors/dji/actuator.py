@@ -9,11 +9,13 @@ Family options (``joints.<name>.<key>``): each class's ``options_schema``. ``si_
 may be ``1.62/16384`` for the other GM6020 current-mode scale (UNVERIFIED which is right;
 3 A/16384 is the default). A GM6020 on voltage turns an effort into a voltage with
 ``V = R·I + Ke·ω``; R 1.8 Ω and Ke 60/(2π·13.33 rpm/V) = 0.716 V·s/rad are datasheet-level
-values (not in docs/PROTOCOLS.md).
+values (not in docs/PROTOCOLS.md). ω there is the median rotor speed of the last three
+frames, so that one corrupted frame cannot put the clamped voltage on a standing rotor.
 """
 
 from __future__ import annotations
 
+import collections
 import math
 from typing import ClassVar
 
@@ -30,6 +32,11 @@ _RPM_TO_RAD_S = dji.RAD_PER_S_PER_RPM
 #: Feedback faster than this times the type's no-load speed is implausible.
 _PLAUSIBLE_SPEED_FACTOR = 2.0
 _TAU = 2.0 * math.pi
+
+#: Frames whose median rotor speed a GM6020 on voltage compensates (one outlier outvoted).
+_BACK_EMF_FRAMES = 3
+#: A gap between frames after which the speeds before it are not used [ns].
+_BACK_EMF_GAP_NS = 10_000_000
 
 #: GM6020 speed constant 13.33 rpm/V -> back-EMF constant [V·s/rad].
 GM6020_BACK_EMF_V_S_PER_RAD = 60.0 / (_TAU * 13.33)
@@ -179,9 +186,39 @@ class Gm6020Voltage(DjiActuator):
         super().__init__(config, safety)
         self.resistance: float = self.options['resistance']
         self.back_emf_constant: float = self.options['back_emf_constant']
+        # The rotor speeds of the last frames, for the back-EMF term (see back_emf_speed).
+        self._speeds: collections.deque[float] = collections.deque(maxlen=_BACK_EMF_FRAMES)
+        self._last_frame_ns: int | None = None
+
+    def handle_frame(self, msg: can.Message, now_ns: int) -> bool:
+        """As for every actuator; also keeps the rotor speed for the back-EMF term."""
+        before = self._feedback
+        claimed = super().handle_frame(msg, now_ns)
+        feedback = self._feedback
+        if feedback is not None and feedback is not before:  # a frame was taken
+            last, self._last_frame_ns = self._last_frame_ns, now_ns
+            if last is None or now_ns - last > _BACK_EMF_GAP_NS:
+                self._speeds.clear()  # after a gap the old speeds tell nothing
+            self._speeds.append(feedback.device_velocity)
+        return claimed
+
+    @property
+    def back_emf_speed(self) -> float:
+        """The rotor speed [rad/s] the voltage compensates: the median of the last frames.
+
+        A DJI frame has no checksum, and a corrupted one inside the speed bound still reads
+        as a speed; put into ``Ke·ω`` once, it would drive the clamped voltage into a
+        rotor that is not turning. The median of three frames never takes a lone outlier
+        and follows a real change one frame late. Of two frames (after start or a gap)
+        the slower is taken, of one that one.
+        """
+        speeds = sorted(self._speeds)
+        if len(speeds) == 2:
+            return min(speeds, key=abs)
+        return speeds[len(speeds) // 2] if speeds else 0.0
 
     def _set_output(self, effort: float, command: JointCommand, feedback: Feedback) -> float:
-        rotor_velocity = feedback.device_velocity
+        rotor_velocity = self.back_emf_speed
         amps = self.direction * effort / self._kt
         volts = self.resistance * amps + self.back_emf_constant * rotor_velocity
         raw = self.spec.raw_from_si(volts)
