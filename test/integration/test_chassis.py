@@ -306,6 +306,22 @@ def test_when_mecanum_has_three_wheels_expect_one_line_naming_wheel_joints(ros_c
         RobotHost(context=ros_context, parameter_overrides=params)
 
 
+@pytest.mark.parametrize(
+    ('steer_joints', 'message'),
+    [
+        (['s1', 's2', 's3'], r"'chassis.steer_joints' must name 4 steering joints in the order "
+                             r'FL, FR, RL, RR for swerve, got 3'),
+        (['s1', 's2', 's3', 'wheel_rr'], r'joint\(s\) wheel_rr both steer and drive'),
+    ],
+)
+def test_when_swerve_steering_joints_are_wrong_expect_one_line_naming_them(
+    ros_context, steer_joints, message
+):
+    params = robot_parameters(kinematics='swerve', steer_joints=steer_joints)
+    with pytest.raises(ParameterError, match=message):
+        RobotHost(context=ros_context, parameter_overrides=params)
+
+
 # -- states on the sim --------------------------------------------------------------------------
 
 
