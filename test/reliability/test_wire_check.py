@@ -233,6 +233,24 @@ def test_actuator_states_with_nan_or_beyond_the_limit_are_reported():
     ]
 
 
+def test_a_voltage_frame_sent_after_a_stall_is_judged_with_the_speeds_of_its_decision():
+    checker = WireChecker(CONFIG, grace_s=0.002, stall_s=0.02, feedback_window_s=0.15)
+    # the yaw turns at 300 rpm (31 rad/s, a 22.5 V back-EMF): 24 V asks ~0.6 N·m
+    for k in range(50):
+        t = k * MS
+        feed(checker, yaw_fb(t, rpm=300), frame(0x1FF, dji.pack_command([25000]), t))
+    # the bridge's process stalls after deciding a tick at 50 ms, while the motor, on its
+    # own, brakes to 0 rpm and reports it for 300 ms; the 24 V frame goes out at 350 ms
+    for k in range(300):
+        feed(checker, yaw_fb(0.05 + k * MS, rpm=0))
+    found = feed(checker, frame(0x1FF, dji.pack_command([25000]), 0.35))
+    assert found == []  # decided at 300 rpm, which the speeds of 0.35 s alone would not say
+    assert checker.stalls == 1
+    # the next frame is decided after the stall, at rest: 24 V is 9.9 N·m
+    found = feed(checker, yaw_fb(0.351), frame(0x1FF, dji.pack_command([25000]), 0.351))
+    assert rules(found) == [('yaw', 'effort')]
+
+
 def test_a_frame_sent_after_a_stall_is_judged_when_it_was_decided():
     checker = WireChecker(CONFIG, grace_s=0.002, stall_s=0.02)
     for k in range(50):  # a steady 1 kHz stream with fresh feedback

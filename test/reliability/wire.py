@@ -126,15 +126,27 @@ class JointStats:
 
 class _Window:
     """Sliding min and max of a value over the last ``span_s`` seconds (never fewer than the
-    last two samples), in O(1) amortised per sample."""
+    last two samples), in O(1) amortised per sample.
+
+    The last ``span_s + HISTORY_S`` seconds of samples are also kept, for frames decided
+    before a stall and sent after it (``bounds(since=...)``): the bridge decided them with
+    feedback from before the stall, which the sliding window may have let go meanwhile.
+    """
+
+    HISTORY_S = 2.0  # [s] longer than any stall a test lets pass
 
     def __init__(self, span_s: float) -> None:
         self.span_s = span_s
+        self._history: collections.deque[tuple[float, float]] = collections.deque()
         self._samples: collections.deque[tuple[float, float]] = collections.deque()
         self._lo: collections.deque[tuple[float, float]] = collections.deque()
         self._hi: collections.deque[tuple[float, float]] = collections.deque()
 
     def add(self, t: float, x: float) -> None:
+        history = self._history
+        history.append((t, x))
+        while history[0][0] < t - self.span_s - self.HISTORY_S:
+            history.popleft()
         self._samples.append((t, x))
         while self._lo and self._lo[-1][1] >= x:
             self._lo.pop()
@@ -149,11 +161,20 @@ class _Window:
                 while mono and mono[0][0] <= old_t:
                     mono.popleft()
 
-    def bounds(self) -> tuple[float, float] | None:
-        """(min, max) over the window, or None before any sample."""
+    def bounds(self, since: float | None = None) -> tuple[float, float] | None:
+        """(min, max) over the window, or None before any sample.
+
+        Args:
+            since: also over every kept sample from this time on [s] (an O(n) scan, for
+                the few frames sent after a stall).
+        """
         if not self._samples:
             return None
-        return self._lo[0][1], self._hi[0][1]
+        lo, hi = self._lo[0][1], self._hi[0][1]
+        if since is not None:
+            older = [x for tx, x in self._history if tx >= since]
+            lo, hi = min([lo, *older]), max([hi, *older])
+        return lo, hi
 
     @property
     def last(self) -> float:
@@ -248,6 +269,7 @@ class WireChecker:
         self._burst: dict[str, tuple[float, float]] = {}
         self._last_stall: dict[str, tuple[float, float]] = {}  # bus -> (end, length ms)
         self.stall_window_s = stall_window_s
+        self.feedback_window_s = feedback_window_s
         self.violations_by_rule: dict[str, int] = {}
         self.violations_after_stall = 0
         self.stalls = 0
@@ -585,7 +607,7 @@ class WireChecker:
                 # the bridge's hold output, and the only one that needs no fresh speed.)
                 effort, step = 0.0, 0.0
             elif isinstance(shadow, Gm6020Voltage):
-                effort, step = self._gm6020_effort(joint, shadow, raw)
+                effort, step = self._gm6020_effort(joint, shadow, raw, self._since(td, t))
             else:
                 effort = raw * spec.si_per_raw * kt
                 step = spec.si_per_raw * kt
@@ -594,16 +616,24 @@ class WireChecker:
                 detail = f'raw {raw} = {effort:+.4f} N·m beyond max_effort {joint.max_effort} N·m'
             self._judge(joint, bus, can_id, t, td, effort, raw != 0, detail, found)
 
+    def _since(self, td: float, t: float) -> float | None:
+        """For a frame decided before it was sent (after a stall): the feedback window's
+        start at the decision, else None."""
+        return td - self.feedback_window_s if td < t else None
+
     @staticmethod
-    def _gm6020_effort(joint: _Joint, shadow: Gm6020Voltage, raw: int) -> tuple[float, float]:
+    def _gm6020_effort(
+        joint: _Joint, shadow: Gm6020Voltage, raw: int, since: float | None = None
+    ) -> tuple[float, float]:
         """Effort a GM6020 voltage command asks for, the smallest over the feedback window.
 
         The bridge computes the voltage with the newest feedback it has processed, which
-        may be older than the newest on the wire (see ``feedback_window_s``).
+        may be older than the newest on the wire (see ``feedback_window_s``); a frame
+        decided before a stall, with any it had then (``since``).
         """
         volts = raw * shadow.spec.si_per_raw
         kt, r, ke = shadow.torque_constant, shadow.resistance, shadow.back_emf_constant
-        bounds = joint.velocity.bounds() or (0.0, 0.0)
+        bounds = joint.velocity.bounds(since) or (0.0, 0.0)
         # linear in ω: the extremes are at the window's bounds
         a, b = ((volts - ke * w) / r * kt for w in bounds)
         return _min_abs(min(a, b), max(a, b)), shadow.spec.si_per_raw / r * kt
@@ -636,8 +666,9 @@ class WireChecker:
         g = shadow.gear_ratio
         # the torque the motor applies, the smallest over the feedback window (linear in
         # q and dq: the extremes are at the window's bounds)
-        q_lo, q_hi = joint.position.bounds() or (0.0, 0.0)
-        dq_lo, dq_hi = joint.velocity.bounds() or (0.0, 0.0)
+        since = self._since(td, t)
+        q_lo, q_hi = joint.position.bounds(since) or (0.0, 0.0)
+        dq_lo, dq_hi = joint.velocity.bounds(since) or (0.0, 0.0)
         lo = cmd.kp * (cmd.position - q_hi) + cmd.kd * (cmd.velocity - dq_hi) + cmd.torque
         hi = cmd.kp * (cmd.position - q_lo) + cmd.kd * (cmd.velocity - dq_lo) + cmd.torque
         effort = _min_abs(lo, hi) * g
