@@ -56,6 +56,11 @@ class ThreadProfiles:
 
         setattr(obj, attribute, wrapped)
 
+    def stopped(self) -> bool:
+        """Whether every profile started has stopped (its thread passed a check since)."""
+        with self._lock:
+            return all(not running[0] for _, _, running in self._profiles.values())
+
     def report(self, out_dir: Path, top: int = 25) -> dict[str, Any]:
         """Write one text and one pstats profile per thread; return each thread's top functions."""
         summary: dict[str, Any] = {}

@@ -41,6 +41,9 @@ from typing import Any
 
 from bench.protocol import reply, serve
 
+#: How long a profiled thread may take to pass its check after the window [s].
+_PROFILE_STOP_WAIT_S = 10.0
+
 
 def make_tap_class():
     from rm_base.sim import SimBus
@@ -380,7 +383,11 @@ class Robot:
         self.profiles = profiles
         time.sleep(seconds)
         profiles.active = False
-        time.sleep(0.5)  # every thread passes its check and stops its profile
+        # every thread passes its check and stops its profile; on a loaded machine a thread
+        # behind the real-time loop may wait seconds for its next call
+        deadline = time.monotonic() + _PROFILE_STOP_WAIT_S
+        while not profiles.stopped() and time.monotonic() < deadline:
+            time.sleep(0.05)
         self.profiles = None
         for obj, attribute in targets:
             obj.__dict__.pop(attribute, None)
