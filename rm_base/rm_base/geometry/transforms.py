@@ -12,7 +12,8 @@ Both classes are immutable: the matrix they expose is read-only.
 from __future__ import annotations
 
 import math
-from typing import Self
+from collections.abc import Iterable
+from typing import Any, Self, cast
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -21,9 +22,9 @@ from rm_base.errors import InputRejectedError
 from rm_base.geometry.rotations import (
     Quaternion,
     check_rotation_matrix,
+    normalize_quaternion,
     quaternion_from_rotation_matrix,
-    rotation_matrix_from_quaternion,
-    rotation_matrix_from_rpy,
+    quaternion_from_rpy,
     rpy_from_quaternion,
 )
 
@@ -43,11 +44,15 @@ def _check_homogeneous(matrix: ArrayLike, size: int) -> NDArray[np.float64]:
     return homogeneous
 
 
-def _check_vector(name: str, value: ArrayLike, size: int) -> NDArray[np.float64]:
-    vector = np.asarray(value, dtype=float)
-    if vector.shape != (size,) or not np.all(np.isfinite(vector)):
-        raise InputRejectedError(f'{name} must be {size} finite values, got {value!r}')
-    return vector
+def _finite_translation(value: ArrayLike) -> tuple[float, float, float]:
+    """Return value as three finite floats (see SE3.from_translation_quaternion)."""
+    try:
+        x, y, z = map(float, cast(Iterable[Any], value))
+    except (TypeError, ValueError):
+        raise InputRejectedError(f'translation must be 3 finite values, got {value!r}') from None
+    if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
+        raise InputRejectedError(f'translation must be 3 finite values, got {value!r}')
+    return x, y, z
 
 
 def _check_points(points: ArrayLike, size: int) -> NDArray[np.float64]:
@@ -186,13 +191,6 @@ class SE3(_RigidTransform):
     DIM = 3
 
     @classmethod
-    def _from_parts(cls, translation: ArrayLike, rotation: NDArray[np.float64]) -> SE3:
-        matrix = np.eye(4)
-        matrix[:3, :3] = rotation
-        matrix[:3, 3] = _check_vector('translation', translation, 3)
-        return cls._trusted(matrix)
-
-    @classmethod
     def from_translation_quaternion(cls, translation: ArrayLike, quaternion: ArrayLike) -> SE3:
         """Return the transform with translation (x, y, z) [m] and rotation (x, y, z, w).
 
@@ -200,7 +198,16 @@ class SE3(_RigidTransform):
             InputRejectedError: If translation is not 3 finite values or quaternion is not a
                 (near-)unit quaternion.
         """
-        return cls._from_parts(translation, rotation_matrix_from_quaternion(quaternion))
+        # Built from plain floats in one array: senders of /tf call this per tick, where
+        # numpy's per-call overhead is most of the cost.
+        tx, ty, tz = _finite_translation(translation)
+        x, y, z, w = normalize_quaternion(quaternion)
+        return cls._trusted(np.array((
+            (1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y - z * w), 2.0 * (x * z + y * w), tx),
+            (2.0 * (x * y + z * w), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z - x * w), ty),
+            (2.0 * (x * z - y * w), 2.0 * (y * z + x * w), 1.0 - 2.0 * (x * x + y * y), tz),
+            (0.0, 0.0, 0.0, 1.0),
+        )))
 
     @classmethod
     def from_translation_rpy(
@@ -211,7 +218,7 @@ class SE3(_RigidTransform):
         Raises:
             InputRejectedError: If a value is NaN or infinite.
         """
-        return cls._from_parts(translation, rotation_matrix_from_rpy(roll, pitch, yaw))
+        return cls.from_translation_quaternion(translation, quaternion_from_rpy(roll, pitch, yaw))
 
     @classmethod
     def from_se2(cls, planar: SE2) -> SE3:
