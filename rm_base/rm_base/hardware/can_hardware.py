@@ -365,9 +365,12 @@ class CanHardware:
         actuator.request_system_command(command)
 
     # --- state ---
-    def states(self) -> list[JointState]:
-        """State of every joint (config order), ActuatorState fields."""
-        return [a.state() for a in self.actuators.values()]
+    def states(self, stamp_ns: int | None = None) -> list[JointState]:
+        """State of every joint (config order), ActuatorState fields.
+
+        stamp_ns: every state's stamp [ns]; default the receive time of its feedback.
+        """
+        return [a.state(stamp_ns) for a in self.actuators.values()]
 
     def diagnostics(self) -> dict[str, Any]:
         """Bus counters and load, scheduler timing, and per-joint counters."""

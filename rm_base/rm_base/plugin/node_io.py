@@ -71,8 +71,8 @@ class JointBackend(Protocol):
     def set_target(self, name: str, target: JointTarget) -> None:
         """Set one joint's target, already checked (output shaft, SI)."""
 
-    def states(self) -> list[JointState]:
-        """Every joint's state."""
+    def states(self, stamp_ns: int | None = None) -> list[JointState]:
+        """Every joint's state, stamped stamp_ns (default: its feedback's receive time)."""
 
     def add_power_limit(self, group: str, joints: Sequence[str], model: Any) -> Any:
         """Run one power limit over joints at the loop rate; return its stage."""
@@ -392,9 +392,7 @@ class LocalJointIO(NodeIO):
         Args:
             stamp_ns: the tick's time on the plugins' clock [ns], the states' stamp.
         """
-        self.joint_states.replace(
-            {s.name: s._replace(stamp_ns=stamp_ns) for s in self._hardware.states()}
-        )
+        self.joint_states.replace({s.name: s for s in self._hardware.states(stamp_ns)})
 
 
 _BY_NODE: weakref.WeakKeyDictionary[Any, NodeIO] = weakref.WeakKeyDictionary()

@@ -136,6 +136,16 @@ def test_states_and_diagnostics(rig):
     assert diag['joints']['yaw']['hold_reason'] == HoldReason.NO_COMMAND.value
 
 
+def test_states_carry_their_feedback_time_or_the_stamp_asked_for(rig):
+    hw, peer, _ = rig
+    fed(hw, peer)
+    hw.tick()
+    received = hw.states()[0].stamp_ns
+    assert received > 0
+    assert [s.stamp_ns for s in hw.states(stamp_ns=123)] == [123, 123, 123]
+    assert hw.states()[0].stamp_ns == received  # nothing kept
+
+
 def test_command_timeout_ends_with_zero_current_on_the_wire(rig):
     hw, peer, clock = rig
     fed(hw, peer)

@@ -25,8 +25,9 @@ class FakeHardware:
             raise KeyError(name)
         self.commands.append((name, target))
 
-    def states(self):
-        return [JointState('wheel_l', 1.0, 2.0, 0.5, math.nan, True, 0, 2, 0.4, 77)]
+    def states(self, stamp_ns=None):
+        stamp = 77 if stamp_ns is None else stamp_ns  # as CanHardware.states
+        return [JointState('wheel_l', 1.0, 2.0, 0.5, math.nan, True, 0, 2, 0.4, stamp)]
 
 
 class FakeNode:

@@ -627,8 +627,11 @@ class Actuator(abc.ABC):
         """Latest accepted command, or None."""
         return self._command
 
-    def state(self) -> JointState:
-        """The joint state as of the last update (ActuatorState fields)."""
+    def state(self, stamp_ns: int | None = None) -> JointState:
+        """The joint state as of the last update (ActuatorState fields).
+
+        stamp_ns: the state's stamp [ns]; default the receive time of its feedback.
+        """
         fb = self._feedback
         if fb is None:
             return JointState(
@@ -641,7 +644,7 @@ class Actuator(abc.ABC):
                 0,
                 int(self._applied_mode),
                 self._effort_out,
-                0,
+                0 if stamp_ns is None else stamp_ns,
             )
         return JointState(
             self.name,
@@ -653,7 +656,7 @@ class Actuator(abc.ABC):
             fb.error_code,
             int(self._applied_mode),
             self._effort_out,
-            fb.stamp_ns,
+            fb.stamp_ns if stamp_ns is None else stamp_ns,
         )
 
     def diagnostics(self) -> dict[str, Any]:
