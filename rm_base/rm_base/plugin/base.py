@@ -52,7 +52,7 @@ from rm_base.plugin.errors import PluginConfigError, PluginInitError, TargetReje
 from rm_base.plugin.frames import TF_QOS, TF_STATIC_QOS, FramePublisher
 from rm_base.plugin.joints import JointStateView, JointTarget
 from rm_base.plugin.node_io import NodeIO, node_io
-from rm_base.plugin.outbox import is_heard
+from rm_base.plugin.outbox import is_heard, publish_built
 from rm_base.plugin.params import PluginParams
 from rm_base.plugin.state_machine import DefaultState, StateMachine, Transition
 from rm_base.ros_logging import FastLogger
@@ -462,6 +462,16 @@ class PluginBase:
         the robot and no other node subscribes (the next one goes to the first subscriber).
         """
         return is_heard(publisher)
+
+    @staticmethod
+    def publish_built(publisher: Any, build: Callable[..., Any], *values: Any) -> None:
+        """Publish ``build(*values)``; in the control loop, the ROS edge's thread builds it.
+
+        For periodic reports: the loop then only keeps the values (which must not change
+        after the call: numbers, strings, tuples), and build (a new message each call) and
+        the serialisation run in the loop's idle time.
+        """
+        publish_built(publisher, build, *values)
 
     def loop_input(self, read: Callable[[], bool], name: str | None = None) -> bool:
         """Call read() at the start of every tick of the loop, before the plugins run.

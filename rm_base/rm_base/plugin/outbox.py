@@ -9,6 +9,13 @@ A publisher that hands its messages over (``hand_over``: a new message for each 
 never changed after) skips the snapshot: the robot's own subscribers get that object at
 once, in the publishing thread (their callbacks only store it), and the outbox thread
 serialises it for DDS if another node subscribes.
+A report can also be handed over unbuilt (``publish_built(build, *values)``): the loop
+only queues the function and an immutable snapshot of the values, and the outbox thread
+builds the message, hands it to the robot's subscribers and publishes it. Building and
+serialising a state message costs the loop about as much as a plugin's control step
+(docs/PERFORMANCE.md, "Reports built by the edge"); this way it costs a tuple. Where the
+loopback is immediate (``loopback_at_put``: lockstep; a hand-over publisher) or the topic
+latched, the message is built at once instead.
 The queue is bounded: if the edge falls behind, the oldest messages are dropped and
 counted (a state message is superseded by the next one anyway).
 
@@ -30,7 +37,7 @@ import collections
 import logging
 import threading
 from collections.abc import Callable
-from typing import Any
+from typing import Any, NamedTuple
 
 from rclpy.qos import DurabilityPolicy
 from rclpy.serialization import serialize_message
@@ -48,6 +55,26 @@ def _always(topic: str) -> bool:
 def _latched(publisher: Any) -> bool:
     # a late joiner gets the last message: every message counts
     return bool(publisher.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL)
+
+
+class _Build(NamedTuple):
+    """A message the outbox thread builds: ``build(*values)``."""
+
+    build: Callable[..., Any]
+    values: tuple[Any, ...]
+
+
+def publish_built(publisher: Any, build: Callable[..., Any], *values: Any) -> None:
+    """Publish ``build(*values)``, built by the outbox thread where there is one.
+
+    values must not change after the call (numbers, strings, tuples); build must return a
+    new message each call. With a plain rclpy publisher the message is built and published
+    at once.
+    """
+    if isinstance(publisher, _EdgePublisher):
+        publisher.publish_built(build, *values)
+    else:
+        publisher.publish(build(*values))
 
 
 def is_heard(publisher: Any) -> bool:
@@ -70,6 +97,10 @@ class _EdgePublisher:
     def publish(self, msg: Any) -> None:
         self._outbox.put(self, msg)
 
+    def publish_built(self, build: Callable[..., Any], *values: Any) -> None:
+        """Publish build(*values), built by the outbox thread (see :func:`publish_built`)."""
+        self._outbox.put_built(self, build, values)
+
     def heard(self) -> bool:
         """Whether a message published now would reach anyone (else it is not sent)."""
         return self._outbox.heard(self)
@@ -91,9 +122,10 @@ class Outbox:
     """
 
     def __init__(self, name: str = 'ros-edge-publish', max_queued: int = MAX_QUEUED) -> None:
-        # (edge publisher, serialised message or the message handed over, its type if the
-        # thread hands it to the loopback, whether it goes on DDS)
-        self._queue: collections.deque[tuple[_EdgePublisher, Any, type | None, bool]]
+        # (edge publisher, serialised message, the message handed over or a _Build, its
+        # type (None: the built message's), whether the thread hands it to the loopback,
+        # whether it goes on DDS)
+        self._queue: collections.deque[tuple[_EdgePublisher, Any, type | None, bool, bool]]
         self._queue = collections.deque(maxlen=max_queued)
         self._wake = threading.Event()
         self._stop = False
@@ -101,6 +133,7 @@ class Outbox:
         self.published = 0
         self.dropped = 0
         self.errors = 0
+        self.build_errors = 0
         self.loopback_errors = 0
         self._paced = False
         # Also hands each message to the in-process subscribers of its topic
@@ -129,11 +162,8 @@ class Outbox:
 
     def heard(self, edge: _EdgePublisher) -> bool:
         """Whether a message put for edge now would reach anyone."""
-        return (
-            (self.loopback is not None and self.listens(edge.topic_name))
-            or edge.latched
-            or edge.publisher.get_subscription_count() > 0
-        )
+        local, outside = self._audience(edge)
+        return local or outside
 
     def last_latched(self, topic: str) -> tuple[Any, type] | None:
         """The last message put on a latched topic (serialised or handed over) and its type."""
@@ -141,25 +171,54 @@ class Outbox:
 
     def put(self, edge: _EdgePublisher, msg: Any) -> None:
         """Queue msg for edge's publisher (any thread; never blocks)."""
-        topic = edge.topic_name
-        local = self.loopback is not None and self.listens(topic)
-        outside = edge.latched or edge.publisher.get_subscription_count() > 0
+        self._put(edge, msg, snapshot=not edge.hand_over)
+
+    def put_built(
+        self, edge: _EdgePublisher, build: Callable[..., Any], values: tuple[Any, ...]
+    ) -> None:
+        """Queue build(*values) for edge's publisher, to be built by the thread.
+
+        Built at once instead where the robot's subscribers get messages at once
+        (``loopback_at_put``, a hand-over publisher) or the topic is latched.
+        """
+        local, outside = self._audience(edge)
         if not (local or outside):
             self.unheard += 1
             return
-        data = msg if edge.hand_over else serialize_message(msg)
+        if self.loopback_at_put or edge.latched or (local and edge.hand_over):
+            self._put(edge, build(*values), snapshot=False)  # new: nobody else holds it
+            return
+        self._enqueue(edge, _Build(build, values), None, local, outside)
+
+    def _audience(self, edge: _EdgePublisher) -> tuple[bool, bool]:
+        """Whether a plugin of this process, and whether anyone outside, gets edge's messages."""
+        local = self.loopback is not None and self.listens(edge.topic_name)
+        outside = edge.latched or edge.publisher.get_subscription_count() > 0
+        return local, bool(outside)
+
+    def _put(self, edge: _EdgePublisher, msg: Any, snapshot: bool) -> None:
+        topic = edge.topic_name
+        local, outside = self._audience(edge)
+        if not (local or outside):
+            self.unheard += 1
+            return
+        data = serialize_message(msg) if snapshot else msg
         if edge.latched:
             self._latched[topic] = (data, type(msg))
-        # a message handed over costs its subscribers no copy: they get it at once
-        if local and (self.loopback_at_put or edge.hand_over):
+        # a message not snapshot costs its subscribers no copy: they get it at once
+        if local and (self.loopback_at_put or not snapshot):
             self._hand_back(topic, data, type(msg))
             local = False
-        if not (local or outside):
-            return
+        if local or outside:
+            self._enqueue(edge, data, type(msg), local, outside)
+
+    def _enqueue(
+        self, edge: _EdgePublisher, data: Any, msg_type: type | None, local: bool, outside: bool
+    ) -> None:
         queue = self._queue
         if len(queue) == queue.maxlen:
             self.dropped += 1
-        queue.append((edge, data, type(msg) if local else None, outside))
+        queue.append((edge, data, msg_type, local, outside))
         if not self._paced:
             self._wake.set()
 
@@ -181,9 +240,13 @@ class Outbox:
         with self._publish_lock:
             queue = self._queue
             while queue:
-                edge, data, loop_type, outside = queue.popleft()
-                if loop_type is not None:
-                    self._hand_back(edge.topic_name, data, loop_type)
+                edge, data, msg_type, local, outside = queue.popleft()
+                if isinstance(data, _Build):
+                    data = self._build(edge, data)
+                    if data is None:
+                        continue
+                if local:
+                    self._hand_back(edge.topic_name, data, msg_type or type(data))
                 if not outside:
                     continue
                 try:
@@ -193,6 +256,16 @@ class Outbox:
                     self.errors += 1
                     if self.errors == 1:
                         _log.error('publishing %s failed: %r', edge.topic_name, err)
+
+    def _build(self, edge: _EdgePublisher, job: _Build) -> Any:
+        """The message job builds, or None if the plugin's build function failed (logged)."""
+        try:
+            return job.build(*job.values)
+        except Exception as err:  # a plugin's function: the thread must go on
+            self.build_errors += 1
+            if self.build_errors == 1:
+                _log.error('building a message for %s failed: %r', edge.topic_name, err)
+            return None
 
     def _hand_back(self, topic: str, data: Any, msg_type: type) -> None:
         if self.loopback is None:

@@ -106,7 +106,7 @@ from rm_plugins.chassis.motion import (
     MotionPlanner,
     held_frame,
 )
-from rm_plugins.chassis.odometry import Odometry
+from rm_plugins.chassis.odometry import Odometry, Pose2D
 from rm_plugins.chassis.position import Goal, goal_of, position_command
 from rm_plugins.chassis.referee_power import RefereePower
 
@@ -189,7 +189,6 @@ class StandChassis(PluginBase):
             self.subscribe(cfg.imu_topic, Imu, self._imu.put, qos_profile_sensor_data)
         self._chassis_state_pub = self.create_publisher(ChassisState, 'chassis_state', 10)
         self._odom_pub = self.create_publisher(OdometryMsg, 'odom', 10)
-        self._state_msg, self._odom_msg = _report_messages(cfg)
         self._tf = self.create_frame_publisher() if cfg.publish_tf else None
         self._publish_period_ns = round(_NS_PER_S / cfg.publish_rate)
         self._next_publish_ns = 0
@@ -564,48 +563,22 @@ class StandChassis(PluginBase):
         if now_ns < self._next_publish_ns:
             return
         self._next_publish_ns = max(self._next_publish_ns + self._publish_period_ns, now_ns)
-        stamp = now.to_msg()
-        if self.heard(self._chassis_state_pub):
-            self._publish_state(stamp)
-        if self._tf is not None or self.heard(self._odom_pub):
-            self._publish_odometry(stamp, now.nanoseconds)
-
-    def _publish_state(self, stamp: Any) -> None:
         cfg, report = self.config, self._report
-        state, reason = self.state, self.reason
-        # One message, refilled: publish() serialises it before returning.
-        msg = self._state_msg
-        msg.header.stamp = stamp
-        msg.state = int(state.value)
-        msg.reason = reason
-        _set_twist(msg.cmd_vel, report.twist)
-        _set_twist(msg.measured_vel, self._odometry.twist)
-        msg.wheel_target = [float(v) for v in report.targets]
-        msg.wheel_speed = (
-            [float(v) for v in report.speeds] if report.speeds is not None
-            else [math.nan] * len(cfg.wheel_joints)
-        )
-        msg.power = float(report.power_w)
-        msg.power_limit = float(report.power_limit_w)
-        self._chassis_state_pub.publish(msg)
-
-    def _publish_odometry(self, stamp: Any, stamp_ns: int) -> None:
-        cfg = self.config
         pose, twist = self._odometry.pose, self._odometry.twist
-        q = quaternion_from_yaw(pose.yaw)
-        msg = self._odom_msg
-        msg.header.stamp = stamp
-        msg.pose.pose.position.x = pose.x
-        msg.pose.pose.position.y = pose.y
-        msg.pose.pose.orientation.x = q.x
-        msg.pose.pose.orientation.y = q.y
-        msg.pose.pose.orientation.z = q.z
-        msg.pose.pose.orientation.w = q.w
-        _set_twist(msg.twist.twist, twist)
-        self._odom_pub.publish(msg)
+        # The messages are built by the ROS edge's thread, from these values.
+        if self.heard(self._chassis_state_pub):
+            speeds = tuple(report.speeds) if report.speeds is not None else None
+            snapshot = _StateReport(
+                now_ns, int(self.state.value), self.reason, report.twist, twist,
+                tuple(report.targets), speeds, report.power_w, report.power_limit_w,
+            )
+            self.publish_built(self._chassis_state_pub, _chassis_state_message, cfg, snapshot)
+        if self.heard(self._odom_pub):
+            self.publish_built(self._odom_pub, _odometry_message, cfg, now_ns, pose, twist)
         if self._tf is not None:
+            q = quaternion_from_yaw(pose.yaw)
             base = SE3.from_translation_quaternion((pose.x, pose.y, 0.0), q)
-            self._tf.send([(cfg.odom_frame, cfg.base_frame, base)], stamp_ns)
+            self._tf.send([(cfg.odom_frame, cfg.base_frame, base)], now_ns)
 
 
 class _Report:
@@ -625,19 +598,58 @@ class _Report:
         self.power_w, self.power_limit_w = power_w, power_limit_w
 
 
-def _report_messages(cfg: ChassisConfig) -> tuple[ChassisState, OdometryMsg]:
-    """The /chassis_state and /odom messages with the fields that never change filled in."""
-    state = ChassisState()
-    state.header.frame_id = cfg.base_frame
-    state.wheel_name = list(cfg.wheel_joints)
-    odom = OdometryMsg()
-    odom.header.frame_id = cfg.odom_frame
-    odom.child_frame_id = cfg.base_frame
+class _StateReport(NamedTuple):
+    """What one /chassis_state says, kept by the loop for the edge's thread."""
+
+    stamp_ns: int
+    state: int
+    reason: str
+    cmd_vel: Twist2D
+    measured_vel: Twist2D
+    targets: tuple[float, ...]
+    speeds: tuple[float, ...] | None
+    power_w: float
+    power_limit_w: float
+
+
+def _chassis_state_message(cfg: ChassisConfig, report: _StateReport) -> ChassisState:
+    """/chassis_state of one report (built by the edge's thread: a new message each time)."""
+    msg = ChassisState()
+    msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(report.stamp_ns, _NS_PER_S)
+    msg.header.frame_id = cfg.base_frame
+    msg.wheel_name = list(cfg.wheel_joints)
+    msg.state = report.state
+    msg.reason = report.reason
+    _set_twist(msg.cmd_vel, report.cmd_vel)
+    _set_twist(msg.measured_vel, report.measured_vel)
+    msg.wheel_target = [float(v) for v in report.targets]
+    msg.wheel_speed = (
+        [float(v) for v in report.speeds] if report.speeds is not None
+        else [math.nan] * len(cfg.wheel_joints)
+    )
+    msg.power = float(report.power_w)
+    msg.power_limit = float(report.power_limit_w)
+    return msg
+
+
+def _odometry_message(
+    cfg: ChassisConfig, stamp_ns: int, pose: Pose2D, twist: Twist2D
+) -> OdometryMsg:
+    """/odom of one report (built by the edge's thread: a new message each time)."""
+    msg = OdometryMsg()
+    msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp_ns, _NS_PER_S)
+    msg.header.frame_id = cfg.odom_frame
+    msg.child_frame_id = cfg.base_frame
+    position, orientation = msg.pose.pose.position, msg.pose.pose.orientation
+    position.x, position.y = float(pose.x), float(pose.y)
+    q = quaternion_from_yaw(pose.yaw)
+    orientation.x, orientation.y, orientation.z, orientation.w = q.x, q.y, q.z, q.w
+    _set_twist(msg.twist.twist, twist)
     for i, value in enumerate(_POSE_COVARIANCE):
-        odom.pose.covariance[7 * i] = value
+        msg.pose.covariance[7 * i] = value
     for i, value in enumerate(_TWIST_COVARIANCE):
-        odom.twist.covariance[7 * i] = value
-    return state, odom
+        msg.twist.covariance[7 * i] = value
+    return msg
 
 
 def _set_twist(out: Any, twist: Twist2D) -> None:

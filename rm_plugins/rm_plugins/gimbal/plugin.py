@@ -524,23 +524,38 @@ class StandGimbal(PluginBase):
         self._next_state_ns = now_ns + self._state_period_ns
         self._published_mode = mode
         offset = self._odom_offset.value or 0.0
-        msg = GimbalState()
-        msg.header.stamp = now.to_msg()
-        msg.header.frame_id = self.config.world_frames[0]
-        msg.state = int(mode)
-        msg.reason = self.reason
         nan = math.nan
         if isinstance(measurement, Measurement):
-            msg.yaw = wrap_to_pi(measurement.yaw - offset)
-            msg.pitch = measurement.pitch
-            msg.yaw_joint = measurement.yaw_joint
-            msg.pitch_joint = measurement.pitch_joint
+            angles = (
+                wrap_to_pi(measurement.yaw - offset), measurement.pitch,
+                measurement.yaw_joint, measurement.pitch_joint,
+            )
         else:
-            msg.yaw = msg.pitch = msg.yaw_joint = msg.pitch_joint = nan
+            angles = (nan, nan, nan, nan)
         yaw_target, pitch_target = self._yaw_target, self._pitch_target
         if mode is GimbalMode.PASSIVE or yaw_target is None or pitch_target is None:
-            msg.yaw_target = msg.pitch_target = nan
+            targets = (nan, nan)
         else:
-            msg.yaw_target = wrap_to_pi(yaw_target - offset)
-            msg.pitch_target = pitch_target
-        self._gimbal_state_pub.publish(msg)
+            targets = (wrap_to_pi(yaw_target - offset), pitch_target)
+        # built by the ROS edge's thread, from these values
+        self.publish_built(
+            self._gimbal_state_pub, _gimbal_state_message, now_ns,
+            self.config.world_frames[0], int(mode), self.reason, angles + targets,
+        )
+
+
+def _gimbal_state_message(
+    stamp_ns: int, frame_id: str, state: int, reason: str, angles: tuple[float, ...]
+) -> GimbalState:
+    """/gimbal_state of one report (a new message each call).
+
+    angles: yaw, pitch, yaw_joint, pitch_joint, yaw_target, pitch_target [rad].
+    """
+    msg = GimbalState()
+    msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp_ns, _NS_PER_S)
+    msg.header.frame_id = frame_id
+    msg.state = state
+    msg.reason = reason
+    (msg.yaw, msg.pitch, msg.yaw_joint, msg.pitch_joint, msg.yaw_target,
+     msg.pitch_target) = (float(a) for a in angles)
+    return msg

@@ -9,7 +9,7 @@ from __future__ import annotations
 import threading
 from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, NamedTuple
 
 from rclpy.qos import qos_profile_sensor_data
 from rclpy.time import Time
@@ -547,18 +547,46 @@ class StandShooter(PluginBase):
         self._last_published = key
         self._next_publish_ns = now_ns + self._state_period_ns
         joints = self.joint_states.snapshot(self.config.friction_joints)
-        msg = ShooterState()
-        msg.header.stamp = now.to_msg()
-        msg.state = int(self.state.value)
-        msg.reason = self.reason
-        msg.bullet_speed = float(self._speed)
-        msg.friction_target = [float(v) for v in self._friction_target]
-        msg.friction_speed = [
+        friction_speed = tuple(
             float(joints[j].velocity) if j in joints else 0.0 for j in self.config.friction_joints
-        ]
-        msg.friction_ready = bool(self._friction_ready)
-        msg.shots_fired = self._shots_fired
-        msg.burst_remaining = remaining
-        msg.jam_count = self._jam_count
-        msg.fault = self._fault
-        self.state_pub.publish(msg)
+        )
+        report = _StateReport(
+            now_ns, int(self.state.value), self.reason, float(self._speed),
+            tuple(float(v) for v in self._friction_target), friction_speed,
+            bool(self._friction_ready), self._shots_fired, remaining, self._jam_count,
+            self._fault,
+        )
+        self.publish_built(self.state_pub, _shooter_state_message, report)  # by the edge
+
+
+class _StateReport(NamedTuple):
+    """What one /shooter_state says, kept by the loop for the edge's thread."""
+
+    stamp_ns: int
+    state: int
+    reason: str
+    bullet_speed: float
+    friction_target: tuple[float, ...]
+    friction_speed: tuple[float, ...]
+    friction_ready: bool
+    shots_fired: int
+    burst_remaining: int
+    jam_count: int
+    fault: bool
+
+
+def _shooter_state_message(report: _StateReport) -> ShooterState:
+    """/shooter_state of one report (a new message each call)."""
+    msg = ShooterState()
+    msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(report.stamp_ns, _NS_PER_S)
+    msg.state = report.state
+    msg.reason = report.reason
+    msg.bullet_speed = report.bullet_speed
+    msg.friction_target = list(report.friction_target)
+    msg.friction_speed = list(report.friction_speed)
+    msg.friction_ready = report.friction_ready
+    msg.shots_fired = report.shots_fired
+    msg.burst_remaining = report.burst_remaining
+    msg.jam_count = report.jam_count
+    msg.fault = report.fault
+    return msg

@@ -5,7 +5,7 @@ import threading
 import pytest
 from rclpy.qos import DurabilityPolicy, QoSProfile
 from rclpy.serialization import deserialize_message
-from rm_base.plugin.outbox import Outbox, is_heard
+from rm_base.plugin.outbox import Outbox, is_heard, publish_built
 from std_msgs.msg import UInt32
 from support.ros import wait_until
 
@@ -187,3 +187,81 @@ def test_is_heard_says_whether_anyone_would_get_a_message():
     assert is_heard(latched) and is_heard(box.wrap(latched))
     box.listens = lambda topic: topic == '/fake'  # a plugin of the robot
     assert is_heard(box.wrap(FakePublisher(subscribers=0)))
+
+
+def build_uint32(value, built_in):
+    built_in.append(threading.current_thread().name)
+    return UInt32(data=value)
+
+
+def test_a_report_published_built_is_built_by_the_outbox_thread_and_reaches_robot_and_dds():
+    box = Outbox('test-publish')
+    pub = FakePublisher()
+    got, built_in = [], []
+    box.loopback = lambda topic, data, msg_type: got.append((data, msg_type))
+    box.wrap(pub).publish_built(build_uint32, 7, built_in)
+    assert built_in == [] and got == []  # the loop only queued it
+    box.start()
+    try:
+        assert wait_until(lambda: pub.published == [7], 5.0)
+    finally:
+        box.stop()
+    assert built_in == ['test-publish']
+    (msg, msg_type), = got
+    assert msg.data == 7 and msg_type is UInt32  # the object built, no serialised copy
+
+
+def test_a_report_published_built_with_an_immediate_loopback_is_built_at_once():
+    box = Outbox()
+    box.loopback_at_put = True  # lockstep: the robot's subscribers get it in this tick
+    got, built_in = [], []
+    box.loopback = lambda topic, data, msg_type: got.append(data.data)
+    box.listens = lambda topic: True
+    box.wrap(FakePublisher(subscribers=0)).publish_built(build_uint32, 8, built_in)
+    assert got == [8] and built_in == [threading.current_thread().name]
+    box.stop()
+
+
+def test_a_report_nobody_would_get_is_never_built_and_is_counted():
+    box = Outbox()
+    box.loopback = lambda topic, data, msg_type: pytest.fail('no plugin listens')
+    box.listens = lambda topic: False
+    built_in = []
+    box.wrap(FakePublisher(subscribers=0)).publish_built(build_uint32, 1, built_in)
+    box.stop()
+    assert built_in == [] and box.unheard == 1
+
+
+def test_a_failing_build_is_counted_and_logged_and_the_next_report_still_goes_out(caplog):
+    box = Outbox()
+    pub = FakePublisher()
+    wrapped = box.wrap(pub)
+
+    def broken():
+        raise ValueError('bad report')
+
+    wrapped.publish_built(broken)
+    wrapped.publish_built(build_uint32, 2, [])
+    box.stop()
+    assert box.build_errors == 1 and pub.published == [2]
+    assert 'bad report' in caplog.text and '/fake' in caplog.text
+
+
+def test_publish_built_on_a_plain_publisher_builds_and_publishes_at_once():
+    pub = FakePublisher()  # no outbox: rm_robot without a loop
+    built_in = []
+    publish_built(pub, build_uint32, 5, built_in)
+    assert pub.published == [5] and built_in == [threading.current_thread().name]
+
+
+def test_a_report_published_built_by_a_hand_over_publisher_reaches_the_robot_at_once():
+    # A hand-over topic's plugins get its messages in the publishing tick: built reports too.
+    box = Outbox()
+    got, built_in = [], []
+    box.loopback = lambda topic, data, msg_type: got.append(data.data)
+    box.listens = lambda topic: True
+    pub = FakePublisher()
+    box.wrap(pub, hand_over=True).publish_built(build_uint32, 6, built_in)
+    assert got == [6] and built_in == [threading.current_thread().name]
+    box.flush()
+    assert pub.published == [6]
