@@ -60,7 +60,7 @@ from rclpy.qos import qos_profile_sensor_data  # noqa: E402
 from reliability.rigs import WireWatch, hardware_config  # noqa: E402
 from reliability.wire import check_actuator_states, max_efforts  # noqa: E402
 from rm_base.bridge import CanBridgeNode  # noqa: E402
-from rm_base.realtime import raise_edge_priority  # noqa: E402
+from rm_base.realtime import keep_on_cpu, raise_edge_priority  # noqa: E402
 from rm_base.sim import Fault, FaultKind  # noqa: E402
 from support.robot import CONFIG_DIR, load_parameters  # noqa: E402
 
@@ -142,6 +142,9 @@ class Robot:
         self.executor.add_node(self.bridge)
         self.executor.add_node(self.node)
         raise_edge_priority(self.bridge.edge_priority)  # as can_bridge's main does
+        self._cpus = os.sched_getaffinity(0)  # rm_robot's, before this process is pinned
+        if self.bridge.cpu_index is not None:
+            keep_on_cpu(self.bridge.cpu_index)  # likewise
         self._stop = threading.Event()
         self._spinner = threading.Thread(target=self._spin, name='soak-spin', daemon=True)
         self._spinner.start()
@@ -171,6 +174,12 @@ class Robot:
         env = dict(os.environ)
         isolate_ros_environment(env)
         self.host = subprocess.Popen(args, env=env, stdout=self.host_log, stderr=self.host_log)
+        # It inherited this thread's CPU; it picks its own for its Python threads, and its
+        # middleware's threads run anywhere, as when started from a shell.
+        try:
+            os.sched_setaffinity(self.host.pid, self._cpus)
+        except ProcessLookupError:  # it died at once: the soak counts its exit
+            pass
 
     def kill_host(self) -> None:
         if self.host is not None and self.host.poll() is None:
