@@ -36,16 +36,21 @@ from __future__ import annotations
 import collections
 import logging
 import threading
+import time
 from collections.abc import Callable
 from typing import Any, NamedTuple
 
 from rclpy.qos import DurabilityPolicy
 from rclpy.serialization import serialize_message
 
+from rm_base.plugin.commands import LogThrottle
+
 _log = logging.getLogger(__name__)
 
 #: Messages held at most before the oldest are dropped.
 MAX_QUEUED = 1000
+# A failing build function is logged at most this often, with the count [ns].
+_BUILD_LOG_PERIOD_NS = 1_000_000_000
 
 
 def _always(topic: str) -> bool:
@@ -134,6 +139,7 @@ class Outbox:
         self.dropped = 0
         self.errors = 0
         self.build_errors = 0
+        self._build_log = LogThrottle(_BUILD_LOG_PERIOD_NS)
         self.loopback_errors = 0
         self._paced = False
         # Also hands each message to the in-process subscribers of its topic
@@ -263,8 +269,9 @@ class Outbox:
             return job.build(*job.values)
         except Exception as err:  # a plugin's function: the thread must go on
             self.build_errors += 1
-            if self.build_errors == 1:
-                _log.error('building a message for %s failed: %r', edge.topic_name, err)
+            more = self._build_log.due(time.monotonic_ns())
+            if more is not None:
+                _log.error('building a message for %s failed: %r%s', edge.topic_name, err, more)
             return None
 
     def _hand_back(self, topic: str, data: Any, msg_type: type) -> None:
