@@ -419,14 +419,18 @@ class FaultInjector:
         self.robot.world.inject(joint, Fault.jam())
 
         asked = []  # whether the joint was asked to move while jammed
+        peak, modes = [0.0], set()  # what a miss is explained by (its note)
 
         def shown() -> bool:
             if joint == 'trigger':
                 s = self.robot.state('shooter_state')
                 asked.append(s is not None and s.state in (ShooterState.FEED, ShooterState.PUSH))
                 return s is not None and (s.jam_count > jams or s.state == ShooterState.BLOCK)
-            asked.append(actuator.state().mode != 0)
-            return abs(actuator.state().command) >= 0.99 * actuator.max_effort
+            state = actuator.state()
+            asked.append(state.mode != 0)
+            peak[0] = max(peak[0], abs(state.command))
+            modes.add(state.mode)
+            return abs(state.command) >= 0.99 * actuator.max_effort
 
         lat = wait_for(shown, 3.0)
         if lat is not None:
@@ -435,6 +439,13 @@ class FaultInjector:
             rec.note = 'not asked to move while jammed (held or off): nothing to detect'
         else:
             rec.detected = False
+            if joint != 'trigger':
+                gimbal = self.robot.state('gimbal_state')
+                rec.note = (
+                    f'output peaked at {peak[0] / actuator.max_effort:.0%} of its clamp, '
+                    f'modes {sorted(modes)}, gimbal state '
+                    f'{gimbal.state if gimbal is not None else None}'
+                )
         time.sleep(self.rng.uniform(0.2, 1.0))
         self.robot.world.clear_faults(joint, FaultKind.JAM)
         rec.end = time.time()
