@@ -177,7 +177,7 @@ class Outbox:
 
     def put(self, edge: _EdgePublisher, msg: Any) -> None:
         """Queue msg for edge's publisher (any thread; never blocks)."""
-        self._put(edge, msg, snapshot=not edge.hand_over)
+        self._put(edge, msg, not edge.hand_over, self._audience(edge))
 
     def put_built(
         self, edge: _EdgePublisher, build: Callable[..., Any], values: tuple[Any, ...]
@@ -187,12 +187,13 @@ class Outbox:
         Built at once instead where the robot's subscribers get messages at once
         (``loopback_at_put``, a hand-over publisher) or the topic is latched.
         """
-        local, outside = self._audience(edge)
+        audience = self._audience(edge)
+        local, outside = audience
         if not (local or outside):
             self.unheard += 1
             return
         if self.loopback_at_put or edge.latched or (local and edge.hand_over):
-            self._put(edge, build(*values), snapshot=False)  # new: nobody else holds it
+            self._put(edge, build(*values), False, audience)  # new: nobody else holds it
             return
         self._enqueue(edge, _Build(build, values), None, local, outside)
 
@@ -202,9 +203,12 @@ class Outbox:
         outside = edge.latched or edge.publisher.get_subscription_count() > 0
         return local, bool(outside)
 
-    def _put(self, edge: _EdgePublisher, msg: Any, snapshot: bool) -> None:
+    def _put(
+        self, edge: _EdgePublisher, msg: Any, snapshot: bool, audience: tuple[bool, bool]
+    ) -> None:
+        """Queue msg (serialised first if snapshot) for its audience (see _audience)."""
         topic = edge.topic_name
-        local, outside = self._audience(edge)
+        local, outside = audience
         if not (local or outside):
             self.unheard += 1
             return
