@@ -38,4 +38,5 @@ lock:
 	rm -rf .venv-lock
 
 clean:
+	-.venv/bin/python scripts/build_compiled.py --clean
 	rm -rf build install log .venv .pytest_cache .ruff_cache .hypothesis

@@ -1,9 +1,12 @@
 """CPU profiles per thread of the running robot (``bench/run.py --profile``).
 
-cProfile profiles only the thread that enables it, so the robot process wraps one
-frequently called method per thread on the *instance* (the loop's ``tick``, the bridge
-publisher's ``_states_heard``, the outbox's ``flush``, the world's ``_tick`` where rm_sim
-runs in the process; the main thread checks in its spin loop). While a window is open the
+cProfile profiles only the thread that enables it, so each thread checks the window
+once per wake-up: the loop after each tick (``Scheduler.add_after_tick``), the others
+through one frequently called method wrapped on the *instance* (the bridge publisher's
+``_states_heard``, the outbox's ``flush``, the world's ``_tick`` where rm_sim runs in the
+process; the main thread checks in its spin loop). The loop's compiled modules
+(rm_base/compiled.py) are invisible to cProfile: their time shows in their callers;
+``RM_ROS2_COMPILED=0`` profiles them as Python. While a window is open the
 wrapper enables a ``cProfile.Profile`` in its thread, and disables it when the window
 closes. The timer is cProfile's default (wall clock, cheap): sleeps and waits show up as
 such (``time.sleep``, lock ``acquire``, ``spin_once``) and are read past. The thread

@@ -70,29 +70,27 @@ def make_tap_class():
 class _SendTap:
     """Keeps (t_ns, id, data) of some frames a ManagedBus sends (rm_sim in its process).
 
-    Stamped when the loop hands the tick's frames to the bus (``send_many``): the moment
-    they go on the socket, as the in-process tap stamps them on the simulated wire.
+    Stamped when the bus has handed the tick's frames to its driver
+    (``ManagedBus.observe_sent``): the moment they went on the socket, as the in-process
+    tap stamps them on the simulated wire.
     """
 
     def __init__(self, bus: Any, channel: str, ids: set[int]) -> None:
         self.records: list[tuple[int, int, str]] = []
         self.channel_id = channel
         self._bus = bus
-        self._ids = frozenset(ids)
-        send_many = type(bus).send_many.__get__(bus)
+        wanted = frozenset(ids)
 
-        def tapped(msgs: Any) -> int:
-            sent = send_many(msgs)
+        def record(msgs: Any) -> None:
             now = time.monotonic_ns()
             for msg in msgs:
-                if msg.arbitration_id in self._ids:
+                if msg.arbitration_id in wanted:
                     self.records.append((now, msg.arbitration_id, msg.data.hex()))
-            return sent
 
-        bus.send_many = tapped
+        bus.observe_sent(record)
 
     def shutdown(self) -> None:
-        self._bus.__dict__.pop('send_many', None)
+        self._bus.observe_sent(None)
 
 
 class Robot:
@@ -368,17 +366,21 @@ class Robot:
 
         profiles = ThreadProfiles()
         targets: list[tuple[Any, str]] = []
+        loops: list[Any] = []  # Schedulers: their thread checks after each tick
         # one method per thread, called once per wake-up of that thread
         if self.hw is not None:
-            targets += [(self.hw.scheduler, 'tick'), (self.bridge, '_states_heard')]
+            loops.append(self.hw.scheduler)
+            targets.append((self.bridge, '_states_heard'))
             if self.bridge.sim_world is not None:  # rm_sim in this process (split layout)
                 targets += [(self.bridge.sim_world, '_tick')]
         if self.host is not None:
             targets += [(self.host._outbox, 'flush')]
             if self.hw is None:  # rm_robot's own loop (split layout)
-                targets += [(self.host.loop, 'tick')]
+                loops.append(self.host.loop)
         for obj, attribute in targets:
             profiles.wrap(obj, attribute)
+        for loop in loops:
+            loop.add_after_tick(profiles.check)
         profiles.active = True
         self.profiles = profiles
         time.sleep(seconds)
@@ -391,6 +393,8 @@ class Robot:
         self.profiles = None
         for obj, attribute in targets:
             obj.__dict__.pop(attribute, None)
+        for loop in loops:
+            loop.remove_after_tick(profiles.check)
         return {'profiles': profiles.report(pathlib.Path(out_dir))}
 
 

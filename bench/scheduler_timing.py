@@ -1,9 +1,8 @@
 """Measurement 1: the 1 kHz scheduler's period error and missed deadlines.
 
 The production :class:`rm_base.hardware.scheduler.Scheduler` keeps only a histogram, a
-mean and a max of ``|start - deadline|``. For percentiles the bench puts a recorder in
-front of its ``_record_start`` hook on the *instance* (nothing in rm_base changes, and the
-production path has no extra branch): one ``array.append`` per tick while recording.
+mean and a max of ``|start - deadline|``. For percentiles the bench observes every tick
+(``Scheduler.observe_ticks``): one ``array.append`` per tick while recording.
 
 Definitions (the scheduler's own):
 
@@ -12,8 +11,8 @@ Definitions (the scheduler's own):
   next tick then runs at once, late, and periods that passed whole are ``skipped``); the
   share is ``overruns / ticks``. Loops the bench only watches from outside (the bare
   sleeper, an rclpy timer) count the periods with no tick: ``skipped / (ticks + skipped)``;
-* tick duration: update + pack + send of one tick [µs] (timed by wrapping the instance's
-  ``tick`` while recording). On rm_sim a send waits for the simulated world's lock, so
+* tick duration: update + pack + send of one tick [µs] (``tick`` as the loop thread
+  times it). On rm_sim a send waits for the simulated world's lock, so
   time the physics thread holds it shows up here.
 """
 
@@ -37,30 +36,18 @@ class TickRecorder:
         self._t0_ns = 0
 
     def start(self) -> None:
-        """Clear and start recording (hooks the instance)."""
+        """Clear and start recording."""
         self.errors_ns = array.array('q')
-        append = self.errors_ns.append
-        original = type(self._scheduler)._record_start.__get__(self._scheduler)
-
-        def record(error_ns: int) -> None:
-            append(error_ns)
-            original(error_ns)
-
         self.ticks_ns = array.array('q')
-        append_tick = self.ticks_ns.append
-        tick = type(self._scheduler).tick.__get__(self._scheduler)
-        clock = time.perf_counter_ns
+        append_error, append_tick = self.errors_ns.append, self.ticks_ns.append
 
-        def timed_tick(now_ns: int) -> int:
-            t0 = clock()
-            frames = tick(now_ns)
-            append_tick(clock() - t0)
-            return frames
+        def record(error_ns: int, tick_ns: int) -> None:
+            append_error(error_ns)
+            append_tick(tick_ns)
 
         self._stats0 = self._scheduler.stats()
-        self._scheduler._record_start = record
-        self._scheduler.tick = timed_tick
-        self._t0_ns = clock()
+        self._scheduler.observe_ticks(record)
+        self._t0_ns = time.perf_counter_ns()
 
     def stop(self) -> dict[str, Any]:
         """Stop recording (unhook) and return :func:`tick_summary` of the window.
@@ -71,8 +58,7 @@ class TickRecorder:
         come out short of the loop's real rate.
         """
         elapsed_ns = time.perf_counter_ns() - self._t0_ns
-        self._scheduler.__dict__.pop('_record_start', None)
-        self._scheduler.__dict__.pop('tick', None)
+        self._scheduler.observe_ticks(None)
         stats1 = self._scheduler.stats()
         s0 = self._stats0
         ticks = stats1.ticks - s0.ticks

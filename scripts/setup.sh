@@ -4,7 +4,8 @@
 #   2. install the pinned ROS 2 Jazzy wheels and libraries from requirements/lock.txt,
 #   3. make the venv an ament underlay (scripts/make_venv_underlay.py),
 #   4. colcon build the workspace into build/ and install/ (with vendor/'s interface
-#      packages that the wheels lack).
+#      packages that the wheels lack),
+#   5. compile the control loop's modules with mypyc (scripts/build_compiled.py).
 # Each step is skipped when its inputs have not changed since it last succeeded, so a
 # second run with nothing changed takes a few seconds. Source scripts/env.sh afterwards.
 set -euo pipefail
@@ -81,4 +82,12 @@ if [ "$(cat "$STAMPS/build" 2>/dev/null)" != "$build_digest" ] || [ ! -f install
   }
   echo "$build_digest" > "$STAMPS/build"
 fi
+# 5. the control loop's modules compiled with mypyc beside their sources (rm_base/compiled.py
+# names them); rebuilt when one of them changed. Without it they run from source, slower.
+mkdir -p "$ROOT/log"
+"$VENV/bin/python" "$ROOT/scripts/build_compiled.py" --if-changed > "$ROOT/log/build-compiled.log" 2>&1 || {
+  tail -n 40 "$ROOT/log/build-compiled.log" >&2
+  echo "[setup] compiling the loop failed; full output in log/build-compiled.log" >&2
+  exit 1
+}
 log "ready: source scripts/env.sh"

@@ -147,16 +147,22 @@ def run_node(
     except KeyboardInterrupt:
         rclpy.try_shutdown()
         return 0
-    executor = make_executor(node)
-    executor.add_node(node)
-    raise_edge_priority(node.edge_priority)
-    if node.cpu_index is not None:
-        keep_on_cpu(node.cpu_index)
+    executor: Executor | None = None
     try:
+        executor = make_executor(node)
+        executor.add_node(node)
+        raise_edge_priority(node.edge_priority)
+        if node.cpu_index is not None:
+            keep_on_cpu(node.cpu_index)
         spin_until_shutdown(executor, node.context)
+    except KeyboardInterrupt:
+        # a SIGINT before the spin took the signals over (the loop already runs): the
+        # same clean stop, zero output first
+        pass
     finally:
         node.shutdown()
-        executor.shutdown()
+        if executor is not None:
+            executor.shutdown()
         node.destroy_node()
         rclpy.try_shutdown()
     return 0

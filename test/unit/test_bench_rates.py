@@ -26,16 +26,19 @@ def _bench(name):
 
 
 class FakeScheduler:
-    """What TickRecorder hooks: ``_record_start``, ``tick`` and ``stats()``."""
+    """What TickRecorder uses: ``observe_ticks`` and ``stats()``."""
 
     def __init__(self):
         self.ticks = 0
+        self.observer = None
 
-    def _record_start(self, error_ns):
-        pass
+    def observe_ticks(self, observer):
+        self.observer = observer
 
     def tick(self, now_ns):
         self.ticks += 1
+        if self.observer is not None:
+            self.observer(0, 1000)
         return 0
 
     def stats(self):
@@ -66,7 +69,6 @@ def test_the_recorder_times_its_own_window():
     recorder = _bench('scheduler_timing').TickRecorder(scheduler)
     recorder.start()
     for t in range(5):
-        scheduler._record_start(0)
         scheduler.tick(t)
     time.sleep(0.01)
     out = recorder.stop()
@@ -74,4 +76,4 @@ def test_the_recorder_times_its_own_window():
     assert 0.01 <= out['elapsed_s'] < 5.0
     assert out['achieved_hz'] == pytest.approx(5 / out['elapsed_s'])
     scheduler.tick(5)  # unhooked: no longer recorded
-    assert len(recorder.ticks_ns) == 5
+    assert len(recorder.ticks_ns) == len(recorder.errors_ns) == 5

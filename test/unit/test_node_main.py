@@ -57,3 +57,39 @@ def test_when_on_tick_returns_false_expect_the_loop_to_end():
     executor = Idle()
     spin_until_shutdown(executor, AlwaysOk(), on_tick=lambda: executor.calls < 3)
     assert executor.calls == 3
+
+
+def test_a_sigint_while_the_node_starts_up_still_stops_it_cleanly(monkeypatch):
+    from rm_base import node_main
+
+    calls = []
+
+    class Node:
+        edge_priority = 0
+        cpu_index = None
+        context = None
+
+        def shutdown(self):
+            calls.append('shutdown')
+
+        def destroy_node(self):
+            calls.append('destroy')
+
+    class Executor:
+        def add_node(self, node):
+            pass
+
+        def shutdown(self):
+            calls.append('executor')
+
+    def interrupted(priority):
+        raise KeyboardInterrupt  # Ctrl-C after the loop started, before the spin
+
+    monkeypatch.setattr(node_main, 'init_ros', lambda name, args: True)
+    monkeypatch.setattr(node_main, 'raise_edge_priority', interrupted)
+    try:
+        status = node_main.run_node('n', [], Node, lambda node: Executor())
+    except KeyboardInterrupt:
+        pytest.fail('the interrupt escaped run_node: no zero output, a traceback')
+    assert status == 0
+    assert calls == ['shutdown', 'executor', 'destroy']

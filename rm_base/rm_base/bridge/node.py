@@ -22,6 +22,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 
+from rm_base import compiled
 from rm_base.bridge.commands import check_stamp, parse_actuator_cmd
 from rm_base.bridge.diagnostics import CommandStats, DiagnosticsReporter
 from rm_base.bridge.errors import (
@@ -235,6 +236,7 @@ class CanBridgeNode(Node):
         self.get_logger().info(
             f'{len(self._joints)} joint(s) on {len(hw.buses)} bus(es) {mode}, control at '
             f'{settings.hardware_config.rate_hz:g} Hz, states at {settings.publish_rate_hz:g} Hz'
+            f', {_loop_build()}'
         )
 
     def _read_parameters(self) -> BridgeSettings:
@@ -626,3 +628,11 @@ class CanBridgeNode(Node):
             self._inbox.destroy()
             self._inbox = None
         super().destroy_node()
+
+
+def _loop_build() -> str:
+    """How the loop's modules run: compiled, or from source and why (rm_base/compiled.py)."""
+    reason = compiled.choose()
+    if reason is None:
+        return f'loop compiled ({len(compiled.MODULES)} modules)'
+    return f'loop from source ({reason})'

@@ -186,7 +186,7 @@ class ManagedBus:
         self._failure_listeners: list[Callable[[int], None]] = []
         self._stop = threading.Event()
         self._reopen_requested = False
-        self._thread: threading.Thread | None = None
+        self._worker: threading.Thread | None = None
         self._lock = threading.Lock()  # open/close and shutdown
         self._backoff_s = config.reconnect_initial_s
         self._reopen_delay_s = config.reconnect_initial_s
@@ -195,6 +195,7 @@ class ManagedBus:
         self._up_since = 0.0  # when the bus last came up (time.monotonic) [s]
         self._consecutive_send_failures = 0
         self._log_sink = CanLog(config.log_file, config.name) if config.log_file else None
+        self._sent_observer: Callable[[Sequence[can.Message]], object] | None = None
         # counters (single writer each: the sending thread or the receive thread)
         self._sent = 0
         self._received = 0
@@ -339,11 +340,11 @@ class ManagedBus:
         if not receive_thread:
             self._polled = True
             return
-        if self._thread is None:
-            self._thread = threading.Thread(
+        if self._worker is None:
+            self._worker = threading.Thread(
                 target=self._run, name=f'canrx-{self.name}', daemon=True
             )
-            self._thread.start()
+            self._worker.start()
 
     def shutdown(self) -> None:
         """Stop the receive thread, close the bus and the log. Idempotent."""
@@ -352,9 +353,9 @@ class ManagedBus:
                 return
             self._state = BusState.CLOSED
         self._stop.set()
-        if self._thread is not None and self._thread is not threading.current_thread():
-            self._thread.join(timeout=5.0)
-            if self._thread.is_alive():
+        if self._worker is not None and self._worker is not threading.current_thread():
+            self._worker.join(timeout=5.0)
+            if self._worker.is_alive():
                 _log.error('bus %s: receive thread did not stop within 5 s', self.name)
         with self._lock:
             self._close_locked()
@@ -420,7 +421,18 @@ class ManagedBus:
         if self._log_sink is not None:
             for msg in msgs:
                 self._log_sink.sent(msg, self.name)
+        observer = self._sent_observer
+        if observer is not None:
+            observer(msgs)
         return True
+
+    def observe_sent(self, observer: Callable[[Sequence[can.Message]], object] | None) -> None:
+        """Call observer(frames) with the frames of each send the driver accepted; None stops.
+
+        For measurements (the bench times commands to their first frame); it runs in the
+        sending thread, the loop's, so it must be quick.
+        """
+        self._sent_observer = observer
 
     # --- receiving ---------------------------------------------------------------------------
     def poll(self) -> int:

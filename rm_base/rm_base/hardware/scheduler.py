@@ -78,7 +78,7 @@ class Stage(Protocol):
 
     name: str
 
-    def __call__(self, now_ns: int, dt: float) -> bool:
+    def __call__(self, now_ns: int, dt: float) -> bool | None:
         """Do this tick's work; return False if there was none (then it is not timed)."""
 
 
@@ -162,8 +162,9 @@ class Scheduler:
         self._last_tick_ns: int | None = None
         self._tick_deadline_ns: int | None = None
         self._frames: list[tuple[Callable[[can.Message], object], can.Message]] = []
+        self._observer: Callable[[int, int], object] | None = None
         self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
+        self._worker: threading.Thread | None = None
         self._final: Callable[[], None] | None = None
         # statistics
         self._ticks = 0
@@ -206,6 +207,15 @@ class Scheduler:
     def remove_after_tick(self, callback: Callable[[], object]) -> None:
         """Stop calling callback after the ticks (no error if it was not added)."""
         self._after_tick = tuple(c for c in self._after_tick if c != callback)
+
+    def observe_ticks(self, observer: Callable[[int, int], object] | None) -> None:
+        """Call observer(start_error_ns, tick_ns) after each tick of the thread; None stops.
+
+        For measurements that need every tick (the bench's percentiles), where the loop
+        itself keeps histograms: ``start_error_ns`` is the tick's start minus its deadline,
+        ``tick_ns`` how long ``tick`` took.
+        """
+        self._observer = observer
 
     def remove_stage(self, name: str) -> bool:
         """Remove the stage of that name from the loop (from its next tick on).
@@ -275,7 +285,7 @@ class Scheduler:
     @property
     def running(self) -> bool:
         """Whether the scheduler thread is alive."""
-        return self._thread is not None and self._thread.is_alive()
+        return self._worker is not None and self._worker.is_alive()
 
     def start(self, final: Callable[[], None] | None = None) -> None:
         """Start the thread. Idempotent while running.
@@ -288,13 +298,13 @@ class Scheduler:
             return
         self._final = final
         self._stop.clear()
-        self._thread = threading.Thread(target=self._run, name=self._thread_name, daemon=True)
-        self._thread.start()
+        self._worker = threading.Thread(target=self._run, name=self._thread_name, daemon=True)
+        self._worker.start()
 
     def stop(self, timeout_s: float = 5.0) -> None:
         """Stop the thread and wait for it (including ``final``). Idempotent."""
         self._stop.set()
-        thread = self._thread
+        thread = self._worker
         if thread is not None and thread is not threading.current_thread():
             thread.join(timeout_s)
             if thread.is_alive():
@@ -333,6 +343,9 @@ class Scheduler:
                         _log.error('scheduler stopped after an error')
                         break
                 self._tick_deadline_ns = None
+                observer = self._observer
+                if observer is not None:
+                    observer(start - deadline, clock() - start)
                 if holder is not None:
                     t0 = time.perf_counter_ns()
                     if garbage.collect_if_due(holder) is not None:

@@ -163,12 +163,19 @@ def test_shutdown_holds_zero():
 
 
 def test_an_exception_in_update_holds_zero_and_is_counted():
-    a = running()
+    class Breaking(actuator_class(joint().type)):
+        broken = False
 
-    def broken(*args):
-        raise RuntimeError('bug')
+        def _set_output(self, *args):
+            if self.broken:
+                raise RuntimeError('bug')
+            return super()._set_output(*args)
 
-    a._set_output = broken
+    a = Breaking(joint(), None)
+    feed(a, T0)
+    a.set_command(Mode.EFFORT, T0, effort=1.0)
+    assert step(a, T0) == ONE_NM_RAW
+    Breaking.broken = True
     feed(a, T0 + MS)
     a.set_command(Mode.EFFORT, T0 + MS, effort=1.0)
     assert step(a, T0 + MS) == 0

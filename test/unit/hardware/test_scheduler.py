@@ -107,15 +107,12 @@ def test_thread_sleeps_to_absolute_deadlines_runs_late_ticks_at_once_and_counts_
             return None
 
     scheduler = Scheduler([Slow()], [], rate_hz=1000.0, clock_ns=clock, sleep=clock.sleep)
-    tick = scheduler.tick
 
-    def counted_tick(now_ns):
-        n = tick(now_ns)
+    def stop_after_ten():
         if len(starts) >= 10:
-            scheduler._stop.set()
-        return n
+            scheduler.stop(timeout_s=0.0)
 
-    scheduler.tick = counted_tick
+    scheduler.add_after_tick(stop_after_ten)
     scheduler.start()
     assert wait_until(lambda: not scheduler.running, timeout=10.0)
     # 4th tick at 3 ms ends at 5.5 ms: the 4 ms period passed whole (skipped), the 5 ms
@@ -298,6 +295,7 @@ def test_time_left_is_known_only_inside_a_tick_of_the_loop_thread():
 
         def __call__(self, now_ns, dt):
             seen.append(scheduler.time_left_ns())
+            return True
 
     scheduler = Scheduler([], [], rate_hz=1000.0)
     scheduler.add_stage(Probe())

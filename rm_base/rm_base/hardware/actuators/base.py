@@ -38,6 +38,7 @@ import math
 from typing import Any, ClassVar, NamedTuple
 
 import can
+from mypy_extensions import mypyc_attr
 
 from rm_base.config_schema import Schema
 from rm_base.control import build_pid
@@ -169,7 +170,11 @@ def _clamp(x: float, limit: float) -> float:
     return limit if x > limit else -limit if x < -limit else x
 
 
-class Actuator(abc.ABC):
+# Compiled (rm_base/compiled.py); other motor families and tests subclass it. Not an
+# abc.ABC: compiled, its subclasses would share one isinstance cache (docs/PERFORMANCE.md,
+# "The compiled loop"); mypy still refuses an instance of a class with abstract methods.
+@mypyc_attr(allow_interpreted_subclasses=True)
+class Actuator:
     """Base of every motor family; see the module docstring for the hooks.
 
     Thread model: :meth:`handle_frame` runs on the bus receive thread and replaces the
@@ -278,6 +283,7 @@ class Actuator(abc.ABC):
     @abc.abstractmethod
     def _feedback_ids(self) -> tuple[int, ...]:
         """Arbitration ids whose frames may be this actuator's."""
+        raise NotImplementedError(f'{type(self).__name__}._feedback_ids')
 
     def _match(self, msg: can.Message) -> bool:
         return True
@@ -285,14 +291,17 @@ class Actuator(abc.ABC):
     @abc.abstractmethod
     def _decode(self, msg: can.Message) -> tuple[float, float, float, float | None, int]:
         """Angle [rad], velocity [rad/s], torque [N·m], temperature [°C] or None, error code."""
+        raise NotImplementedError(f'{type(self).__name__}._decode')
 
     @abc.abstractmethod
     def _set_output(self, effort: float, command: JointCommand, feedback: Feedback) -> float:
         """Compute the device command for ``effort`` [N·m]; return the effort really applied."""
+        raise NotImplementedError(f'{type(self).__name__}._set_output')
 
     @abc.abstractmethod
     def _set_zero_output(self) -> None:
         """Set the device command for no output."""
+        raise NotImplementedError(f'{type(self).__name__}._set_zero_output')
 
     def _pack(self) -> can.Message | None:
         return None
@@ -300,7 +309,7 @@ class Actuator(abc.ABC):
     def _is_fault(self, error_code: int) -> bool:
         return error_code != 0
 
-    def _after_update(self, now_ns: int) -> None:  # noqa: B027 (optional hook)
+    def _after_update(self, now_ns: int) -> None:
         """Called at the end of every update (e.g. to schedule an enable frame)."""
 
     # --- feedback (receive thread) ---
@@ -366,16 +375,19 @@ class Actuator(abc.ABC):
     # --- commands (any thread) ---
     def set_command(
         self,
-        mode: int,
+        mode: object,
         now_ns: int,
         *,
-        position: float = 0.0,
-        velocity: float = 0.0,
-        effort: float = 0.0,
-        kp: float = 0.0,
-        kd: float = 0.0,
+        position: object = 0.0,
+        velocity: object = 0.0,
+        effort: object = 0.0,
+        kp: object = 0.0,
+        kd: object = 0.0,
     ) -> None:
         """Accept a joint target (output shaft, SI), or reject it.
+
+        The fields are checked here (``check_target``), whatever their type: typed as
+        floats, the compiled class would refuse a wrong one with a bare TypeError.
 
         Args:
             mode: :class:`Mode` value (rm_msgs/ActuatorCmd.MODE_*).

@@ -20,6 +20,7 @@ import math
 from typing import ClassVar
 
 import can
+from mypy_extensions import mypyc_attr
 
 from rm_base.config_schema import Schema, integer, number
 from rm_base.geometry.encoder import EncoderUnwrapper
@@ -54,6 +55,7 @@ SCALE_KEYS = (
 )
 
 
+@mypyc_attr(allow_interpreted_subclasses=True)
 class DjiActuator(Actuator):
     """A DJI ESC-driven motor; the group packs its raw command."""
 
@@ -136,6 +138,7 @@ class DjiActuator(Actuator):
         return self._zero_by_offset()
 
 
+@mypyc_attr(allow_interpreted_subclasses=True)
 class M3508(DjiActuator):
     """M3508 with a C620 ESC (±20 A, gear 3591/187, 0.3 N·m/A at the output)."""
 
@@ -145,6 +148,7 @@ class M3508(DjiActuator):
     defaults = Defaults(3591.0 / 187.0, 0.3, 6.0, 50.0, 80.0)
 
 
+@mypyc_attr(allow_interpreted_subclasses=True)
 class M2006(DjiActuator):
     """M2006 with a C610 ESC (±10 A, gear 36, 0.18 N·m/A; no temperature feedback)."""
 
@@ -154,6 +158,7 @@ class M2006(DjiActuator):
     defaults = Defaults(36.0, 0.18, 1.8, 52.0, 80.0)
 
 
+@mypyc_attr(allow_interpreted_subclasses=True)
 class Gm6020Current(DjiActuator):
     """GM6020 in current mode (0x1FE/0x2FE; enable the current loop in the DJI assistant)."""
 
@@ -163,6 +168,7 @@ class Gm6020Current(DjiActuator):
     defaults = Defaults(1.0, 0.741, 1.2, 33.5, 80.0)
 
 
+@mypyc_attr(allow_interpreted_subclasses=True)
 class Gm6020Voltage(DjiActuator):
     """GM6020 in voltage mode (0x1FF/0x2FF): effort -> current -> ``V = R·I + Ke·ω``."""
 
