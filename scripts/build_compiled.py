@@ -31,7 +31,7 @@ def main(argv: list[str]) -> int:
         # DjiActuator.gear_ratio (docs/PERFORMANCE.md): one order, the same every build.
         os.environ['PYTHONHASHSEED'] = '0'
         os.execv(sys.executable, [sys.executable, *argv])
-    sys.path[:0] = [str(ROOT / 'rm_base')]
+    sys.path[:0] = [str(ROOT / 'rm_base'), str(ROOT / 'rm_plugins')]
     os.environ['RM_ROS2_COMPILED'] = '0'  # this process imports the sources
     from rm_base import compiled
 
@@ -47,8 +47,12 @@ def main(argv: list[str]) -> int:
     from setuptools import setup
 
     os.chdir(ROOT)  # mypy.ini (mypy_path, strictness) is read from here
-    paths = [str(compiled.source_path(m).relative_to(ROOT)) for m in compiled.MODULES]
-    sources = {m: compiled.digest(compiled.source_path(m)) for m in compiled.MODULES}
+    found = {m: compiled.source_path(m) for m in compiled.MODULES}
+    missing = [m for m, path in found.items() if path is None]
+    if missing:
+        raise SystemExit(f'[build_compiled] no source for {", ".join(missing)}')
+    paths = [str(path.relative_to(ROOT)) for path in found.values() if path is not None]
+    sources = {m: compiled.digest(path) for m, path in found.items() if path is not None}
     extensions = mypycify(
         [*paths, '--cache-dir', 'build/compiled/mypy_cache'],
         separate=[(paths, compiled.GROUP)], opt_level='3', debug_level='1',

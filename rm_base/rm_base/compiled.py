@@ -41,6 +41,11 @@ MODULES: tuple[str, ...] = (
     'rm_base.motors.dji.actuator',
     'rm_base.motors.dji.groups',
     'rm_base.sim.wire',
+    'rm_base.geometry.angles',
+    'rm_base.host.plugin_task',
+    'rm_plugins.chassis.motion',
+    'rm_plugins.chassis.odometry',
+    'rm_plugins.gimbal.control',
 )
 #: The group's shared library is ``rm_base/<GROUP tail>__mypyc.*.so``.
 GROUP = 'rm_base.native'
@@ -52,19 +57,23 @@ STAMP_NAME = 'compiled_stamp.json'
 _log = logging.getLogger(__name__)
 
 
-def _package_dir(package: str) -> Path:
+def _package_dir(package: str) -> Path | None:
     if package == 'rm_base':
         return Path(__file__).parent
     spec = importlib.util.find_spec(package)  # finds, does not import
     if spec is None or not spec.submodule_search_locations:
-        raise ImportError(f'no package {package!r}')
+        return None
     return Path(spec.submodule_search_locations[0])
 
 
-def source_path(module: str) -> Path:
-    """The source file of one of the project's modules (``rm_base.hardware.bus``)."""
+def source_path(module: str) -> Path | None:
+    """The source file of one of the project's modules (``rm_base.hardware.bus``).
+
+    None when its package is not installed (rm_base alone, without rm_plugins).
+    """
     package, *rest = module.split('.')
-    return _package_dir(package).joinpath(*rest[:-1], rest[-1] + '.py')
+    directory = _package_dir(package)
+    return None if directory is None else directory.joinpath(*rest[:-1], rest[-1] + '.py')
 
 
 def stamp_path() -> Path:
@@ -85,7 +94,9 @@ def stale(modules: Sequence[str] = MODULES, stamp: Path | None = None) -> list[s
         return list(modules)
     if set(built) != set(modules):
         return list(modules)
-    return [m for m in modules if built.get(m) != digest(source_path(m))]
+    # a module of a package not installed is never imported: it cannot be stale
+    sources = {m: source_path(m) for m in modules}
+    return [m for m, path in sources.items() if path is not None and built[m] != digest(path)]
 
 
 class _SourceFinder(importlib.abc.MetaPathFinder):

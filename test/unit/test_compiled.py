@@ -42,6 +42,15 @@ def test_without_a_stamp_or_with_another_module_list_nothing_compiled_is_used(tm
     assert compiled.stale(stamp=tmp_path / 'torn.json') == list(compiled.MODULES)
 
 
+def test_without_rm_plugins_installed_only_rm_base_modules_are_checked(tmp_path, monkeypatch):
+    plugins = [m for m in compiled.MODULES if m.startswith('rm_plugins.')]
+    assert plugins  # else this test checks nothing
+    stamp = _stamp(tmp_path, **dict.fromkeys(plugins, '0' * 64))
+    real = compiled._package_dir
+    monkeypatch.setattr(compiled, '_package_dir', lambda p: None if p == 'rm_plugins' else real(p))
+    assert compiled.stale(stamp=stamp) == []
+
+
 def test_the_source_finder_finds_the_python_file_beside_the_extension_module():
     import rm_base.hardware
 

@@ -60,7 +60,7 @@ class TickInputs:
         self,
         now: Callable[[], Any],
         refresh: Callable[[int], None] | None = None,
-        time_left: Callable[[], int | None] | None = None,
+        time_left: Callable[[], float | None] | None = None,
     ) -> None:
         self._now = now
         self._refresh = refresh
