@@ -28,7 +28,7 @@ def _built_files() -> list[Path]:
 def main(argv: list[str]) -> int:
     if os.environ.get('PYTHONHASHSEED') != '0':
         # mypyc 1.13 walks some sets in hash order, and one of those orders fails on
-        # DjiActuator.gear_ratio (docs/PERFORMANCE.md): one order, the same every build.
+        # DjiActuator.gear_ratio (docs/ARCHITECTURE.md): one order, the same every build.
         os.environ['PYTHONHASHSEED'] = '0'
         os.execv(sys.executable, [sys.executable, *argv])
     sys.path[:0] = [str(ROOT / 'rm_base'), str(ROOT / 'rm_plugins')]

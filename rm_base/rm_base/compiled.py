@@ -32,7 +32,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from types import ModuleType
 
-#: The compiled modules: the loop's hardware side, from the frames to the motor commands.
+#: The compiled modules: the loop's hardware side and the plugins' busiest helpers.
 MODULES: tuple[str, ...] = (
     'rm_base.hardware.timing',
     'rm_base.hardware.scheduler',

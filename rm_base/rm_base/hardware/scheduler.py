@@ -164,6 +164,7 @@ class Scheduler:
         self._frames: list[tuple[Callable[[can.Message], object], can.Message]] = []
         self._observer: Callable[[int, int], object] | None = None
         self._stop = threading.Event()
+        # not _thread: compiled (rm_base/compiled.py), that is __thread in C, a keyword
         self._worker: threading.Thread | None = None
         self._final: Callable[[], None] | None = None
         # statistics

@@ -300,6 +300,22 @@ def test_when_sends_keep_failing_expect_a_reopen():
         assert bus.stats().send_errors == 5
 
 
+def test_an_observer_sees_every_accepted_send_and_no_failed_one():
+    factory = Factory()
+    seen = []
+    with ManagedBus(fake(), bus_factory=factory) as bus:
+        bus.start()
+        bus.observe_sent(lambda msgs: seen.append([m.arbitration_id for m in msgs]))
+        assert bus.send(frame(0x200))
+        assert bus.send_many([frame(0x1FF), frame(0x2FF)]) == 2
+        factory.buses[0].fail_send = True
+        assert not bus.send(frame(0x200))
+        factory.buses[0].fail_send = False
+        bus.observe_sent(None)
+        assert bus.send(frame(0x200))
+    assert seen == [[0x200], [0x1FF], [0x2FF]]
+
+
 def test_send_while_down_returns_false_and_counts():
     factory = Factory(plan=[False] * 1000)
     with ManagedBus(fake(reconnect_initial_s=5.0, reconnect_max_s=5.0), bus_factory=factory) as bus:

@@ -128,6 +128,33 @@ def test_thread_sleeps_to_absolute_deadlines_runs_late_ticks_at_once_and_counts_
     assert len(stats.histogram) == len(HISTOGRAM_EDGES_US) + 1
 
 
+def test_an_observer_gets_each_ticks_start_error_and_duration():
+    clock = SteppedClock()
+    seen = []
+
+    class Work:
+        def update(self, now_ns, dt):
+            clock.now += 300_000  # 0.3 ms of work
+
+        def pack_command(self):
+            return None
+
+    scheduler = Scheduler([Work()], [], rate_hz=1000.0, clock_ns=clock, sleep=clock.sleep)
+
+    def observe(error_ns, tick_ns):
+        seen.append((error_ns, tick_ns))
+        if len(seen) == 3:
+            scheduler.stop(timeout_s=0.0)
+
+    scheduler.observe_ticks(observe)
+    scheduler.start()
+    assert wait_until(lambda: not scheduler.running, timeout=10.0)
+    assert seen == [(0, 300_000)] * 3
+    scheduler.observe_ticks(None)
+    scheduler.tick(T0)  # stepped ticks are not the thread's: never observed
+    assert len(seen) == 3
+
+
 def test_on_error_decides_whether_to_go_on():
     clock = SteppedClock()
     failures = []

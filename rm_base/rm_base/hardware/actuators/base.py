@@ -171,7 +171,7 @@ def _clamp(x: float, limit: float) -> float:
 
 
 # Compiled (rm_base/compiled.py); other motor families and tests subclass it. Not an
-# abc.ABC: compiled, its subclasses would share one isinstance cache (docs/PERFORMANCE.md,
+# abc.ABC: compiled, its subclasses would share one isinstance cache (docs/ARCHITECTURE.md,
 # "The compiled loop"); mypy still refuses an instance of a class with abstract methods.
 @mypyc_attr(allow_interpreted_subclasses=True)
 class Actuator:
