@@ -11,8 +11,8 @@ Definitions (the scheduler's own):
   next tick then runs at once, late, and periods that passed whole are ``skipped``); the
   share is ``overruns / ticks``. Loops the bench only watches from outside (the bare
   sleeper, an rclpy timer) count the periods with no tick: ``skipped / (ticks + skipped)``;
-* tick duration: update + pack + send of one tick [µs] (``tick`` as the loop thread
-  times it). On rm_sim a send waits for the simulated world's lock, so
+* tick duration: update + pack + send of one tick [µs], from the tick's start as the
+  loop thread times it (``Scheduler.observe_ticks``). On rm_sim a send waits for the simulated world's lock, so
   time the physics thread holds it shows up here.
 """
 

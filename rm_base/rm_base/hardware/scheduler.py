@@ -214,7 +214,8 @@ class Scheduler:
 
         For measurements that need every tick (the bench's percentiles), where the loop
         itself keeps histograms: ``start_error_ns`` is the tick's start minus its deadline,
-        ``tick_ns`` how long ``tick`` took.
+        ``tick_ns`` the time from that start to the end of ``tick`` (the loop's own
+        bookkeeping at the start included, its window log every ``report_period_s`` too).
         """
         self._observer = observer
 
