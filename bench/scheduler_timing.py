@@ -12,8 +12,8 @@ Definitions (the scheduler's own):
   share is ``overruns / ticks``. Loops the bench only watches from outside (the bare
   sleeper, an rclpy timer) count the periods with no tick: ``skipped / (ticks + skipped)``;
 * tick duration: update + pack + send of one tick [µs], from the tick's start as the
-  loop thread times it (``Scheduler.observe_ticks``). On rm_sim a send waits for the simulated world's lock, so
-  time the physics thread holds it shows up here.
+  loop thread times it (``Scheduler.observe_ticks``). On rm_sim a send waits for the
+  simulated world's lock, so time the physics thread holds it shows up here.
 """
 
 from __future__ import annotations
