@@ -7,7 +7,7 @@ import subprocess
 
 import pytest
 from ament_index_python.packages import get_package_prefix
-from support.ros import isolate_ros_environment, wait_until
+from support.ros import call_idempotent, isolate_ros_environment, wait_until
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
@@ -104,10 +104,10 @@ def test_when_a_motor_is_taken_offline_in_rm_sim_expect_the_robot_to_see_it(
         assert referee[0].barrel_heat_limit == 100.0
         client = node.create_client(SetBool, '/rm_sim/wheel_fl/offline')
         assert client.wait_for_service(timeout_sec=20.0)
-        future = client.call_async(SetBool.Request(data=True))
-        executor.spin_until_future_complete(future, timeout_sec=20.0)
+        response = call_idempotent(executor, client, SetBool.Request(data=True))
         executor.shutdown()
-        assert future.result().success, future.result().message
+        assert response is not None, 'rm_sim did not answer 4 requests in 20 s'
+        assert response.success, response.message
         assert wait_until(lambda: status(lambda s: 'offline wheel_fl' in s), 30.0, period=0.0)
         assert proc.poll() is None, ''.join(lines) + log.read_text()
         proc.send_signal(signal.SIGINT)

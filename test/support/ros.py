@@ -100,6 +100,23 @@ def wait_until(
             time.sleep(period)
 
 
+def call_idempotent(executor: Any, client: Any, request: Any, attempts: int = 4,
+                    timeout_s: float = 5.0) -> Any:
+    """Call a service whose request may be repeated; the response, or None after every try.
+
+    A service can be discovered (``wait_for_service``) before it has matched the client's
+    response reader, and a request sent then gets no answer (seen once in a fresh-clone CI
+    run: no response within 20 s). A repeated request after a few seconds is answered.
+    """
+    for _ in range(attempts):
+        future = client.call_async(request)
+        executor.spin_until_future_complete(future, timeout_sec=timeout_s)
+        if future.done() and future.result() is not None:
+            return future.result()
+        client.remove_pending_request(future)
+    return None
+
+
 @contextmanager
 def rclpy_context() -> Iterator[object]:
     """Yield a private, initialised rclpy Context on the test domain; shut it down after."""
