@@ -18,8 +18,10 @@ sending garbage on its feedback id, a bus in bus-off, or rm_robot killed (SIGKIL
 restarted. Each fault has a detection rule (what the robot must show within a deadline,
 see ``FaultInjector``); the report counts faults injected and detected, unsafe frames
 on the wire (the checker, by rule; must be 0), crashes (must be 0: the bridge's threads,
-scheduler errors, rm_robot exits not caused here), the scheduler's timing, and the
-resident memory of both processes at the start (after warm-up) and the end.
+scheduler errors, rm_robot exits not caused here), the scheduler's timing, the
+resident memory of both processes at the start (after warm-up) and the end, and what the
+simulated referee did (``reliability.referee_watch``: a robot it destroyed is revived, and
+a fault missed while it had the joint unpowered is not judged).
 
 Network rule: ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST and a private ROS_DOMAIN_ID are set
 before rclpy is imported, and passed to rm_robot.
@@ -57,6 +59,7 @@ from rclpy.context import Context  # noqa: E402
 from rclpy.experimental import EventsExecutor  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 from rclpy.qos import qos_profile_sensor_data  # noqa: E402
+from reliability.referee_watch import RefereeWatch  # noqa: E402
 from reliability.rigs import WireWatch, hardware_config  # noqa: E402
 from reliability.wire import check_actuator_states, max_efforts  # noqa: E402
 from rm_base.bridge import CanBridgeNode  # noqa: E402
@@ -81,6 +84,13 @@ DETECT_S = 1.0  # [s] deadline of most detection rules
 RECONTROL_S = 20.0  # [s] a restarted rm_robot must drive again within this
 WHEELS = ('wheel_fl', 'wheel_fr', 'wheel_rl', 'wheel_rr')
 MOTORS = (*WHEELS, 'yaw', 'pitch', 'friction_l', 'friction_r', 'trigger')
+# the joints on each output of the referee's power management module
+OUTPUT_JOINTS = {
+    'chassis': WHEELS,
+    'gimbal': ('yaw', 'pitch'),
+    'shooter': ('friction_l', 'friction_r', 'trigger'),
+}
+REFEREE_SETTLE_S = 1.0  # [s] after an output is back, its joints still resynchronise
 
 
 def rss_kib(pid: int) -> int:
@@ -548,6 +558,8 @@ def main(argv: list[str] | None = None) -> int:
     logging.getLogger('rm_base').setLevel(logging.INFO)
     logging.getLogger('rm_base').propagate = False
     robot = Robot(workdir)
+    referee = RefereeWatch(robot.world, OUTPUT_JOINTS)
+    referee.start()
     commander = Commander(robot, rng)
     injector = FaultInjector(robot, rng, host_restarts=not args.no_host_restart)
     rss: dict[str, Any] = {'bridge': [], 'rm_robot': []}
@@ -584,8 +596,23 @@ def main(argv: list[str] | None = None) -> int:
         if robot.host is not None:
             rss['rm_robot'].append(rss_kib(robot.host.pid))
         commander.stop()
+        referee.stop()
         alive = robot.threads_alive()
         robot.close()
+    bus_of = {name: a.bus_name for name, a in robot.hardware.actuators.items()}
+    for rec in injector.tally.records:
+        # an unpowered motor shows no temperature, no jam and no garbage
+        if rec.target == 'rm_robot':
+            joints: tuple[str, ...] = WHEELS
+        elif rec.target in MOTORS:
+            joints = (rec.target,)
+        else:
+            joints = tuple(j for j, bus in bus_of.items() if bus == rec.target)
+        if rec.detected is False and referee.was_off(
+            joints, rec.start, rec.end, REFEREE_SETTLE_S
+        ):
+            rec.detected = None
+            rec.note = 'its output was off by the referee (see referee in the report)'
     checker = robot.watch.checker
     during = attribute(checker.violations, injector.tally.records, robot)
     sched = robot.hardware.scheduler.stats()
@@ -634,6 +661,7 @@ def main(argv: list[str] | None = None) -> int:
         'crashes': crash_count,
         'crash_detail': crashes,
         'command_mixes': commander.mixes,
+        'referee': referee.summary(),
         'scheduler': {
             'ticks': sched.ticks,
             # ticks run per second of loop time (every deadline is a tick run or skipped)

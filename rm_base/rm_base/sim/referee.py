@@ -106,6 +106,14 @@ class SimReferee:
         """Plug the cable back in."""
         self.plugged = True
 
+    def revive(self) -> None:
+        """Revive the robot (:meth:`RefereeRules.revive`); its outputs are on again at once.
+
+        Call it with the world's lock held (the physics thread switches the outputs too).
+        """
+        self.rules.revive()
+        self._switch_outputs()
+
     def tick(self, now_ns: int, dt: float, shots: Sequence[Shot]) -> list[bytes]:
         """Account one physics tick ending at now_ns; the frames due now.
 

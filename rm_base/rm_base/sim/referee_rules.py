@@ -118,6 +118,7 @@ class RefereeRules:
         chassis_cuts: times an empty buffer cut the chassis (2025 on).
         launcher_locks: times the heat locked the launcher (2025 on).
         shots: projectiles counted.
+        revivals: times :meth:`revive` brought the robot back.
     """
 
     def __init__(self, settings: RefereeSettings) -> None:
@@ -130,6 +131,7 @@ class RefereeRules:
         self.chassis_cuts = 0
         self.launcher_locks = 0
         self.shots = 0
+        self.revivals = 0
         self._cut_until_ns: int | None = None
         self._locked = False
         self._locked_for_match = False
@@ -178,6 +180,30 @@ class RefereeRules:
                 self._hurt(s.max_hp * percent / 100.0 * STEP_S, HURT_OVER_POWER, hurts)
         self._judge_heat(hurts)
         return hurts
+
+    @property
+    def destroyed(self) -> bool:
+        """No HP left: every output is off until :meth:`revive`."""
+        return self.hp <= 0
+
+    @property
+    def locked_for_match(self) -> bool:
+        """The heat went so far over the limit that the launcher stays off (2025 on)."""
+        return self._locked_for_match
+
+    def revive(self) -> None:
+        """Bring the robot back as it started (a revival).
+
+        Full HP, a cold barrel, a full buffer, no cut and no lock; the soak uses it so that
+        one destruction does not end its run.
+        """
+        s = self.settings
+        self.hp = s.max_hp
+        self.heat = 0.0
+        self.buffer_j = s.buffer_max_j
+        self._cut_until_ns = None
+        self._locked = self._locked_for_match = False
+        self.revivals += 1
 
     # -- what the referee reports -----------------------------------------------------------------
 

@@ -117,6 +117,19 @@ def test_an_empty_buffer_cuts_the_wheels_power_for_five_seconds(path):
             bus.shutdown()
 
 
+def test_a_destroyed_robot_has_every_output_off_until_revived(path):
+    with SimWorld.from_config(world_config(path, unique_channel(), max_hp=10)) as world:
+        referee = world.referee
+        for _ in range(60):  # far over twice the limit: the HP goes at the next step
+            referee.rules.shot(0, 15.0)
+        world.advance(0.1)
+        assert referee.rules.destroyed
+        assert not any(world.motor(m).powered for m in [*WHEELS, 'yaw', 'trigger'])
+        with world.lock:
+            referee.revive()
+        assert all(world.motor(m).powered for m in [*WHEELS, 'yaw', 'trigger'])
+
+
 def test_unplugged_it_sends_nothing_but_keeps_judging(path):
     with SimWorld.from_config(world_config(path, unique_channel())) as world:
         frames = []

@@ -115,6 +115,24 @@ def test_no_hp_left_turns_every_output_off():
     assert (r.outputs.gimbal, r.outputs.chassis, r.outputs.shooter) == (False, False, False)
 
 
+def test_a_revival_restores_hp_heat_buffer_and_every_output():
+    r = rules(V.V2024, max_hp=10, buffer_max_j=0.0)
+    steps(r, 10, power=500.0)
+    assert r.destroyed
+    r.revive()
+    assert not r.destroyed and r.hp == 10 and r.revivals == 1
+    assert (r.outputs.gimbal, r.outputs.chassis, r.outputs.shooter) == (True, True, True)
+
+
+def test_a_revival_ends_a_lock_for_the_match():
+    r = rules()
+    for _ in range(21):
+        r.shot(0, 15.0)
+    assert r.locked_for_match and not r.outputs.shooter
+    r.revive()
+    assert not r.locked_for_match and r.heat == 0.0 and r.outputs.shooter
+
+
 def test_reports_follow_the_season():
     new, old = rules(), rules(V.V2024)
     for r in (new, old):
