@@ -48,7 +48,7 @@ from typing import Any
 TEST_ROOT = pathlib.Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(TEST_ROOT))
 
-from support.ros import isolate_ros_environment  # noqa: E402
+from support.ros import domain_claim_fds, isolate_ros_environment  # noqa: E402
 
 # Network rule, before anything imports rclpy.
 isolate_ros_environment(os.environ)
@@ -183,7 +183,10 @@ class Robot:
             args += ['--params-file', str(path)]
         env = dict(os.environ)
         isolate_ros_environment(env)
-        self.host = subprocess.Popen(args, env=env, stdout=self.host_log, stderr=self.host_log)
+        self.host = subprocess.Popen(
+            args, env=env, stdout=self.host_log, stderr=self.host_log,
+            pass_fds=domain_claim_fds(),  # an rm_robot left over keeps its domain to itself
+        )
         # It inherited this thread's CPU; it picks its own for its Python threads, and its
         # middleware's threads run anywhere, as when started from a shell.
         try:

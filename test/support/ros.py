@@ -59,6 +59,16 @@ def claim_domain_id(seed: int) -> int:
     raise RuntimeError(f'all {_DOMAINS} ROS domains are held by other test sessions')
 
 
+def domain_claim_fds() -> list[int]:
+    """The file descriptors of this process's domain claims, for its children to inherit.
+
+    A child started with them (``pass_fds``) holds the claim too: a child that outlives
+    its parent (the parent killed before its clean-up) keeps its domain from the next
+    test session, which would otherwise hear its topics and services.
+    """
+    return [claim.fileno() for claim in _CLAIMED]
+
+
 def isolate_ros_environment(environ: dict[str, str] | os._Environ) -> int:
     """Force localhost-only discovery and a private domain id into environ; return the id.
 
@@ -134,14 +144,17 @@ def rclpy_context() -> Iterator[object]:
 def start_process(args: Sequence[str], **kwargs) -> subprocess.Popen:
     """Start a child process in the isolated ROS environment (stdout/stderr captured).
 
-    The test tree is put on the child's PYTHONPATH, so `python -m support.<module>` works.
+    The test tree is put on the child's PYTHONPATH, so `python -m support.<module>` works;
+    the child holds this session's domain claim (:func:`domain_claim_fds`).
     """
     env = dict(os.environ)
     env.update(kwargs.pop('env', {}))
     isolate_ros_environment(env)
     env['PYTHONPATH'] = os.pathsep.join(p for p in (TEST_ROOT, env.get('PYTHONPATH')) if p)
+    pass_fds = [*kwargs.pop('pass_fds', ()), *domain_claim_fds()]
     return subprocess.Popen(
-        list(args), env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, **kwargs
+        list(args), env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        pass_fds=pass_fds, **kwargs,
     )
 
 
