@@ -9,11 +9,13 @@ from types import SimpleNamespace
 
 import can
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 from rm_base.hardware.protocols import mit
 from rm_base.motors.damiao import protocol as damiao
 from rm_base.motors.dji import protocol as dji
 
-from reliability.wire import WireChecker, check_actuator_states, max_efforts
+from reliability.wire import WireChecker, _Window, check_actuator_states, max_efforts
 
 MS = 1e-3
 DM4310 = damiao.dm_limits('DM4310')
@@ -263,3 +265,31 @@ def test_a_frame_sent_after_a_stall_is_judged_when_it_was_decided():
     # the next tick is decided after the stall: it must be zero (offline by then)
     found = feed(checker, wheel_cmd(ONE_NM, 0.200))
     assert rules(found) == [('wheel', 'offline')]
+
+
+@given(
+    st.lists(
+        st.tuples(st.floats(0.0001, 0.05), st.floats(-100.0, 100.0, allow_nan=False)),
+        min_size=1,
+        max_size=300,
+    ),
+    st.floats(0.0, 3.0),
+)
+def test_the_sliding_window_is_the_min_and_max_of_its_samples(steps, since_back):
+    """Against a brute-force reference: the samples of the last span (at least two), and
+    with since, every kept sample from then on."""
+    span = 0.1
+    window = _Window(span)
+    t, samples = 0.0, []
+    for dt, x in steps:
+        t += dt
+        window.add(t, x)
+        samples.append((t, x))
+        recent = [v for tv, v in samples if tv >= t - span]
+        if len(recent) < 2:
+            recent = [v for _, v in samples[-2:]]
+        assert window.bounds() == (min(recent), max(recent))
+        assert window.last == x
+    since = t - since_back
+    kept = [v for tv, v in samples if tv >= max(since, t - span - _Window.HISTORY_S)]
+    assert window.bounds(since) == (min(recent + kept), max(recent + kept))

@@ -131,35 +131,57 @@ class _Window:
     The last ``span_s + HISTORY_S`` seconds of samples are also kept, for frames decided
     before a stall and sent after it (``bounds(since=...)``): the bridge decided them with
     feedback from before the stall, which the sliding window may have let go meanwhile.
+
+    Times and values sit in parallel deques of floats, not (t, x) tuples: a soak feeds it
+    tens of thousands of samples a second, and new tuples that replace older ones fill the
+    garbage collector's youngest generation without ever making a collection due, so the
+    loop sharing the process scans them all at once (docs/PERFORMANCE.md, "The soak").
     """
 
     HISTORY_S = 2.0  # [s] longer than any stall a test lets pass
 
     def __init__(self, span_s: float) -> None:
         self.span_s = span_s
-        self._history: collections.deque[tuple[float, float]] = collections.deque()
-        self._samples: collections.deque[tuple[float, float]] = collections.deque()
-        self._lo: collections.deque[tuple[float, float]] = collections.deque()
-        self._hi: collections.deque[tuple[float, float]] = collections.deque()
+        deque = collections.deque
+        self._history: tuple[collections.deque[float], collections.deque[float]] = (
+            deque(), deque()
+        )
+        self._samples: tuple[collections.deque[float], collections.deque[float]] = (
+            deque(), deque()
+        )
+        # monotonic deques: increasing values (the minimum first), decreasing values
+        self._lo: tuple[collections.deque[float], collections.deque[float]] = (deque(), deque())
+        self._hi: tuple[collections.deque[float], collections.deque[float]] = (deque(), deque())
 
     def add(self, t: float, x: float) -> None:
-        history = self._history
-        history.append((t, x))
-        while history[0][0] < t - self.span_s - self.HISTORY_S:
-            history.popleft()
-        self._samples.append((t, x))
-        while self._lo and self._lo[-1][1] >= x:
-            self._lo.pop()
-        self._lo.append((t, x))
-        while self._hi and self._hi[-1][1] <= x:
-            self._hi.pop()
-        self._hi.append((t, x))
-        samples = self._samples
-        while len(samples) > 2 and samples[0][0] < t - self.span_s:
-            old_t = samples.popleft()[0]
-            for mono in (self._lo, self._hi):
-                while mono and mono[0][0] <= old_t:
-                    mono.popleft()
+        history_t, history_x = self._history
+        history_t.append(t)
+        history_x.append(x)
+        while history_t[0] < t - self.span_s - self.HISTORY_S:
+            history_t.popleft()
+            history_x.popleft()
+        samples_t, samples_x = self._samples
+        samples_t.append(t)
+        samples_x.append(x)
+        lo_t, lo_x = self._lo
+        while lo_x and lo_x[-1] >= x:
+            lo_t.pop()
+            lo_x.pop()
+        lo_t.append(t)
+        lo_x.append(x)
+        hi_t, hi_x = self._hi
+        while hi_x and hi_x[-1] <= x:
+            hi_t.pop()
+            hi_x.pop()
+        hi_t.append(t)
+        hi_x.append(x)
+        while len(samples_t) > 2 and samples_t[0] < t - self.span_s:
+            old_t = samples_t.popleft()
+            samples_x.popleft()
+            for mono_t, mono_x in (self._lo, self._hi):
+                while mono_t and mono_t[0] <= old_t:
+                    mono_t.popleft()
+                    mono_x.popleft()
 
     def bounds(self, since: float | None = None) -> tuple[float, float] | None:
         """(min, max) over the window, or None before any sample.
@@ -168,17 +190,17 @@ class _Window:
             since: also over every kept sample from this time on [s] (an O(n) scan, for
                 the few frames sent after a stall).
         """
-        if not self._samples:
+        if not self._samples[0]:
             return None
-        lo, hi = self._lo[0][1], self._hi[0][1]
+        lo, hi = self._lo[1][0], self._hi[1][0]
         if since is not None:
-            older = [x for tx, x in self._history if tx >= since]
+            older = [x for tx, x in zip(*self._history, strict=True) if tx >= since]
             lo, hi = min([lo, *older]), max([hi, *older])
         return lo, hi
 
     @property
     def last(self) -> float:
-        return self._samples[-1][1]
+        return self._samples[1][-1]
 
 
 def _min_abs(lo: float, hi: float) -> float:
