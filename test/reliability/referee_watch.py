@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 import threading
 import time
-from collections.abc import Mapping
+from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
 
@@ -101,6 +101,22 @@ class RefereeWatch:
             for joint in joints
             for a, b in self.off.get(joint, ())
         )
+
+    def set_aside(
+        self, records: Iterable[Any], joints_of: Callable[[str], tuple[str, ...]], settle_s: float
+    ) -> None:
+        """Turn each missed fault whose joints the referee had unpowered into not judged.
+
+        An unpowered motor shows no temperature, no jam and no garbage. records: the soak's
+        fault records (``target``, ``start``, ``end``, ``detected``, ``note``); joints_of:
+        the joints a target stands for (a bus: its joints).
+        """
+        for rec in records:
+            if rec.detected is False and self.was_off(
+                joints_of(rec.target), rec.start, rec.end, settle_s
+            ):
+                rec.detected = None
+                rec.note = 'its output was off by the referee (see referee in the report)'
 
     def summary(self) -> dict[str, Any]:
         """The report's ``referee`` section."""

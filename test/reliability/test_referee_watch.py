@@ -1,6 +1,7 @@
 """The soak's RefereeWatch: when the referee had joints unpowered, and the revival."""
 
 import math
+from types import SimpleNamespace
 
 import pytest
 from rm_base.sim import SimWorld
@@ -52,6 +53,24 @@ def test_a_launcher_lock_is_an_open_window_on_the_shooter_until_the_heat_is_gone
     assert watch.off['trigger'] == [[10.0, 12.0]]
     watch.stop()
     assert watch.summary()['output_off_s'] == {'trigger': 2.0}
+
+
+def test_a_miss_while_the_joint_was_unpowered_is_set_aside_as_not_judged(world):
+    watch = RefereeWatch(world, OUTPUTS)
+    watch.off['trigger'] = [[10.0, 12.0]]
+
+    def record(target, start, end, detected=False):
+        return SimpleNamespace(target=target, start=start, end=end, detected=detected, note='')
+
+    during = record('trigger', 11.0, 11.5)
+    settling = record('can1', 12.5, 13.0)  # a bus: its joints
+    later = record('trigger', 14.0, 15.0)
+    elsewhere = record('wheel', 11.0, 11.5)
+    detected = record('trigger', 11.0, 11.5, detected=True)
+    records = [during, settling, later, elsewhere, detected]
+    watch.set_aside(records, lambda t: ('trigger',) if t in ('trigger', 'can1') else (t,), 1.0)
+    assert [r.detected for r in records] == [None, None, False, False, True]
+    assert 'referee' in during.note and later.note == ''
 
 
 def test_a_world_without_referee_is_refused():

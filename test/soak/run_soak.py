@@ -603,19 +603,15 @@ def main(argv: list[str] | None = None) -> int:
         alive = robot.threads_alive()
         robot.close()
     bus_of = {name: a.bus_name for name, a in robot.hardware.actuators.items()}
-    for rec in injector.tally.records:
-        # an unpowered motor shows no temperature, no jam and no garbage
-        if rec.target == 'rm_robot':
-            joints: tuple[str, ...] = WHEELS
-        elif rec.target in MOTORS:
-            joints = (rec.target,)
-        else:
-            joints = tuple(j for j, bus in bus_of.items() if bus == rec.target)
-        if rec.detected is False and referee.was_off(
-            joints, rec.start, rec.end, REFEREE_SETTLE_S
-        ):
-            rec.detected = None
-            rec.note = 'its output was off by the referee (see referee in the report)'
+
+    def joints_of(target: str) -> tuple[str, ...]:
+        if target == 'rm_robot':  # judged by the wheels being driven again
+            return WHEELS
+        if target in MOTORS:
+            return (target,)
+        return tuple(j for j, bus in bus_of.items() if bus == target)
+
+    referee.set_aside(injector.tally.records, joints_of, REFEREE_SETTLE_S)
     checker = robot.watch.checker
     during = attribute(checker.violations, injector.tally.records, robot)
     sched = robot.hardware.scheduler.stats()
