@@ -520,10 +520,11 @@ class FaultInjector:
 # --- the run -----------------------------------------------------------------------------------
 
 
-def attribute(violations, records: list[FaultRecord], robot: Robot) -> dict[str, int]:
-    """Count the kept violations by the fault active on their joint (or bus) at the time,
-    up to 0.5 s after it was cleared; 'none' when no fault was."""
-    bus_of = {name: a.bus_name for name, a in robot.hardware.actuators.items()}
+def attribute(
+    violations, records: list[FaultRecord], bus_of: dict[str, str]
+) -> dict[str, int]:
+    """Count the kept violations by the fault active on their joint (or bus: bus_of, joint
+    -> bus) at the time, up to 0.5 s after it was cleared; 'none' when no fault was."""
     out: dict[str, int] = {}
     for v in violations:
         kind = 'none'
@@ -613,7 +614,7 @@ def main(argv: list[str] | None = None) -> int:
 
     referee.set_aside(injector.tally.records, joints_of, REFEREE_SETTLE_S)
     checker = robot.watch.checker
-    during = attribute(checker.violations, injector.tally.records, robot)
+    during = attribute(checker.violations, injector.tally.records, bus_of)
     sched = robot.hardware.scheduler.stats()
     crashes = {
         'rm_robot_exits': robot.host_exits,
