@@ -148,14 +148,10 @@ class Robot:
         for node in (self.bridge, self.host):
             if node is not None:
                 self.executor.add_node(node)
-        from rm_base.realtime import keep_on_cpu, raise_edge_priority
+        from rm_base.realtime import prepare_loop_process
 
-        # as the executables do: the process's threads below the loop's priority, and all
-        # of them on one CPU
         owner = self.bridge if self.bridge is not None else self.host
-        raise_edge_priority(owner.edge_priority)
-        if owner.cpu_index is not None:
-            keep_on_cpu(owner.cpu_index)
+        prepare_loop_process(owner.edge_priority, owner.cpu_index)  # as the executables do
         self.hw = self.bridge.hardware if self.bridge is not None else None
         self.recorder = TickRecorder(self.hw.scheduler) if self.hw is not None else None
         self._sent_taps: list[Any] = []
@@ -497,7 +493,7 @@ def main(argv: list[str] | None = None) -> int:
         '--switch-interval-us',
         type=float,
         default=None,
-        help="override the GIL switch interval after start-up (rm_robot's is 1000 us)",
+        help='override the GIL switch interval after start-up (the executables set 500 us)',
     )
     args = parser.parse_args(argv)
     plugins = [p for p in args.plugins.split(',') if p] or None

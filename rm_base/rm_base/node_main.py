@@ -23,7 +23,7 @@ from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
 from rm_base.errors import ConfigError
-from rm_base.realtime import keep_on_cpu, raise_edge_priority
+from rm_base.realtime import prepare_loop_process
 from rm_base.ros_env import init_error_line, params_file_error, prepare_ros_process
 
 
@@ -151,9 +151,7 @@ def run_node(
     try:
         executor = make_executor(node)
         executor.add_node(node)
-        raise_edge_priority(node.edge_priority)
-        if node.cpu_index is not None:
-            keep_on_cpu(node.cpu_index)
+        prepare_loop_process(node.edge_priority, node.cpu_index)
         spin_until_shutdown(executor, node.context)
     except KeyboardInterrupt:
         # a SIGINT before the spin took the signals over (the loop already runs): the

@@ -169,3 +169,21 @@ def raise_edge_priority(priority: int = EDGE_PRIORITY) -> bool:
         return False
     _log.info('%d thread(s) of the process at SCHED_FIFO %d, below the loop', count, priority)
     return True
+
+
+def prepare_loop_process(edge_priority: int, cpu_index: int | None) -> None:
+    """Set up a process that runs a control loop, once its nodes (and threads) exist.
+
+    What every executable that hosts a loop does, and what a harness that hosts one must do
+    alike to measure the same thing: the GIL switch interval shortened
+    (:func:`shorten_gil_switch_interval`), the other threads below the loop's priority
+    (:func:`raise_edge_priority`) and every Python thread on one CPU (:func:`keep_on_cpu`;
+    None leaves them where the kernel puts them).
+
+    Raises:
+        ValueError: cpu_index is outside the allowed CPUs (a configuration error).
+    """
+    shorten_gil_switch_interval()
+    raise_edge_priority(edge_priority)
+    if cpu_index is not None:
+        keep_on_cpu(cpu_index)

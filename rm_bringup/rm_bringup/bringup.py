@@ -36,7 +36,7 @@ from rm_base.bridge.node import NODE_NAME as BRIDGE_NODE_NAME
 from rm_base.errors import ConfigError
 from rm_base.host.node import RobotHost
 from rm_base.node_main import init_ros, spin_until_shutdown
-from rm_base.realtime import keep_on_cpu, raise_edge_priority
+from rm_base.realtime import prepare_loop_process
 from rm_base.ros_logging import forward_package_logging
 
 from rm_bringup.sim_process import SimProcess
@@ -203,9 +203,7 @@ def _run(args: argparse.Namespace, files: list[pathlib.Path]) -> int:
     executor.add_node(host)
     if manual is not None:
         executor.add_node(manual)
-    raise_edge_priority(bridge.edge_priority)
-    if bridge.cpu_index is not None:
-        keep_on_cpu(bridge.cpu_index)
+    prepare_loop_process(bridge.edge_priority, bridge.cpu_index)
     printer = None if args.no_status else _StatusPrinter(StatusView(host))
     deadline = None if args.duration is None else time.monotonic() + args.duration
     mode = 'on rm_sim' if args.sim else 'on its CAN buses'

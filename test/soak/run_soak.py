@@ -63,7 +63,7 @@ from reliability.referee_watch import RefereeWatch  # noqa: E402
 from reliability.rigs import WireWatch, hardware_config  # noqa: E402
 from reliability.wire import check_actuator_states, max_efforts  # noqa: E402
 from rm_base.bridge import CanBridgeNode  # noqa: E402
-from rm_base.realtime import keep_on_cpu, raise_edge_priority  # noqa: E402
+from rm_base.realtime import prepare_loop_process  # noqa: E402
 from rm_base.sim import Fault, FaultKind  # noqa: E402
 from support.robot import CONFIG_DIR, load_parameters  # noqa: E402
 
@@ -151,10 +151,8 @@ class Robot:
         self.executor = EventsExecutor(context=self.context)
         self.executor.add_node(self.bridge)
         self.executor.add_node(self.node)
-        raise_edge_priority(self.bridge.edge_priority)  # as can_bridge's main does
         self._cpus = os.sched_getaffinity(0)  # rm_robot's, before this process is pinned
-        if self.bridge.cpu_index is not None:
-            keep_on_cpu(self.bridge.cpu_index)  # likewise
+        prepare_loop_process(self.bridge.edge_priority, self.bridge.cpu_index)  # as can_bridge
         self._stop = threading.Event()
         self._spinner = threading.Thread(target=self._spin, name='soak-spin', daemon=True)
         self._spinner.start()

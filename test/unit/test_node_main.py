@@ -82,11 +82,11 @@ def test_a_sigint_while_the_node_starts_up_still_stops_it_cleanly(monkeypatch):
         def shutdown(self):
             calls.append('executor')
 
-    def interrupted(priority):
+    def interrupted(priority, cpu_index):
         raise KeyboardInterrupt  # Ctrl-C after the loop started, before the spin
 
     monkeypatch.setattr(node_main, 'init_ros', lambda name, args: True)
-    monkeypatch.setattr(node_main, 'raise_edge_priority', interrupted)
+    monkeypatch.setattr(node_main, 'prepare_loop_process', interrupted)
     try:
         status = node_main.run_node('n', [], Node, lambda node: Executor())
     except KeyboardInterrupt:

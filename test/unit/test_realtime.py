@@ -1,6 +1,7 @@
 """realtime: SCHED_FIFO for the loop, and below it for the process's other threads."""
 
 import os
+import sys
 import threading
 
 import pytest
@@ -122,3 +123,20 @@ def test_a_thread_pinned_in_a_child_process_runs_on_that_cpu():
     )
     out = subprocess.run([sys.executable, '-c', code], capture_output=True, text=True, check=True)
     assert out.stdout.split() == [str(cpu), 'True', 'True']
+
+
+def test_a_loop_process_gets_the_short_switch_interval_the_edge_priority_and_its_cpu(
+    monkeypatch,
+):
+    calls = []
+    monkeypatch.setattr(realtime, 'raise_edge_priority', lambda p: calls.append(('fifo', p)))
+    monkeypatch.setattr(realtime, 'keep_on_cpu', lambda i: calls.append(('cpu', i)))
+    before = sys.getswitchinterval()
+    sys.setswitchinterval(0.005)  # CPython's default: a busy thread keeps a waking loop 5 ms
+    try:
+        realtime.prepare_loop_process(10, -1)
+        assert sys.getswitchinterval() == pytest.approx(realtime.GIL_SWITCH_INTERVAL_S)
+        realtime.prepare_loop_process(0, None)  # no CPU asked for: the threads stay put
+    finally:
+        sys.setswitchinterval(before)
+    assert calls == [('fifo', 10), ('cpu', -1), ('fifo', 0)]

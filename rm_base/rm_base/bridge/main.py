@@ -12,7 +12,6 @@ from rm_base.bridge.node import NODE_NAME, CanBridgeNode
 from rm_base.errors import ConfigError
 from rm_base.hardware import BusError
 from rm_base.node_main import run_node
-from rm_base.realtime import shorten_gil_switch_interval
 from rm_base.ros_logging import forward_package_logging
 
 
@@ -26,7 +25,6 @@ def _executor(node: CanBridgeNode) -> Executor:
 
 def main(args: list[str] | None = None) -> int:
     """Run can_bridge until SIGINT/SIGTERM; return the exit status (1 on a config error)."""
-    shorten_gil_switch_interval()
     handler = forward_package_logging(NODE_NAME)
     try:
         return run_node(
