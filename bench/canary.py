@@ -8,7 +8,11 @@ that moment. The scheduler's error minus the canary's is what the robot process 
 over 1.5 ms, as the wire measurement counts them between two wheel frames: the share the
 machine alone gives a 1 kHz sleeper in that window.
 
-    python -m bench.canary <seconds>    # prints one '@@BENCH {json}' line
+    python -m bench.canary <seconds> [<start>]   # prints one '@@BENCH {json}' line
+
+``start`` (a ``time.time()`` value) lets it be launched ahead of the window it measures:
+a Python process starting up is a burst of CPU on a 2-core machine, which would land in
+the robot's measured window if the sleeper were launched at its start.
 """
 
 from __future__ import annotations
@@ -24,7 +28,10 @@ PERIOD_NS = 1_000_000
 GAP_NS = 1_500_000  # as bench.wire_check.GAP_S
 
 
-def run(seconds: float) -> dict:
+def run(seconds: float, start: float | None = None) -> dict:
+    """Sleep to 1 kHz deadlines for seconds, from start (wall clock; None: now)."""
+    if start is not None:
+        time.sleep(max(0.0, start - time.time()))
     clock = time.perf_counter_ns
     errors = array.array('q')
     ticks = skipped = late_gaps = 0
@@ -52,4 +59,4 @@ def run(seconds: float) -> dict:
 
 
 if __name__ == '__main__':
-    reply(run(float(sys.argv[1])))
+    reply(run(float(sys.argv[1]), float(sys.argv[2]) if len(sys.argv) > 2 else None))

@@ -37,6 +37,8 @@ from bench.protocol import PREFIX
 
 ROOT = Path(__file__).resolve().parents[1]
 ACTIVE_JOINTS = ('wheel_fl', 'yaw', 'friction_l')
+#: How long before a window its bare sleeper is launched (its start-up stays out) [s].
+CANARY_LEAD_S = 1.0
 
 
 class BenchError(RuntimeError):
@@ -176,8 +178,10 @@ def _measure_phases(
     active = bridge.request('wait_active 20 ' + ' '.join(ACTIVE_JOINTS), 30.0)
     if not active['active']:
         result['notes'].append(f'not every joint driven under load: {active["holds"]}')
-    canary = Child('bench.canary', [str(plan.load_s)], canary_log)
+    start = time.time() + CANARY_LEAD_S
+    canary = Child('bench.canary', [str(plan.load_s), repr(start)], canary_log)
     try:
+        time.sleep(max(0.0, start - time.time()))
         result['load'] = measure('load', plan.load_s)
         result['canary'] = canary.wait(30.0)
     finally:

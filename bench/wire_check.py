@@ -89,6 +89,12 @@ def run_once(plan: WirePlan, log_dir: Path, tag: str) -> dict[str, Any]:
         cmd = ChassisCmd(mode=mode)
         next_switch = time.monotonic() + plan.settle_s
         next_publish = time.monotonic()
+        # launched now, measuring from the first switch: its start-up stays out of the window
+        canary = Child(
+            'bench.canary',
+            [str(plan.steps * plan.period_s), repr(time.time() + plan.settle_s)],
+            workdir / 'canary.log',
+        )
         while len(switches) < plan.steps or time.monotonic() < next_switch:
             now = time.monotonic()
             if now >= next_switch:
@@ -99,9 +105,6 @@ def run_once(plan: WirePlan, log_dir: Path, tag: str) -> dict[str, Any]:
                 next_switch += plan.period_s
                 next_publish = now
                 switches.append((time.time(), mode))
-                if canary is None:
-                    canary = Child('bench.canary', [str(plan.steps * plan.period_s)],
-                                   workdir / 'canary.log')
             if now >= next_publish:
                 cmd.header.stamp = node.get_clock().now().to_msg()
                 cmd_pub.publish(cmd)

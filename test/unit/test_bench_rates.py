@@ -77,3 +77,13 @@ def test_the_recorder_times_its_own_window():
     assert out['achieved_hz'] == pytest.approx(5 / out['elapsed_s'])
     scheduler.tick(5)  # unhooked: no longer recorded
     assert len(recorder.ticks_ns) == len(recorder.errors_ns) == 5
+
+
+def test_a_sleeper_launched_ahead_measures_from_its_start_time():
+    # bench.canary is launched a second before the robot's window, so that a Python
+    # process starting up does not load the machine inside it; its window starts at start.
+    canary = _bench('canary')
+    launched = time.monotonic()
+    out = canary.run(0.05, start=time.time() + 0.2)
+    assert time.monotonic() - launched >= 0.2 + 0.05 - 0.002  # the sleep before, then 50 ms
+    assert out['ticks'] + out['skipped'] in range(48, 52)  # 50 periods of 1 ms, none before
