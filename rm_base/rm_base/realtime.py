@@ -20,10 +20,12 @@ docs/PERFORMANCE.md.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import sys
 import threading
+from collections.abc import Iterator
 from pathlib import Path
 
 _log = logging.getLogger(__name__)
@@ -49,6 +51,28 @@ def set_fifo_priority(priority: int, thread_id: int = 0) -> None:
             thread.
     """
     os.sched_setscheduler(thread_id, os.SCHED_FIFO, os.sched_param(priority))
+
+
+@contextlib.contextmanager
+def children_start_normal() -> Iterator[None]:
+    """Within it, a process the calling thread starts begins under normal scheduling.
+
+    A child inherits its parent thread's policy and CPU. A Python node started from an
+    edge thread would run its start-up (about a second of imports) at the edge priority,
+    where SCHED_FIFO takes no turns, beside the threads the loop waits for
+    (docs/RELIABILITY.md). SCHED_RESET_ON_FORK is set only meanwhile: it resets new
+    threads too, and the process's later threads keep the edge priority.
+    """
+    policy = os.sched_getscheduler(0)
+    if policy != os.SCHED_FIFO:  # normal already, or the flag set by a caller
+        yield
+        return
+    param = os.sched_getparam(0)
+    os.sched_setscheduler(0, policy | os.SCHED_RESET_ON_FORK, param)
+    try:
+        yield
+    finally:
+        os.sched_setscheduler(0, policy, param)
 
 
 def raise_process_threads(priority: int) -> int:

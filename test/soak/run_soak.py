@@ -63,7 +63,7 @@ from reliability.referee_watch import RefereeWatch  # noqa: E402
 from reliability.rigs import WireWatch, hardware_config  # noqa: E402
 from reliability.wire import check_actuator_states, max_efforts  # noqa: E402
 from rm_base.bridge import CanBridgeNode  # noqa: E402
-from rm_base.realtime import prepare_loop_process  # noqa: E402
+from rm_base.realtime import children_start_normal, prepare_loop_process  # noqa: E402
 from rm_base.sim import Fault, FaultKind  # noqa: E402
 from support.robot import CONFIG_DIR, load_parameters  # noqa: E402
 
@@ -181,10 +181,11 @@ class Robot:
             args += ['--params-file', str(path)]
         env = dict(os.environ)
         isolate_ros_environment(env)
-        self.host = subprocess.Popen(
-            args, env=env, stdout=self.host_log, stderr=self.host_log,
-            pass_fds=domain_claim_fds(),  # an rm_robot left over keeps its domain to itself
-        )
+        with children_start_normal():  # not at this thread's real-time priority
+            self.host = subprocess.Popen(
+                args, env=env, stdout=self.host_log, stderr=self.host_log,
+                pass_fds=domain_claim_fds(),  # an rm_robot left over keeps its domain
+            )
         # It inherited this thread's CPU; it picks its own for its Python threads, and its
         # middleware's threads run anywhere, as when started from a shell.
         try:

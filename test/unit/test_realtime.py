@@ -1,6 +1,7 @@
 """realtime: SCHED_FIFO for the loop, and below it for the process's other threads."""
 
 import os
+import subprocess
 import sys
 import threading
 
@@ -140,3 +141,44 @@ def test_a_loop_process_gets_the_short_switch_interval_the_edge_priority_and_its
     finally:
         sys.setswitchinterval(before)
     assert calls == [('fifo', 10), ('cpu', -1), ('fifo', 0)]
+
+
+@pytest.mark.skipif(not hasattr(os, 'SCHED_RESET_ON_FORK'), reason='Linux scheduling API')
+def test_a_process_started_by_a_real_time_thread_within_children_start_normal_is_normal():
+    result = {}
+
+    def policy_of_a_child():
+        child = subprocess.Popen([sys.executable, '-c', 'import time; time.sleep(10)'])
+        try:
+            return os.sched_getscheduler(child.pid)
+        finally:
+            child.kill()
+            child.wait()
+
+    def worker():
+        try:
+            realtime.set_fifo_priority(5)
+        except PermissionError as err:  # an unprivileged machine: the call is refused
+            result['refused'] = err
+            return
+        result['inherited'] = policy_of_a_child()
+        with realtime.children_start_normal():
+            result['started normal'] = policy_of_a_child()
+        result['thread after'] = _policy_of_a_new_thread()
+
+    thread = threading.Thread(target=worker)
+    thread.start()
+    thread.join()
+    if 'refused' not in result:
+        assert result['inherited'] == os.SCHED_FIFO  # what a child gets without it
+        assert result['started normal'] == os.SCHED_OTHER
+        # the flag also resets new threads: threads started afterwards inherit FIFO again
+        assert result['thread after'] == os.SCHED_FIFO
+
+
+def _policy_of_a_new_thread():
+    out = []
+    thread = threading.Thread(target=lambda: out.append(os.sched_getscheduler(0)))
+    thread.start()
+    thread.join()
+    return out[0]
