@@ -42,8 +42,8 @@ def test_a_refusal_is_one_warning_and_normal_scheduling(monkeypatch, caplog):
     assert realtime.raise_edge_priority(0) is False  # 0: asked for nothing
 
 
-@pytest.mark.skipif(not hasattr(os, 'sched_setscheduler'), reason='Linux scheduling API')
-def test_the_calling_thread_gets_the_policy_when_permitted():
+def _in_a_real_time_thread(body):
+    """body(result) in a new thread at SCHED_FIFO 5; result['refused'] where not permitted."""
     result = {}
 
     def worker():
@@ -52,12 +52,21 @@ def test_the_calling_thread_gets_the_policy_when_permitted():
         except PermissionError as err:  # an unprivileged machine: the call is refused
             result['refused'] = err
             return
-        result['policy'] = os.sched_getscheduler(0)
-        result['priority'] = os.sched_getparam(0).sched_priority
+        body(result)
 
     thread = threading.Thread(target=worker)
     thread.start()
     thread.join()
+    return result
+
+
+@pytest.mark.skipif(not hasattr(os, 'sched_setscheduler'), reason='Linux scheduling API')
+def test_the_calling_thread_gets_the_policy_when_permitted():
+    def body(result):
+        result['policy'] = os.sched_getscheduler(0)
+        result['priority'] = os.sched_getparam(0).sched_priority
+
+    result = _in_a_real_time_thread(body)
     assert 'refused' in result or (result['policy'], result['priority']) == (os.SCHED_FIFO, 5)
 
 
@@ -145,8 +154,6 @@ def test_a_loop_process_gets_the_short_switch_interval_the_edge_priority_and_its
 
 @pytest.mark.skipif(not hasattr(os, 'SCHED_RESET_ON_FORK'), reason='Linux scheduling API')
 def test_a_process_started_by_a_real_time_thread_within_children_start_normal_is_normal():
-    result = {}
-
     def policy_of_a_child():
         child = subprocess.Popen([sys.executable, '-c', 'import time; time.sleep(10)'])
         try:
@@ -155,20 +162,13 @@ def test_a_process_started_by_a_real_time_thread_within_children_start_normal_is
             child.kill()
             child.wait()
 
-    def worker():
-        try:
-            realtime.set_fifo_priority(5)
-        except PermissionError as err:  # an unprivileged machine: the call is refused
-            result['refused'] = err
-            return
+    def body(result):
         result['inherited'] = policy_of_a_child()
         with realtime.children_start_normal():
             result['started normal'] = policy_of_a_child()
         result['thread after'] = _policy_of_a_new_thread()
 
-    thread = threading.Thread(target=worker)
-    thread.start()
-    thread.join()
+    result = _in_a_real_time_thread(body)
     if 'refused' not in result:
         assert result['inherited'] == os.SCHED_FIFO  # what a child gets without it
         assert result['started normal'] == os.SCHED_OTHER
