@@ -59,6 +59,7 @@ from rclpy.context import Context  # noqa: E402
 from rclpy.experimental import EventsExecutor  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 from rclpy.qos import qos_profile_sensor_data  # noqa: E402
+from reliability.jam_watch import JamWatch, power_scale  # noqa: E402
 from reliability.referee_watch import RefereeWatch  # noqa: E402
 from reliability.rigs import WireWatch, hardware_config  # noqa: E402
 from reliability.wire import check_actuator_states, max_efforts  # noqa: E402
@@ -421,41 +422,37 @@ class FaultInjector:
 
     def _jam(self) -> FaultRecord:
         """Detected: trigger -> the shooter counts a jam or blocks; any other joint -> its
-        output reaches its clamp (the loop pushes against the stall). A joint not asked to
-        move cannot show a jam: not judged."""
+        output reaches its clamp (the loop pushes against the stall). Not judged: a trigger
+        not asked to feed, or another joint whose commands never asked its loop for a push
+        that reaches the clamp against a stall (reliability.jam_watch)."""
         joint = self.rng.choice(('trigger', 'trigger', 'friction_l', 'wheel_fl', 'yaw'))
         rec = self._record('jam', joint)
-        actuator = self.robot.joint(joint)
         before = self.robot.state('shooter_state')
         jams = before.jam_count if before is not None else 0
         self.robot.world.inject(joint, Fault.jam())
-
-        asked = []  # whether the joint was asked to move while jammed
-        peak, modes = [0.0], set()  # what a miss is explained by (its note)
+        fed = []  # trigger: whether the shooter fed while jammed
+        watch = JamWatch(self.robot.joint(joint), power_scale(self.robot.hardware, joint))
 
         def shown() -> bool:
-            if joint == 'trigger':
-                s = self.robot.state('shooter_state')
-                asked.append(s is not None and s.state in (ShooterState.FEED, ShooterState.PUSH))
-                return s is not None and (s.jam_count > jams or s.state == ShooterState.BLOCK)
-            state = actuator.state()
-            asked.append(state.mode != 0)
-            peak[0] = max(peak[0], abs(state.command))
-            modes.add(state.mode)
-            return abs(state.command) >= 0.99 * actuator.max_effort
+            if joint != 'trigger':
+                return watch.sample()
+            s = self.robot.state('shooter_state')
+            fed.append(s is not None and s.state in (ShooterState.FEED, ShooterState.PUSH))
+            return s is not None and (s.jam_count > jams or s.state == ShooterState.BLOCK)
 
         lat = wait_for(shown, 3.0)
         if lat is not None:
             rec.detected, rec.latency_ms = True, 1e3 * lat
-        elif not any(asked):
-            rec.note = 'not asked to move while jammed (held or off): nothing to detect'
+        elif joint == 'trigger' and not any(fed):
+            rec.note = 'not asked to feed while jammed: nothing to detect'
+        elif joint != 'trigger' and not watch.judged:
+            rec.note = f'never asked for a push that reaches the clamp: {watch.note()}'
         else:
             rec.detected = False
             if joint != 'trigger':
                 gimbal = self.robot.state('gimbal_state')
                 rec.note = (
-                    f'output peaked at {peak[0] / actuator.max_effort:.0%} of its clamp, '
-                    f'modes {sorted(modes)}, gimbal state '
+                    f'{watch.note()}, gimbal state '
                     f'{gimbal.state if gimbal is not None else None}'
                 )
         time.sleep(self.rng.uniform(0.2, 1.0))
