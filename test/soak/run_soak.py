@@ -65,6 +65,7 @@ from reliability.rigs import WireWatch, hardware_config  # noqa: E402
 from reliability.wire import check_actuator_states, max_efforts  # noqa: E402
 from rm_base.bridge import CanBridgeNode  # noqa: E402
 from rm_base.realtime import children_start_normal, prepare_loop_process  # noqa: E402
+from rm_base.ros_publish import publish  # noqa: E402
 from rm_base.sim import Fault, FaultKind  # noqa: E402
 from support.robot import CONFIG_DIR, load_parameters  # noqa: E402
 
@@ -312,7 +313,7 @@ class Commander:
             for key, msg in self.mix.items():
                 if hasattr(msg, 'header'):
                     msg.header.stamp = stamp
-                self.pubs[key].publish(msg)
+                publish(self.pubs[key], msg)  # as the bridge's threads: DDS without the GIL
 
 
 # --- faults ------------------------------------------------------------------------------------

@@ -60,6 +60,7 @@ from rm_base.plugin.node_io import POWER_LIMIT_QOS, POWER_LIMIT_TOPIC
 from rm_base.plugin.params import PluginParams
 from rm_base.realtime import EDGE_PRIORITY, LOOP_PRIORITY
 from rm_base.ros_logging import FastLogger
+from rm_base.ros_publish import publish
 from rm_base.sim import SimConfigError, SimWorld, Timing
 from rm_msgs.msg import ActuatorCmd, ActuatorState, CanFrame, PowerLimit
 
@@ -513,12 +514,12 @@ class CanBridgeNode(Node):
         stamp = self.get_clock().now().to_msg()
         if joints and actuators:
             joint_states, actuator_states = state_msgs(states, stamp)
-            self._joint_states_pub.publish(joint_states)
-            self._actuator_states_pub.publish(actuator_states)
+            publish(self._joint_states_pub, joint_states)
+            publish(self._actuator_states_pub, actuator_states)
         elif joints:
-            self._joint_states_pub.publish(joint_state_msg(states, stamp))
+            publish(self._joint_states_pub, joint_state_msg(states, stamp))
         else:  # rm_robot in a process of its own hears only /actuator_states
-            self._actuator_states_pub.publish(actuator_state_msg(states, stamp))
+            publish(self._actuator_states_pub, actuator_state_msg(states, stamp))
 
     def _states_heard(self) -> bool:
         return (
@@ -535,7 +536,7 @@ class CanBridgeNode(Node):
             self.command_stats(),
             self.get_clock().now().to_msg(),
         )
-        self._diagnostics_pub.publish(msg)
+        publish(self._diagnostics_pub, msg)
 
     def publish_frames(self) -> None:
         """Publish the frames seen since the last call on ~/frames."""
@@ -543,8 +544,9 @@ class CanBridgeNode(Node):
         if tap is None or self._frames_pub is None:
             return
         for frame in tap.drain():
-            self._frames_pub.publish(
-                can_frame_msg(frame.bus, frame.frame, frame.is_rx, time_msg(frame.stamp_ns))
+            publish(
+                self._frames_pub,
+                can_frame_msg(frame.bus, frame.frame, frame.is_rx, time_msg(frame.stamp_ns)),
             )
         if tap.dropped != self._frames_dropped_reported:
             self._frames_dropped_reported = tap.dropped

@@ -44,6 +44,7 @@ from rclpy.qos import DurabilityPolicy
 from rclpy.serialization import serialize_message
 
 from rm_base.plugin.commands import LogThrottle
+from rm_base.ros_publish import publish
 
 _log = logging.getLogger(__name__)
 
@@ -260,7 +261,7 @@ class Outbox:
                 if not outside:
                     continue
                 try:
-                    edge.publisher.publish(data)  # bytes go out as they are
+                    publish(edge.publisher, data)  # bytes go out as they are; DDS without the GIL
                     self.published += 1
                 except Exception as err:  # e.g. the context is shutting down
                     self.errors += 1
