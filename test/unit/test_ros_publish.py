@@ -5,6 +5,7 @@ import threading
 import time
 
 import pytest
+import rclpy
 from rclpy.exceptions import InvalidHandle
 from rclpy.node import Node
 from rclpy.serialization import serialize_message
@@ -52,6 +53,18 @@ def test_a_destroyed_publisher_raises_and_publishes_nothing(ros_context):
         ros_publish.publish(publisher, String(data='late'))
     assert got == []
     node.destroy_node()
+
+
+def test_a_shut_down_context_is_a_publish_error_naming_the_topic():
+    from rclpy.context import Context
+
+    context = Context()
+    rclpy.init(context=context)
+    node = Node('ros_publish_shut', context=context)
+    publisher = node.create_publisher(String, '/ros_publish_shut', 10)
+    context.shutdown()
+    with pytest.raises(ros_publish.PublishError, match='/ros_publish_shut'):
+        ros_publish.publish(publisher, String(data='late'))
 
 
 def test_the_functions_it_loads_let_other_threads_run_while_they_block():
