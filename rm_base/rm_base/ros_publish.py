@@ -9,8 +9,9 @@ held, that stops every Python thread of the process, the control loop among them
 
 Here the message is serialised under the GIL (one short C call), and the bytes go to
 ``rcl_publish_serialized_message``, rcl's own entry point for serialised messages, through
-ctypes, which releases the GIL for the call. A send that blocks then blocks only the thread
-that publishes.
+ctypes, which releases the GIL for the call. A send that blocks then holds up only the
+thread that publishes and what waits on Fast DDS's own locks meanwhile (a take on a reader
+that is answering the new participant still does: the same section of docs/PERFORMANCE.md).
 """
 
 from __future__ import annotations
