@@ -28,8 +28,9 @@ class PublishError(RuntimeError):
     """rcl refused to publish (the publisher or its context is gone)."""
 
 
-class _Allocator(ctypes.Structure):
-    # rcutils_allocator_t
+class Allocator(ctypes.Structure):
+    """rcutils_allocator_t."""
+
     _fields_ = [
         ('allocate', ctypes.c_void_p),
         ('deallocate', ctypes.c_void_p),
@@ -39,13 +40,14 @@ class _Allocator(ctypes.Structure):
     ]
 
 
-class _SerializedMessage(ctypes.Structure):
-    # rcl_serialized_message_t (rcutils_uint8_array_t): rcl only reads the bytes
+class SerializedMessage(ctypes.Structure):
+    """rcl_serialized_message_t (rcutils_uint8_array_t)."""
+
     _fields_ = [
         ('buffer', ctypes.c_void_p),
         ('buffer_length', ctypes.c_size_t),
         ('buffer_capacity', ctypes.c_size_t),
-        ('allocator', _Allocator),
+        ('allocator', Allocator),
     ]
 
 
@@ -63,7 +65,7 @@ def load_function(library: str, name: str, argtypes: Sequence[Any], restype: Any
 _rcl_publish_serialized = load_function(
     'librcl.so',
     'rcl_publish_serialized_message',
-    (ctypes.c_void_p, ctypes.POINTER(_SerializedMessage), ctypes.c_void_p),
+    (ctypes.c_void_p, ctypes.POINTER(SerializedMessage), ctypes.c_void_p),
     ctypes.c_int,
 )
 _rcutils_reset_error = load_function('librcutils.so', 'rcutils_reset_error', (), None)
@@ -85,9 +87,8 @@ def publish(publisher: Any, message: Any) -> None:
         return
     data = message if isinstance(message, bytes) else serialize_message(message)
     buffer = ctypes.c_char_p(data)  # the bytes' own storage, alive as long as data
-    serialized = _SerializedMessage(
-        ctypes.cast(buffer, ctypes.c_void_p), len(data), len(data)
-    )
+    # rcl only reads the bytes: no allocator needed
+    serialized = SerializedMessage(ctypes.cast(buffer, ctypes.c_void_p), len(data), len(data))
     handle = publisher.handle
     with handle:  # rclpy does not destroy it while in use
         ret = _rcl_publish_serialized(handle.pointer, ctypes.byref(serialized), None)

@@ -198,7 +198,7 @@ class CanBridgeNode(Node):
             self._command_sub = self.create_subscription(
                 ActuatorCmd, 'actuator_cmd', self._on_actuator_cmd, _COMMAND_QOS
             )
-        else:  # the loop takes /actuator_cmd at the start of each tick (no executor hop)
+        else:  # the loop hands /actuator_cmd out at the start of each tick (no executor hop)
             self._inbox = Inbox(inbox_node(self), self.get_clock(), name='actuator_cmd')
             self._inbox.subscribe(
                 ActuatorCmd, self.resolve_topic_name('actuator_cmd'),

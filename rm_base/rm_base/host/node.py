@@ -60,10 +60,11 @@ class RobotHost(Node):
       joint targets on the actuators directly; without it (rm_robot as a process of its
       own) the host runs a loop of plugins only, at ``loop_rate``, and joint targets go
       out on /actuator_cmd.
-    - ROS stays at the edge: the loop's first stage takes the plugins' subscriptions
-      (an ``Inbox``, no executor) and their callbacks store the latest command; every
-      message a plugin publishes goes through an outbox thread, never from the loop
-      thread. The executor ``main`` spins runs only services and the state timer.
+    - ROS stays at the edge: the loop's first stage hands out what the ``Inbox``'s
+      thread took from the plugins' subscriptions (no executor, no DDS call in the
+      loop) and their callbacks store the latest command; every message a plugin
+      publishes goes through an outbox thread, never from the loop thread. The
+      executor ``main`` spins runs only services and the state timer.
     - Services: ``~/<name>/enable`` (std_srvs/SetBool) per plugin and
       ``~/enable_all`` (std_srvs/SetBool, true = enable all, false = disable all).
     - Publishes each plugin's rm_msgs/PluginState on ``~/<name>/state`` (latched) at

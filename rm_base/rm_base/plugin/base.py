@@ -396,7 +396,7 @@ class PluginBase:
         """Subscribe to a topic; ``callback(msg, receive_ns)`` must only store the message.
 
         Use this, not ``node.create_subscription``: hosted in the control loop, the loop
-        takes the messages itself at each tick (no executor in between), a topic another
+        hands the messages out at each tick (no executor in between), a topic another
         plugin of the robot publishes arrives in-process, and ``RobotHost.inject``
         (lockstep) reaches the same callback.
 

@@ -16,7 +16,7 @@ A host may also give the I/O an :class:`~rm_base.plugin.outbox.Outbox`: then eve
 publisher a plugin creates through :meth:`NodeIO.create_publisher` hands its messages to
 the outbox's thread, so the control loop never publishes itself; and an
 :class:`~rm_base.plugin.inbox.Inbox`: then every subscription a plugin makes through
-:meth:`NodeIO.subscribe` is taken by the loop itself, never by an executor.
+:meth:`NodeIO.subscribe` reaches its callback in the control loop, never through an executor.
 
 Created on first use per node (``node_io(node)``: DDS) or by the host
 (``use_local_io(node, hardware)``), and kept as long as the node lives. The plugin layer

@@ -1,16 +1,23 @@
 """Inbox: the loop takes subscriptions itself; local topics never cross DDS."""
 
 import logging
+import threading
+import time
 
+import pytest
+import rclpy
+from rclpy.context import Context
 from rclpy.node import Node
-from rclpy.qos import qos_profile_sensor_data
+from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from rm_base.hardware.scheduler import Scheduler
 from rm_base.node_main import inbox_node
-from rm_base.plugin.inbox import Inbox
+from rm_base.plugin.inbox import MAX_QUEUED, Inbox, queue_depth
 from rm_base.plugin.node_io import DdsJointIO
 from rm_base.plugin.outbox import Outbox
 from std_msgs.msg import UInt32
 from support.ros import wait_until
+
+from rm_base import ros_take
 
 
 def _take_until(inbox, got, count, timeout=5.0):
@@ -132,3 +139,105 @@ def test_input_stages_of_plugins_run_before_the_plugins_and_leave_on_release(ros
     io.loop.tick(1_000_000)
     assert calls == [0, 'plugin', 'plugin']
     node.destroy_node()
+
+
+def test_the_loop_never_takes_from_dds_and_runs_on_while_a_take_blocks(ros_context, monkeypatch):
+    # A take can wait a third of a second for Fast DDS's locks when a node joins
+    # (docs/PERFORMANCE.md): only the inbox's thread may wait, never the loop.
+    takers = set()
+    blocked = threading.Event()
+    real_take = ros_take.TakeBuffer.take
+
+    def take(buffer, subscription, msg_type):
+        takers.add(threading.get_ident())
+        msg = real_take(buffer, subscription, msg_type)
+        if msg is not None and msg.data == 99:
+            blocked.set()
+            time.sleep(0.4)
+        return msg
+
+    monkeypatch.setattr(ros_take.TakeBuffer, 'take', take)
+    node = Node('inbox_test', context=ros_context)
+    inbox = Inbox(inbox_node(node), node.get_clock())
+    got = []
+    inbox.subscribe(UInt32, '/inbox_block', lambda msg, ns: got.append(msg.data), 10)
+    pub = node.create_publisher(UInt32, '/inbox_block', 10)
+    assert wait_until(lambda: pub.get_subscription_count() == 1, 5.0)
+    pub.publish(UInt32(data=99))
+    assert blocked.wait(5.0)
+    start = time.monotonic()
+    ticks = 0
+    while time.monotonic() - start < 0.2:  # inside the blocked take
+        inbox(0, 0.001)
+        ticks += 1
+    assert ticks > 100  # generous: a stage that waited for the take would manage 1
+    _take_until(inbox, got, 1)
+    assert got == [99]
+    assert takers and threading.get_ident() not in takers
+    inbox.destroy()
+    node.destroy_node()
+
+
+def test_when_the_loop_falls_behind_the_oldest_messages_are_dropped_and_counted(
+    ros_context, caplog
+):
+    node = Node('inbox_test', context=ros_context)
+    inbox = Inbox(inbox_node(node), node.get_clock())
+    got = []
+    qos = QoSProfile(depth=3, reliability=ReliabilityPolicy.RELIABLE)
+    inbox.subscribe(UInt32, '/inbox_behind', lambda msg, ns: got.append(msg.data), qos)
+    pub = node.create_publisher(UInt32, '/inbox_behind', 10)
+    assert wait_until(lambda: pub.get_subscription_count() == 1, 5.0)
+    with caplog.at_level(logging.WARNING, logger='rm_base.plugin.inbox'):
+        for i in range(8):  # one at a time: DDS's own queue never overflows
+            pub.publish(UInt32(data=i))
+            assert wait_until(lambda n=i + 1: inbox.pending + inbox.dropped == n, 5.0)
+    assert inbox.pending == 3
+    assert inbox.dropped_by_topic == {'/inbox_behind': 5}
+    assert '/inbox_behind: 3 messages wait for the loop' in caplog.text
+    assert inbox(0, 0.001) is True
+    assert got == [5, 6, 7] and inbox.taken == 3 and inbox.pending == 0
+    inbox.destroy()
+    node.destroy_node()
+
+
+def test_its_thread_ends_with_destroy_and_with_the_context():
+    node = Node('inbox_test', context=(context := _started_context()))
+    inbox = Inbox(inbox_node(node), node.get_clock())
+    thread = inbox._thread
+    assert thread.is_alive()
+    inbox.destroy()
+    assert not thread.is_alive()
+    other = Inbox(inbox_node(node), node.get_clock())
+    other.subscribe(UInt32, '/inbox_end', lambda msg, ns: None, 10)
+    start = time.monotonic()
+    context.shutdown()
+    other._thread.join(5.0)
+    assert not other._thread.is_alive()
+    assert time.monotonic() - start < 2.0  # the shutdown wakes it: not its wait timeout
+    assert other.receive_errors == 0
+
+
+def _started_context():
+    context = Context()
+    rclpy.init(context=context)
+    return context
+
+
+@pytest.mark.parametrize(
+    ('qos', 'depth'),
+    [
+        (10, 10),
+        (0, MAX_QUEUED),
+        (QoSProfile(depth=5), 5),
+        (QoSProfile(depth=1, history=HistoryPolicy.KEEP_ALL), MAX_QUEUED),
+        (qos_profile_sensor_data, qos_profile_sensor_data.depth),
+    ],
+)
+def test_a_queue_is_as_deep_as_the_subscriptions_qos(qos, depth):
+    assert queue_depth(qos) == depth
+
+
+def test_a_qos_that_is_neither_a_profile_nor_a_depth_is_refused():
+    with pytest.raises(TypeError, match='QoS'):
+        queue_depth('sensor')

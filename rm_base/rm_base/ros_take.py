@@ -1,0 +1,103 @@
+"""Taking a message that lets go of the interpreter lock while DDS hands it over.
+
+rclpy's take (what its executors call) keeps the GIL for the whole of ``rcl_take``. A take
+can block: it waits for the reader's mutex, which Fast DDS's event thread holds while it
+answers a participant that just appeared, and that answer can wait a third of a second
+for the new participant's shared-memory port (docs/PERFORMANCE.md, "The take that still
+stopped the loop"). With the GIL held, that stops every Python thread of the process.
+
+Here ``rcl_take_serialized_message``, rcl's own entry point for serialised messages, runs
+through ctypes, which releases the GIL for the call; the bytes are then deserialised under
+the GIL (one short C call). The counterpart of :mod:`rm_base.ros_publish`.
+"""
+
+from __future__ import annotations
+
+import ctypes
+from typing import Any
+
+from rclpy.serialization import deserialize_message
+
+from rm_base.ros_publish import Allocator, SerializedMessage, load_function
+
+#: Capacity a new buffer starts with [bytes]; rmw grows it for a larger message.
+INITIAL_CAPACITY = 256
+
+# rcl's return codes (rcl/types.h)
+_RCL_RET_OK = 0
+_RCL_RET_SUBSCRIPTION_TAKE_FAILED = 401
+
+
+class TakeError(RuntimeError):
+    """rcl refused to take (the subscription or its context is gone)."""
+
+
+_rcl_take_serialized = load_function(
+    'librcl.so',
+    'rcl_take_serialized_message',
+    (ctypes.c_void_p, ctypes.POINTER(SerializedMessage), ctypes.c_void_p, ctypes.c_void_p),
+    ctypes.c_int,
+)
+_default_allocator = load_function('librcutils.so', 'rcutils_get_default_allocator', (), Allocator)
+_array_init = load_function(
+    'librcutils.so',
+    'rcutils_uint8_array_init',
+    (ctypes.POINTER(SerializedMessage), ctypes.c_size_t, ctypes.POINTER(Allocator)),
+    ctypes.c_int,
+)
+_array_fini = load_function(
+    'librcutils.so', 'rcutils_uint8_array_fini', (ctypes.POINTER(SerializedMessage),), ctypes.c_int
+)
+_rcutils_reset_error = load_function('librcutils.so', 'rcutils_reset_error', (), None)
+
+
+class TakeBuffer:
+    """A serialised-message buffer rcl takes into, grown as messages need; one per thread.
+
+    Its memory is rcutils' own (rmw resizes it with its allocator); :meth:`close` frees it.
+    """
+
+    def __init__(self, capacity: int = INITIAL_CAPACITY) -> None:
+        self._message = SerializedMessage()
+        allocator = _default_allocator()
+        if _array_init(ctypes.byref(self._message), capacity, ctypes.byref(allocator)) != 0:
+            _rcutils_reset_error()
+            raise MemoryError(f'no {capacity}-byte buffer for taking messages')
+        self._open = True
+
+    def take(self, subscription: Any, msg_type: type) -> Any | None:
+        """Take subscription's next message, without the GIL while rcl takes.
+
+        Args:
+            subscription: an rclpy ``Subscription``.
+            msg_type: its message class.
+
+        Returns:
+            The message, or None when none was waiting.
+
+        Raises:
+            TakeError: rcl refused (e.g. the context was shut down).
+            rclpy.exceptions.InvalidHandle: the subscription was destroyed.
+        """
+        if not self._open:
+            raise ValueError('take into a closed buffer')
+        handle = subscription.handle
+        with handle:  # rclpy does not destroy it while in use
+            ret = _rcl_take_serialized(handle.pointer, ctypes.byref(self._message), None, None)
+        if ret == _RCL_RET_SUBSCRIPTION_TAKE_FAILED:
+            _rcutils_reset_error()
+            return None
+        if ret != _RCL_RET_OK:
+            _rcutils_reset_error()  # rcl left its error in this thread's state
+            raise TakeError(f'taking from {subscription.topic_name} failed: rcl returned {ret}')
+        data = ctypes.string_at(self._message.buffer, self._message.buffer_length)
+        return deserialize_message(data, msg_type)
+
+    def close(self) -> None:
+        """Free the buffer (idempotent)."""
+        if self._open:
+            self._open = False
+            _array_fini(ctypes.byref(self._message))
+
+    def __del__(self) -> None:
+        self.close()

@@ -1,0 +1,95 @@
+"""rm_base.ros_take: rcl's serialised take, with the GIL released while rcl takes."""
+
+import ctypes
+
+import pytest
+import rclpy
+from rclpy.context import Context
+from rclpy.exceptions import InvalidHandle
+from rclpy.node import Node
+from rm_base.ros_take import TakeBuffer, TakeError
+from std_msgs.msg import String
+from support.ros import wait_until
+
+
+def _pair(context, topic):
+    node = Node('ros_take_test', context=context)
+    subscription = node.create_subscription(String, topic, lambda msg: None, 10)
+    publisher = node.create_publisher(String, topic, 10)
+    assert wait_until(lambda: publisher.get_subscription_count() == 1, 5.0)
+    return node, subscription, publisher
+
+
+def _take_one(buffer, subscription, timeout=5.0):
+    got = []
+    assert wait_until(lambda: got.append(buffer.take(subscription, String)) or got[-1], timeout)
+    return got[-1]
+
+
+def test_messages_come_in_order_then_none_and_the_buffer_grows_for_a_large_one(ros_context):
+    node, subscription, publisher = _pair(ros_context, '/ros_take_order')
+    buffer = TakeBuffer(capacity=4)  # smaller than any message: rmw must grow it
+    assert buffer.take(subscription, String) is None
+    publisher.publish(String(data='x' * 5000))
+    publisher.publish(String(data='short'))
+    assert _take_one(buffer, subscription).data == 'x' * 5000
+    assert _take_one(buffer, subscription).data == 'short'  # the length, not the capacity
+    assert buffer.take(subscription, String) is None
+    buffer.close()
+    buffer.close()  # idempotent
+    with pytest.raises(ValueError, match='closed'):
+        buffer.take(subscription, String)
+    node.destroy_node()
+
+
+def test_a_destroyed_subscription_raises(ros_context):
+    node, subscription, _publisher = _pair(ros_context, '/ros_take_gone')
+    node.destroy_subscription(subscription)
+    buffer = TakeBuffer()
+    with pytest.raises(InvalidHandle):
+        buffer.take(subscription, String)
+    buffer.close()
+    node.destroy_node()
+
+
+def test_a_shut_down_context_has_nothing_to_take():
+    context = Context()
+    rclpy.init(context=context)
+    _node, subscription, _publisher = _pair(context, '/ros_take_shut')
+    context.shutdown()
+    buffer = TakeBuffer()
+    assert buffer.take(subscription, String) is None
+    buffer.close()
+
+
+class _ZeroedSubscription:
+    """A subscription whose rcl struct was never initialised (rcl finds it invalid)."""
+
+    topic_name = '/ros_take_invalid'
+
+    def __init__(self):
+        self._struct = ctypes.create_string_buffer(64)  # rcl_subscription_t: impl NULL
+        self.handle = self
+
+    @property
+    def pointer(self):
+        return ctypes.addressof(self._struct)
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+
+def test_an_error_from_rcl_is_a_take_error_naming_the_topic_and_the_buffer_still_works(
+    ros_context,
+):
+    buffer = TakeBuffer()
+    with pytest.raises(TakeError, match='/ros_take_invalid'):
+        buffer.take(_ZeroedSubscription(), String)
+    node, subscription, publisher = _pair(ros_context, '/ros_take_after_error')
+    publisher.publish(String(data='next'))
+    assert _take_one(buffer, subscription).data == 'next'
+    buffer.close()
+    node.destroy_node()
