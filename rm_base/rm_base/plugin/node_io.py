@@ -278,6 +278,7 @@ class DdsJointIO(NodeIO):
         self.actuator_cmd = node.create_publisher(
             ActuatorCmd, ACTUATOR_CMD_TOPIC, ACTUATOR_CMD_QOS_DEPTH
         )
+        self._command_edge: tuple[Outbox, Any] | None = None  # (outbox, its wrapper)
         clock = node.get_clock()
 
         def on_actuator_states(msg: ActuatorState) -> None:
@@ -290,10 +291,24 @@ class DdsJointIO(NodeIO):
         self._power_limit_pub: Any = None
 
     def send(self, targets: Mapping[str, JointTarget], now: Time) -> None:
-        """Publish targets as one rm_msgs/ActuatorCmd stamped now."""
+        """Publish targets as one rm_msgs/ActuatorCmd stamped now.
+
+        Through the host's outbox where it has one: the loop thread never hands a message
+        to DDS, whose send can block while a node joins (docs/PERFORMANCE.md, "A publish
+        that stopped every thread").
+        """
         msg = build_actuator_cmd(targets)
         msg.header.stamp = now.to_msg()
-        self.actuator_cmd.publish(msg)
+        self._command_publisher().publish(msg)
+
+    def _command_publisher(self) -> Any:
+        outbox = self.outbox
+        if outbox is None:
+            return self.actuator_cmd
+        if self._command_edge is None or self._command_edge[0] is not outbox:
+            # handed over: build_actuator_cmd makes a new message for every send
+            self._command_edge = (outbox, outbox.wrap(self.actuator_cmd, hand_over=True))
+        return self._command_edge[1]
 
     def power_limit(
         self, group: str, joints: Sequence[str], model: ChassisPowerModel

@@ -230,7 +230,9 @@ class Outbox:
         if len(queue) == queue.maxlen:
             self.dropped += 1
         queue.append((edge, data, msg_type, local, outside))
-        if not self._paced:
+        if self._stop:  # no thread any more: a late message (zero output) still goes out
+            self.flush()
+        elif not self._paced:
             self._wake.set()
 
     def pace(self) -> None:
@@ -290,7 +292,10 @@ class Outbox:
                 _log.error('in-process delivery on %s failed: %r', topic, err)
 
     def stop(self, timeout_s: float = 2.0) -> None:
-        """Publish what is queued, then end the thread. Idempotent."""
+        """Publish what is queued, then end the thread. Idempotent.
+
+        A message put afterwards is published at once, in the thread that puts it.
+        """
         self._stop = True
         self._wake.set()
         if self._thread.is_alive():

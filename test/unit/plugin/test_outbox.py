@@ -63,6 +63,18 @@ def test_stop_publishes_what_is_still_queued():
     assert pub.published == [7]
 
 
+def test_a_message_put_after_stop_is_published_at_once_in_the_putting_thread():
+    # e.g. a plugin's zero output when it is disabled after the host's outbox stopped
+    box = Outbox('test-publish')
+    pub = FakePublisher()
+    wrapped = box.wrap(pub)
+    box.start()
+    box.stop()
+    wrapped.publish(UInt32(data=3))
+    assert pub.published == [3]
+    assert pub.threads == {threading.current_thread().name}
+
+
 def test_when_the_edge_falls_behind_expect_the_oldest_dropped_and_counted():
     box = Outbox(max_queued=3)
     pub = FakePublisher()
@@ -207,7 +219,7 @@ def test_a_report_published_built_is_built_by_the_outbox_thread_and_reaches_robo
     finally:
         box.stop()
     assert built_in == ['test-publish']
-    (msg, msg_type), = got
+    ((msg, msg_type),) = got
     assert msg.data == 7 and msg_type is UInt32  # the object built, no serialised copy
 
 
