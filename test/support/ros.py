@@ -110,6 +110,18 @@ def wait_until(
             time.sleep(period)
 
 
+def spin_until(node: Any, ready: Callable[[], bool], timeout: float = 5.0) -> bool:
+    """Spin node alone (its own executor) until ready() or timeout [s]; return ready()."""
+    from rclpy.executors import SingleThreadedExecutor
+
+    executor = SingleThreadedExecutor(context=node.context)
+    executor.add_node(node)
+    try:
+        return wait_until(lambda: executor.spin_once(timeout_sec=0.01) or ready(), timeout)
+    finally:
+        executor.remove_node(node)
+
+
 def call_idempotent(executor: Any, client: Any, request: Any, attempts: int = 4,
                     timeout_s: float = 5.0) -> Any:
     """Call a service whose request may be repeated; the response, or None after every try.

@@ -10,7 +10,7 @@ from rclpy.exceptions import InvalidHandle
 from rclpy.node import Node
 from rclpy.serialization import serialize_message
 from std_msgs.msg import String
-from support.ros import wait_until
+from support.ros import spin_until, wait_until
 
 from rm_base import ros_publish
 
@@ -24,24 +24,13 @@ def _subscribed(ros_context, topic):
     return node, publisher, got
 
 
-def _spin_until(node, ready, timeout=5.0):
-    from rclpy.executors import SingleThreadedExecutor
-
-    executor = SingleThreadedExecutor(context=node.context)
-    executor.add_node(node)
-    try:
-        return wait_until(lambda: executor.spin_once(timeout_sec=0.01) or ready(), timeout)
-    finally:
-        executor.remove_node(node)
-
-
 def test_a_message_and_its_serialised_bytes_both_arrive_in_order(ros_context):
     node, publisher, got = _subscribed(ros_context, '/ros_publish_order')
     ros_publish.publish(publisher, String(data='one'))
     data = serialize_message(String(data='two'))
     assert b'\x00' in data  # CDR has zero bytes: nothing is cut at the first
     ros_publish.publish(publisher, data)
-    assert _spin_until(node, lambda: len(got) == 2)
+    assert spin_until(node, lambda: len(got) == 2)
     assert got == ['one', 'two']
     node.destroy_node()
 

@@ -8,18 +8,24 @@ from rm_base.joints import JointTarget, Mode
 from rm_base.plugin import outbox as outbox_module
 from rm_base.plugin.node_io import DdsJointIO
 from rm_base.plugin.outbox import Outbox
-from support.ros import wait_until
+from support.ros import spin_until, wait_until
 
 from rm_msgs.msg import ActuatorCmd
 
 
-def test_joint_targets_go_out_through_the_outbox_thread_never_from_the_loop(ros_context):
-    node = Node('dds_io_test', context=ros_context)
+def _io_and_bridge(context):
+    """rm_robot's joint I/O and a node standing in for the bridge, matched."""
+    node = Node('dds_io_test', context=context)
     io = DdsJointIO(node)
-    bridge = Node('fake_bridge', context=ros_context)
+    bridge = Node('fake_bridge', context=context)
     got = []
     bridge.create_subscription(ActuatorCmd, '/actuator_cmd', got.append, 10)
     assert wait_until(lambda: io.actuator_cmd.get_subscription_count() == 1, 5.0)
+    return node, io, bridge, got
+
+
+def test_joint_targets_go_out_through_the_outbox_thread_never_from_the_loop(ros_context):
+    node, io, bridge, got = _io_and_bridge(ros_context)
     target = JointTarget(Mode.VELOCITY, velocity=1.5)
     publishers = []
     real_publish = outbox_module.publish
@@ -39,7 +45,7 @@ def test_joint_targets_go_out_through_the_outbox_thread_never_from_the_loop(ros_
             io.outbox.wake()  # the loop's after-tick callback
             assert wait_until(lambda: publishers, 5.0)
         assert publishers == [('/actuator_cmd', 'dds-io-publish')]
-        assert _spin_until(bridge, lambda: got)
+        assert spin_until(bridge, lambda: got)
         assert list(got[0].name) == ['wheel'] and got[0].velocity[0] == 1.5
     finally:
         io.outbox.stop()
@@ -47,26 +53,10 @@ def test_joint_targets_go_out_through_the_outbox_thread_never_from_the_loop(ros_
     node.destroy_node()
 
 
-def _spin_until(node, ready, timeout=5.0):
-    from rclpy.executors import SingleThreadedExecutor
-
-    executor = SingleThreadedExecutor(context=node.context)
-    executor.add_node(node)
-    try:
-        return wait_until(lambda: executor.spin_once(timeout_sec=0.01) or ready(), timeout)
-    finally:
-        executor.remove_node(node)
-
-
 def test_without_an_outbox_joint_targets_are_published_at_once(ros_context):
-    node = Node('dds_io_test', context=ros_context)
-    io = DdsJointIO(node)
-    bridge = Node('fake_bridge', context=ros_context)
-    got = []
-    bridge.create_subscription(ActuatorCmd, '/actuator_cmd', got.append, 10)
-    assert wait_until(lambda: io.actuator_cmd.get_subscription_count() == 1, 5.0)
+    node, io, bridge, got = _io_and_bridge(ros_context)
     io.send({'wheel': JointTarget(Mode.EFFORT, effort=0.5)}, node.get_clock().now())
-    assert _spin_until(bridge, lambda: got)
+    assert spin_until(bridge, lambda: got)
     assert list(got[0].name) == ['wheel'] and got[0].effort[0] == 0.5
     bridge.destroy_node()
     node.destroy_node()
