@@ -8,7 +8,8 @@ stopped the loop"). With the GIL held, that stops every Python thread of the pro
 
 Here ``rcl_take_serialized_message``, rcl's own entry point for serialised messages, runs
 through ctypes, which releases the GIL for the call; the bytes are then deserialised under
-the GIL (one short C call). The counterpart of :mod:`rm_base.ros_publish`.
+the GIL (one short C call), by this thread or by the one that uses the message. The
+counterpart of :mod:`rm_base.ros_publish`.
 """
 
 from __future__ import annotations
@@ -79,6 +80,15 @@ class TakeBuffer:
             TakeError: rcl refused (e.g. the context was shut down).
             rclpy.exceptions.InvalidHandle: the subscription was destroyed.
         """
+        data = self.take_serialized(subscription)
+        return None if data is None else deserialize_message(data, msg_type)
+
+    def take_serialized(self, subscription: Any) -> bytes | None:
+        """Take subscription's next message as its serialised bytes (see :meth:`take`).
+
+        For a thread that takes on behalf of another: deserialising is most of a take's
+        cost, and the thread that uses the message pays it with its caches warm.
+        """
         if not self._open:
             raise ValueError('take into a closed buffer')
         handle = subscription.handle
@@ -90,8 +100,7 @@ class TakeBuffer:
         if ret != _RCL_RET_OK:
             _rcutils_reset_error()  # rcl left its error in this thread's state
             raise TakeError(f'taking from {subscription.topic_name} failed: rcl returned {ret}')
-        data = ctypes.string_at(self._message.buffer, self._message.buffer_length)
-        return deserialize_message(data, msg_type)
+        return ctypes.string_at(self._message.buffer, self._message.buffer_length)
 
     def close(self) -> None:
         """Free the buffer (idempotent)."""

@@ -7,6 +7,7 @@ import rclpy
 from rclpy.context import Context
 from rclpy.exceptions import InvalidHandle
 from rclpy.node import Node
+from rclpy.serialization import deserialize_message
 from rm_base.ros_take import TakeBuffer, TakeError
 from std_msgs.msg import String
 from support.ros import wait_until
@@ -20,10 +21,15 @@ def _pair(context, topic):
     return node, subscription, publisher
 
 
-def _take_one(buffer, subscription, timeout=5.0):
+def _first(take, timeout=5.0):
+    """take()'s first result that is not None."""
     got = []
-    assert wait_until(lambda: got.append(buffer.take(subscription, String)) or got[-1], timeout)
+    assert wait_until(lambda: got.append(take()) or got[-1] is not None, timeout)
     return got[-1]
+
+
+def _take_one(buffer, subscription):
+    return _first(lambda: buffer.take(subscription, String))
 
 
 def test_messages_come_in_order_then_none_and_the_buffer_grows_for_a_large_one(ros_context):
@@ -35,6 +41,9 @@ def test_messages_come_in_order_then_none_and_the_buffer_grows_for_a_large_one(r
     assert _take_one(buffer, subscription).data == 'x' * 5000
     assert _take_one(buffer, subscription).data == 'short'  # the length, not the capacity
     assert buffer.take(subscription, String) is None
+    publisher.publish(String(data='as bytes'))
+    data = _first(lambda: buffer.take_serialized(subscription))
+    assert isinstance(data, bytes) and deserialize_message(data, String).data == 'as bytes'
     buffer.close()
     buffer.close()  # idempotent
     with pytest.raises(ValueError, match='closed'):

@@ -5,10 +5,12 @@ behind the executor's thread (docs/PERFORMANCE.md). The inbox's subscriptions li
 node that no executor spins (``rm_base.node_main.inbox_node`` makes one beside the owner).
 The inbox's own thread waits on them (rclpy's wait set, the GIL released while it waits),
 takes what arrives (:class:`rm_base.ros_take.TakeBuffer`: the GIL released while rcl
-takes) and appends each message, stamped with its receive time, to its subscription's
-queue. The loop's first stage, :meth:`Inbox.__call__`, hands every queued message to the
-plugin's callback, the same callback a subscription or ``inject`` runs, so a command
-reaches its plugin at the next tick.
+takes) and appends its serialised bytes to the subscription's queue. The loop's first
+stage, :meth:`Inbox.__call__`, deserialises every queued message, stamps it with the
+tick's receive time and hands it to the plugin's callback, the same callback a
+subscription or ``inject`` runs, so a command reaches its plugin at the next tick.
+Deserialising is most of a take's cost, and the loop pays it with its caches warm: in a
+thread that wakes for each message it cost several times as much (docs/PERFORMANCE.md).
 
 The loop itself never calls DDS: a take can wait a third of a second for Fast DDS's locks
 when another node joins (docs/PERFORMANCE.md, "The take that still stopped the loop"), and
@@ -32,6 +34,7 @@ from typing import Any, NamedTuple
 from rclpy.guard_condition import GuardCondition
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.qos import HistoryPolicy, QoSProfile
+from rclpy.serialization import deserialize_message
 
 from rm_base.plugin.commands import LogThrottle
 from rm_base.ros_take import TakeBuffer
@@ -74,8 +77,8 @@ class _Subscription(NamedTuple):
     msg_type: type
     callback: Callable[[Any, int], Any]
     topic: str
-    # (message, receive time [ns]), appended by the inbox thread, taken by the loop
-    queue: collections.deque[tuple[Any, int]]
+    # serialised messages, appended by the inbox thread, handed out by the loop
+    queue: collections.deque[bytes]
 
 
 class Inbox:
@@ -84,8 +87,8 @@ class Inbox:
     Args:
         node: the node that holds the subscriptions; it must never be added to an
             executor. The inbox destroys it with itself.
-        clock: stamps each message's receive time (the owner's clock: simulated time
-            where the owner uses it).
+        clock: stamps each message's receive time when the loop hands it out (the
+            owner's clock: simulated time where the owner uses it).
         name: its name among the loop's components.
     """
 
@@ -164,23 +167,26 @@ class Inbox:
         """Hand every queued message to its callback; return whether there was one."""
         taken = 0
         counts = self.taken_by_topic
+        receive_ns = 0
         for entry in self._subscriptions:
             queue = entry.queue
             while queue:
-                msg, receive_ns = queue.popleft()
+                data = queue.popleft()
+                if not taken:
+                    receive_ns = self._clock.now().nanoseconds
                 taken += 1
                 counts[entry.topic] += 1
                 try:
-                    entry.callback(msg, receive_ns)
+                    entry.callback(deserialize_message(data, entry.msg_type), receive_ns)
                 except Exception:  # a plugin's callback must not stop the loop
-                    self._callback_failed()
+                    self._callback_failed(entry.topic)
         return taken > 0
 
-    def _callback_failed(self) -> None:
+    def _callback_failed(self, topic: str) -> None:
         self.errors += 1
         more = self._error_log.due(time.monotonic_ns())
         if more is not None:
-            _log.exception('a subscription callback failed%s', more)
+            _log.exception('a message on %s could not be handed out%s', topic, more)
 
     # -- the inbox thread -----------------------------------------------------------------
 
@@ -225,10 +231,10 @@ class Inbox:
 
     def _take_all(self, buffer: TakeBuffer, entry: _Subscription) -> None:
         queue = entry.queue
-        while (msg := buffer.take(entry.subscription, entry.msg_type)) is not None:
+        while (data := buffer.take_serialized(entry.subscription)) is not None:
             if len(queue) == queue.maxlen:
                 self._dropped(entry.topic, queue.maxlen)
-            queue.append((msg, self._clock.now().nanoseconds))
+            queue.append(data)
 
     def _dropped(self, topic: str, depth: int | None) -> None:
         self.dropped_by_topic[topic] += 1
