@@ -30,7 +30,7 @@ _RCL_RET_SUBSCRIPTION_TAKE_FAILED = 401
 
 
 class TakeError(RuntimeError):
-    """rcl refused to take (the subscription or its context is gone)."""
+    """rcl refused to take (e.g. the subscription is not valid)."""
 
 
 _rcl_take_serialized = load_function(
@@ -77,7 +77,7 @@ class TakeBuffer:
             The message, or None when none was waiting.
 
         Raises:
-            TakeError: rcl refused (e.g. the context was shut down).
+            TakeError: rcl refused (a shut-down context is not refused: nothing waits).
             rclpy.exceptions.InvalidHandle: the subscription was destroyed.
         """
         data = self.take_serialized(subscription)

@@ -1,4 +1,4 @@
-"""Inbox: subscriptions the control loop takes from each tick, with no executor and no DDS call.
+"""Inbox: the plugins' subscriptions, handed to the control loop each tick, no DDS call in it.
 
 A message an executor delivers costs the loop a thread switch and a wait for the GIL
 behind the executor's thread (docs/PERFORMANCE.md). The inbox's subscriptions live on a
@@ -31,6 +31,7 @@ import time
 from collections.abc import Callable
 from typing import Any, NamedTuple
 
+from rclpy.exceptions import InvalidHandle
 from rclpy.guard_condition import GuardCondition
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.qos import HistoryPolicy, QoSProfile
@@ -216,7 +217,12 @@ class Inbox:
             in_use.enter_context(context)
             in_use.enter_context(self._guard.handle)
             for entry in subs:
-                in_use.enter_context(entry.subscription.handle)
+                try:
+                    in_use.enter_context(entry.subscription.handle)
+                except InvalidHandle:  # dropped meanwhile: a new tuple is there already
+                    if subs is self._subscriptions:
+                        raise
+                    return
             wait_set = _rclpy.WaitSet(len(subs), 1, 0, 0, 0, 0, context)
             while not self._stopping and subs is self._subscriptions:
                 wait_set.clear_entities()

@@ -146,6 +146,8 @@ def test_the_loop_never_takes_from_dds_and_runs_on_while_a_take_blocks(ros_conte
     # (docs/PERFORMANCE.md): only the inbox's thread may wait, never the loop.
     takers = set()
     blocked = threading.Event()
+    release = threading.Event()
+    gave_up = threading.Event()
     real_take = ros_take.TakeBuffer.take_serialized
 
     def take(buffer, subscription):
@@ -153,7 +155,8 @@ def test_the_loop_never_takes_from_dds_and_runs_on_while_a_take_blocks(ros_conte
         data = real_take(buffer, subscription)
         if data is not None:
             blocked.set()
-            time.sleep(0.4)
+            if not release.wait(10.0):  # a stage that waited for the take would end here
+                gave_up.set()
         return data
 
     monkeypatch.setattr(ros_take.TakeBuffer, 'take_serialized', take)
@@ -165,12 +168,10 @@ def test_the_loop_never_takes_from_dds_and_runs_on_while_a_take_blocks(ros_conte
     assert wait_until(lambda: pub.get_subscription_count() == 1, 5.0)
     pub.publish(UInt32(data=99))
     assert blocked.wait(5.0)
-    start = time.monotonic()
-    ticks = 0
-    while time.monotonic() - start < 0.2:  # inside the blocked take
-        inbox(0, 0.001)
-        ticks += 1
-    assert ticks > 100  # generous: a stage that waited for the take would manage 1
+    for _ in range(50):  # ticks while the thread's take is blocked
+        assert inbox(0, 0.001) is False
+    assert not gave_up.is_set()  # they all returned before the take did
+    release.set()
     _take_until(inbox, got, 1)
     assert got == [99]
     assert takers and threading.get_ident() not in takers
