@@ -61,8 +61,8 @@ class RobotHost(Node):
       own) the host runs a loop of plugins only, at ``loop_rate``, and joint targets go
       out on /actuator_cmd.
     - ROS stays at the edge: the loop's first stage hands out what the ``Inbox``'s
-      thread took from the plugins' subscriptions (no executor, no DDS call in the
-      loop) and their callbacks store the latest command; every message a plugin
+      thread took from the plugins' subscriptions (no executor, no take from DDS in
+      the loop) and their callbacks store the latest command; every message a plugin
       publishes goes through an outbox thread, never from the loop thread. The
       executor ``main`` spins runs only services and the state timer.
     - Services: ``~/<name>/enable`` (std_srvs/SetBool) per plugin and

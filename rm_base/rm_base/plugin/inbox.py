@@ -1,4 +1,4 @@
-"""Inbox: the plugins' subscriptions, handed to the control loop each tick, no DDS call in it.
+"""Inbox: the plugins' subscriptions, handed to the control loop each tick; the loop never takes.
 
 A message an executor delivers costs the loop a thread switch and a wait for the GIL
 behind the executor's thread (docs/PERFORMANCE.md). The inbox's subscriptions live on a
@@ -12,7 +12,7 @@ subscription or ``inject`` runs, so a command reaches its plugin at the next tic
 Deserialising is most of a take's cost, and the loop pays it with its caches warm: in a
 thread that wakes for each message it cost several times as much (docs/PERFORMANCE.md).
 
-The loop itself never calls DDS: a take can wait a third of a second for Fast DDS's locks
+The loop itself never takes from DDS: a take can wait a third of a second for Fast DDS's locks
 when another node joins (docs/PERFORMANCE.md, "The take that still stopped the loop"), and
 then only this thread waits. Its priority is below the loop's and it runs on the loop's
 CPU (``rm_base.realtime``), so it takes in the loop's sleep, never mid-tick.
