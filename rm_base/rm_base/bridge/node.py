@@ -56,8 +56,8 @@ from rm_base.hardware.config import SAFETY_SCHEMA, SCHEDULER_SCHEMA
 from rm_base.hardware.errors import CommandRejectedError, ValueRangeError
 from rm_base.node_main import inbox_node
 from rm_base.plugin.inbox import Inbox
-from rm_base.plugin.node_io import POWER_LIMIT_QOS, POWER_LIMIT_TOPIC
 from rm_base.plugin.params import PluginParams
+from rm_base.plugin.remote_power import POWER_LIMIT_QOS, POWER_LIMIT_TOPIC
 from rm_base.realtime import EDGE_PRIORITY, LOOP_PRIORITY
 from rm_base.ros_logging import FastLogger
 from rm_base.ros_publish import publish

@@ -26,24 +26,23 @@ uses rclpy only through the node object it is given (plus rclpy's QoS value type
 from __future__ import annotations
 
 import abc
-import math
 import threading
 import weakref
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from typing import Any, Protocol
 
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+from rclpy.qos import qos_profile_sensor_data
 from rclpy.serialization import deserialize_message
 from rclpy.time import Time
 
-from rm_base.control import ChassisPowerModel, PowerLimitResult, estimate_power
-from rm_base.errors import InputRejectedError
+from rm_base.control import ChassisPowerModel
 from rm_base.geometry.frame_tree import FrameTree
 from rm_base.joints import JointState, JointTarget
 from rm_base.plugin.errors import JointClaimError, TargetRejectedError
 from rm_base.plugin.inbox import Inbox
 from rm_base.plugin.joints import JointStateView, build_actuator_cmd, check_targets
 from rm_base.plugin.outbox import Outbox
+from rm_base.plugin.remote_power import POWER_LIMIT_QOS, POWER_LIMIT_TOPIC, RemotePowerStage
 from rm_msgs.msg import ActuatorCmd, ActuatorState, PowerLimit
 
 ACTUATOR_CMD_TOPIC = 'actuator_cmd'
@@ -55,15 +54,6 @@ ACTUATOR_STATES_TOPIC = 'actuator_states'
 # Reliable, keep last 10: a reliable writer matches both reliable and best-effort readers,
 # so the bridge may pick either.
 ACTUATOR_CMD_QOS_DEPTH = 10
-
-POWER_LIMIT_TOPIC = 'power_limit'
-"""Power limits the CAN bridge runs for rm_robot in another process (rm_msgs/PowerLimit)."""
-
-#: Latched, one message per group kept: a bridge that starts later gets every stage.
-POWER_LIMIT_QOS = QoSProfile(
-    depth=16, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
-)
-
 
 class JointBackend(Protocol):
     """The part of the CAN hardware layer that local joint I/O uses (CanHardware)."""
@@ -319,57 +309,6 @@ class DdsJointIO(NodeIO):
                 PowerLimit, POWER_LIMIT_TOPIC, POWER_LIMIT_QOS
             )
         return RemotePowerStage(self._power_limit_pub, group, joints, model, self.joint_states)
-
-
-class RemotePowerStage:
-    """A plugin's power stage run by the bridge in another process (see POWER_LIMIT_TOPIC).
-
-    Behaves as the loop's own stage does for the plugin: set ``limit_w``; ``last`` tells
-    the efforts and the power, here from the latest joint states (what the bridge applied).
-    A limit goes out when it changes (latched, so a bridge started later gets it too).
-    """
-
-    def __init__(
-        self, publisher: Any, group: str, joints: Sequence[str], model: ChassisPowerModel,
-        joint_states: JointStateView,
-    ) -> None:
-        self._publisher = publisher
-        self._joints = tuple(joints)
-        self._model = model
-        self._joint_states = joint_states
-        self._msg = PowerLimit(
-            group=group, joints=list(self._joints), k1=model.k1, k2=model.k2,
-            static_power_w=model.static_power_w, limit_w=math.inf,
-        )
-        self._publisher.publish(self._msg)
-
-    @property
-    def limit_w(self) -> float:
-        """The allowed power [W] (inf: no limit)."""
-        return float(self._msg.limit_w)
-
-    @limit_w.setter
-    def limit_w(self, value: float) -> None:
-        if value != self._msg.limit_w:
-            self._msg = PowerLimit(
-                group=self._msg.group, joints=self._msg.joints, k1=self._msg.k1,
-                k2=self._msg.k2, static_power_w=self._msg.static_power_w, limit_w=value,
-            )
-            self._publisher.publish(self._msg)
-
-    @property
-    def last(self) -> PowerLimitResult | None:
-        """The efforts the bridge applied and their predicted power; None before states."""
-        states = self._joint_states.snapshot(self._joints)
-        if len(states) != len(self._joints):
-            return None
-        torques = [states[j].effort for j in self._joints]
-        speeds = [states[j].velocity for j in self._joints]
-        try:
-            power = estimate_power(self._model, torques, speeds)
-        except InputRejectedError:  # a joint offline reports NaN
-            return None
-        return PowerLimitResult(math.nan, tuple(torques), math.nan, power)
 
 
 class LocalJointIO(NodeIO):
