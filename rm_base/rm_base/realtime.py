@@ -37,6 +37,37 @@ EDGE_PRIORITY = 10
 #: Longest a thread that wakes waits for the GIL behind a busy one (CPython: 5 ms) [s].
 GIL_SWITCH_INTERVAL_S = 0.0005
 
+_thread_role = threading.local()
+
+
+@contextlib.contextmanager
+def loop_thread() -> Iterator[None]:
+    """Within it, the calling thread runs a control loop: nothing it calls may block on I/O.
+
+    What could block goes to another thread instead: its log lines, for one
+    (rm_base.ros_logging), since rcutils sends each on /rosout in the caller's thread.
+    """
+    _thread_role.loop = True
+    try:
+        yield
+    finally:
+        _thread_role.loop = False
+
+
+def in_loop_thread() -> bool:
+    """Whether the calling thread is inside :func:`loop_thread`."""
+    return getattr(_thread_role, 'loop', False)
+
+
+def at_most_edge_priority() -> None:
+    """Lower the calling thread to EDGE_PRIORITY if it runs above it (SCHED_FIFO).
+
+    For an edge thread that the loop's thread starts: it inherits the loop's priority.
+    """
+    if os.sched_getscheduler(0) == os.SCHED_FIFO:
+        if os.sched_getparam(0).sched_priority > EDGE_PRIORITY:
+            set_fifo_priority(EDGE_PRIORITY)
+
 
 def shorten_gil_switch_interval() -> None:
     """Lower the interpreter's GIL switch interval (process-wide) to GIL_SWITCH_INTERVAL_S."""

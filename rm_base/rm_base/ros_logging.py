@@ -12,20 +12,164 @@ scheduler tick that logs nine "output held at zero" lines stalled for 3.6 ms.
 (``throttle_duration_sec``, ``once``) itself and passes any other keyword to rclpy's own
 path. ``RosLogHandler`` forwards the hardware layer's Python ``logging`` records, with
 their own caller information.
+
+rcutils sends each line on /rosout in the thread that logs, and rclpy keeps the GIL for
+the call; a send can block a third of a second while a /rosout subscriber joins
+(docs/PERFORMANCE.md, "A log line that stopped the loop"). So the call goes through
+ctypes, which releases the GIL, and a control loop's thread
+(:func:`rm_base.realtime.loop_thread`) does not make it at all: its lines wait in a
+queue that a thread of their own writes, in order with every other thread's lines.
 """
 
 from __future__ import annotations
 
+import atexit
+import collections
+import ctypes
 import logging
 import sys
 import threading
 import time
-from typing import Any
+from typing import Any, NamedTuple
 
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.logging import LoggingSeverity
 
+from rm_base.realtime import at_most_edge_priority, in_loop_thread
+from rm_base.ros_publish import load_function
+
 _OWN_FILTERS = frozenset({'throttle_duration_sec', 'once'})
+#: Lines of a loop thread held at most while the writing thread is blocked.
+MAX_QUEUED_LINES = 1000
+
+
+class _Location(ctypes.Structure):
+    """rcutils_log_location_t."""
+
+    _fields_ = [
+        ('function_name', ctypes.c_char_p),
+        ('file_name', ctypes.c_char_p),
+        ('line_number', ctypes.c_size_t),
+    ]
+
+
+# void rcutils_log(location, severity, name, format, ...): called with format "%s"
+_rcutils_log = load_function(
+    'librcutils.so', 'rcutils_log',
+    (ctypes.POINTER(_Location), ctypes.c_int, ctypes.c_char_p, ctypes.c_char_p), None,
+)
+_rcutils_initialized = ctypes.c_bool.in_dll(ctypes.CDLL('librcutils.so'),
+                                            'g_rcutils_logging_initialized')
+
+
+class LogLine(NamedTuple):
+    """One line for rcutils: its severity, logger name, text and caller."""
+
+    severity: int
+    name: str
+    message: str
+    function: str
+    path: str
+    line: int
+
+
+def _encoded(text: str) -> bytes:
+    return text.encode('utf-8', 'backslashreplace')
+
+
+def write_line(line: LogLine) -> None:
+    """Hand line to rcutils (console, /rosout, log file), the GIL released meanwhile."""
+    if not _rcutils_initialized.value:  # rclpy's call initialises rcutils' logging first
+        _rclpy.rclpy_logging_rcutils_log(*line)
+        return
+    location = _Location(_encoded(line.function), _encoded(line.path), max(line.line, 0))
+    _rcutils_log(ctypes.byref(location), line.severity, _encoded(line.name), b'%s',
+                 _encoded(line.message))
+
+
+class LoopLines:
+    """The log lines of control loop threads, written by a thread of their own.
+
+    ``put`` never blocks (a deque append and an event). Lines of other threads go through
+    ``write`` and come after the queued ones. Over ``max_lines`` queued, the oldest are
+    dropped, counted, and reported by the next line written.
+    """
+
+    def __init__(self, max_lines: int = MAX_QUEUED_LINES, write: Any = write_line) -> None:
+        self._lines: collections.deque[LogLine] = collections.deque(maxlen=max_lines)
+        self._write = write
+        self._wake = threading.Event()
+        self._order = threading.Lock()  # one writer at a time, queued lines first
+        self._start_lock = threading.Lock()
+        self._thread: threading.Thread | None = None
+        self.dropped = 0
+        self._reported = 0
+
+    def put(self, line: LogLine) -> None:
+        """Queue line for the writing thread (started with the first line)."""
+        lines = self._lines
+        if len(lines) == lines.maxlen:
+            self.dropped += 1
+        lines.append(line)
+        if self._thread is None:
+            self._start()
+        self._wake.set()
+
+    def write(self, line: LogLine) -> None:
+        """Write line in the calling thread, after the lines queued before it."""
+        with self._order:
+            self._drain()
+            self._write(line)
+
+    def flush(self) -> None:
+        """Write what is queued, in the calling thread."""
+        with self._order:
+            self._drain()
+
+    def _drain(self) -> None:
+        # Caller holds self._order.
+        lines = self._lines
+        while lines:
+            dropped = self.dropped - self._reported
+            if dropped:  # said by the logger of the oldest line kept, in its place
+                self._reported += dropped
+                self._write(LogLine(
+                    int(LoggingSeverity.WARN), lines[0].name,
+                    f'{dropped} log line(s) of the control loop dropped: more than '
+                    f'{lines.maxlen} waited to be written', '_drain', __file__, 0))
+            self._write(lines.popleft())
+
+    def _start(self) -> None:
+        with self._start_lock:
+            if self._thread is None:
+                thread = threading.Thread(target=self._run, name='rm-log', daemon=True)
+                thread.start()
+                self._thread = thread
+
+    def _run(self) -> None:
+        try:
+            at_most_edge_priority()  # started by the loop's thread: not at its priority
+        except OSError:
+            pass  # no right to change it: it runs as it is
+        while True:
+            self._wake.wait()
+            self._wake.clear()
+            try:
+                self.flush()
+            except Exception as err:  # the thread must go on; rcutils is what failed
+                sys.stderr.write(f'rm_base.ros_logging: a log line was lost: {err!r}\n')
+
+
+_LOOP_LINES = LoopLines()
+atexit.register(_LOOP_LINES.flush)
+
+
+def emit(line: LogLine) -> None:
+    """Write line now, or from the writing thread if the caller runs a control loop."""
+    if in_loop_thread():
+        _LOOP_LINES.put(line)
+    else:
+        _LOOP_LINES.write(line)
 
 
 class FastLogger:
@@ -83,7 +227,7 @@ class FastLogger:
         """Log message with the given caller (for records that carry their own)."""
         if not self.is_enabled_for(severity):
             return False
-        _rclpy.rclpy_logging_rcutils_log(severity, self.name, message, function, path, line)
+        emit(LogLine(int(severity), self.name, message, function, path, line))
         return True
 
     def _log(self, frame: Any, message: str, severity: LoggingSeverity,
@@ -95,8 +239,8 @@ class FastLogger:
         if kwargs and not self._passes(frame, kwargs):
             return False
         code = frame.f_code
-        _rclpy.rclpy_logging_rcutils_log(
-            severity, self.name, str(message), code.co_name, code.co_filename, frame.f_lineno)
+        emit(LogLine(int(severity), self.name, str(message), code.co_name, code.co_filename,
+                     frame.f_lineno))
         return True
 
     def _passes(self, frame: Any, kwargs: dict[str, Any]) -> bool:

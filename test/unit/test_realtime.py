@@ -182,3 +182,27 @@ def _policy_of_a_new_thread():
     thread.start()
     thread.join()
     return out[0]
+
+
+def test_loop_thread_marks_only_the_calling_thread_and_only_within():
+    seen = []
+    with realtime.loop_thread():
+        seen.append(realtime.in_loop_thread())
+        other = threading.Thread(target=lambda: seen.append(realtime.in_loop_thread()))
+        other.start()
+        other.join()
+    seen.append(realtime.in_loop_thread())
+    assert seen == [True, False, False]
+
+
+def test_at_most_edge_priority_lowers_a_thread_above_it_and_leaves_others(monkeypatch):
+    set_to = []
+    monkeypatch.setattr(realtime, 'set_fifo_priority', lambda p, tid=0: set_to.append(p))
+    monkeypatch.setattr(realtime.os, 'sched_getscheduler', lambda tid: os.SCHED_FIFO)
+    for priority in (realtime.LOOP_PRIORITY, realtime.EDGE_PRIORITY):
+        monkeypatch.setattr(realtime.os, 'sched_getparam',
+                            lambda tid, p=priority: os.sched_param(p))
+        realtime.at_most_edge_priority()
+    monkeypatch.setattr(realtime.os, 'sched_getscheduler', lambda tid: os.SCHED_OTHER)
+    realtime.at_most_edge_priority()
+    assert set_to == [realtime.EDGE_PRIORITY]

@@ -1,7 +1,8 @@
-"""rm_base.ros_logging: rclpy's output, without rclpy's 400 µs caller lookup.
+"""rm_base.ros_logging: rclpy's output, without rclpy's 400 µs caller lookup, and no line
+written (nor sent on /rosout) by a control loop's thread.
 
-Each case runs a short script in a fresh interpreter (rcutils reads its output format
-once per process) and compares its console lines, formatted as
+The console cases run a short script in a fresh interpreter (rcutils reads its output
+format once per process) and compare its console lines, formatted as
 ``{severity} {name} {function_name}:{line_number} {message}``.
 """
 
@@ -9,6 +10,10 @@ import os
 import subprocess
 import sys
 import textwrap
+import threading
+
+from rm_base.realtime import loop_thread
+from rm_base.ros_logging import LogLine, LoopLines
 
 PRELUDE = """
 import inspect, logging
@@ -118,3 +123,124 @@ def test_when_python_logging_records_are_forwarded_expect_them_at_their_level_an
         'rm_base.hardware.actuators: gone',
         'not ours: lastResort, plain',
     ]
+
+
+def test_when_a_loop_thread_logs_expect_its_lines_written_in_order_before_later_lines():
+    script = """
+    import threading
+    from rm_base.realtime import loop_thread
+
+    log = FastLogger(get_logger('rm_robot')).get_child('chassis')
+
+    def loop():
+        with loop_thread():
+            for i in range(3):
+                log.info(f'tick {i}')
+            forward_package_logging('rm_robot')
+            logging.getLogger('rm_base.hardware').warning('held at zero')
+
+    worker = threading.Thread(target=loop)
+    worker.start()
+    worker.join()
+    log.info('after the loop')
+    with loop_thread():
+        log.error('queued last: written at exit')
+    """
+    assert [line.split(' ', 3)[3] for line in console_lines(script)] == [
+        'tick 0', 'tick 1', 'tick 2', 'rm_base.hardware: held at zero', 'after the loop',
+        'queued last: written at exit',
+    ]
+
+
+def test_when_logging_expect_the_line_on_rosout_with_its_caller():
+    script = """
+    import threading, time
+    import rclpy
+    from rcl_interfaces.msg import Log
+    from rclpy.qos import QoSProfile, ReliabilityPolicy, DurabilityPolicy
+    from rm_base.realtime import loop_thread
+
+    rclpy.init()
+    node = rclpy.create_node('rosout_probe')
+    got = []
+    qos = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+    node.create_subscription(Log, '/rosout', got.append, qos)
+    log = FastLogger(node.get_logger()).get_child('kid')
+
+    def loop():
+        with loop_thread():
+            log.warning('from the loop')  # here-loop
+
+    log.info('from main')  # here-main
+    worker = threading.Thread(target=loop)
+    worker.start()
+    worker.join()
+    deadline = time.monotonic() + 20.0
+    while len(got) < 2 and time.monotonic() < deadline:
+        rclpy.spin_once(node, timeout_sec=0.1)
+    for m in got:
+        print('ROSOUT', m.level, m.name, m.function, m.line, m.msg, m.file.endswith('<string>'))
+    """
+    rosout = [line for line in console_lines(script) if line.startswith('ROSOUT')]
+    assert rosout == [
+        f'ROSOUT 20 rosout_probe.kid <module> {line_of(script, "here-main")} from main True',
+        f'ROSOUT 30 rosout_probe.kid loop {line_of(script, "here-loop")} from the loop True',
+    ]
+
+
+class BlockingWriter:
+    """A LoopLines ``write`` that records each line's thread and holds the first one."""
+
+    def __init__(self):
+        self.lines = []
+        self.entered = threading.Event()
+        self.release = threading.Event()
+
+    def __call__(self, line):
+        self.lines.append((threading.current_thread().name, line.name, line.message))
+        self.entered.set()
+        assert self.release.wait(10.0)
+
+
+def test_a_loop_threads_line_never_waits_for_the_write():
+    writer = BlockingWriter()
+    lines = LoopLines(write=writer)
+    try:
+        with loop_thread():
+            lines.put(LogLine(20, 'rm_robot', 'first', 'f', 'p', 1))
+            assert writer.entered.wait(10.0)  # the write of 'first' now blocks
+            for i in range(50):
+                lines.put(LogLine(20, 'rm_robot', f'then {i}', 'f', 'p', 1))
+        assert [t for t, _, _ in writer.lines] == ['rm-log']
+    finally:
+        writer.release.set()
+        lines.flush()
+    assert [m for _, _, m in writer.lines] == ['first'] + [f'then {i}' for i in range(50)]
+
+
+def test_when_more_lines_wait_than_the_queue_holds_expect_the_oldest_dropped_and_reported():
+    writer = BlockingWriter()
+    lines = LoopLines(max_lines=3, write=writer)
+    lines.put(LogLine(20, 'rm_robot.gimbal', 'first', 'f', 'p', 1))
+    assert writer.entered.wait(10.0)
+    for i in range(5):
+        lines.put(LogLine(20, 'rm_robot.chassis', f'line {i}', 'f', 'p', 1))
+    writer.release.set()
+    lines.write(LogLine(20, 'rm_robot', 'last', 'f', 'p', 1))
+    assert [(n, m) for _, n, m in writer.lines] == [
+        ('rm_robot.gimbal', 'first'),
+        ('rm_robot.chassis', '2 log line(s) of the control loop dropped: more than 3 waited '
+                             'to be written'),
+        ('rm_robot.chassis', 'line 2'), ('rm_robot.chassis', 'line 3'),
+        ('rm_robot.chassis', 'line 4'), ('rm_robot', 'last'),
+    ]
+    assert lines.dropped == 2
+
+
+def test_outside_a_loop_thread_a_line_is_written_in_the_callers_thread():
+    writer = BlockingWriter()
+    writer.release.set()
+    lines = LoopLines(write=writer)
+    lines.write(LogLine(20, 'rm_robot', 'now', 'f', 'p', 1))
+    assert writer.lines == [(threading.current_thread().name, 'rm_robot', 'now')]

@@ -51,7 +51,7 @@ from rm_base.hardware.timing import (
     DurationSummary,
     PeriodStats,
 )
-from rm_base.realtime import set_fifo_priority
+from rm_base.realtime import loop_thread, set_fifo_priority
 
 _log = logging.getLogger(__name__)
 
@@ -321,50 +321,11 @@ class Scheduler:
                     'the loop runs without real-time priority (SCHED_FIFO %d: %s); '
                     'see docs/PERFORMANCE.md', self.priority, err,
                 )
-        clock = self._clock_ns
-        period = self.period_ns
-        gc_time = self._durations[GC]
         # before the first deadline: taking over collects once, which takes a while
-        holder = garbage.take_over(1e9 / period) if self._collect_garbage else None
-        deadline = clock()
-        next_report = deadline + self._report_period_ns
+        holder = garbage.take_over(1e9 / self.period_ns) if self._collect_garbage else None
         try:
-            while not self._stop.is_set():
-                start = clock()
-                self._record_start(start - deadline)
-                if start >= next_report:
-                    next_report = start + self._report_period_ns
-                    self._log_window()
-                self._tick_deadline_ns = deadline + period
-                try:
-                    self.tick(start)
-                except Exception as exc:
-                    self._errors += 1
-                    _log.exception('scheduler tick failed')
-                    if self.on_error is None or not self.on_error(exc):
-                        _log.error('scheduler stopped after an error')
-                        break
-                self._tick_deadline_ns = None
-                observer = self._observer
-                if observer is not None:
-                    observer(start - deadline, clock() - start)
-                if holder is not None:
-                    t0 = time.perf_counter_ns()
-                    if garbage.collect_if_due(holder) is not None:
-                        gc_time.record(time.perf_counter_ns() - t0)
-                end = clock()
-                self._max_tick_ns = max(self._max_tick_ns, end - start)
-                deadline += period
-                if end > deadline:
-                    self._overruns += 1
-                    # Late by less than a period: the next tick runs at once, late, in its
-                    # own period. Periods that passed whole are skipped, never burst.
-                    missed = (end - deadline) // period
-                    self._skipped += missed
-                    deadline += missed * period
-                delay_ns = deadline - clock()
-                if delay_ns > 0:
-                    self._sleep(delay_ns / 1e9)
+            with loop_thread():  # its log lines are written by another thread
+                self._loop(holder)
         finally:
             if holder is not None:
                 garbage.give_back(holder)
@@ -373,6 +334,50 @@ class Scheduler:
                     self._final()
                 except Exception:
                     _log.exception('scheduler final callback failed')
+
+    def _loop(self, holder: garbage.Holder | None) -> None:
+        """Tick until stopped or a tick's error ends the loop (``_run``'s body)."""
+        clock = self._clock_ns
+        period = self.period_ns
+        gc_time = self._durations[GC]
+        deadline = clock()
+        next_report = deadline + self._report_period_ns
+        while not self._stop.is_set():
+            start = clock()
+            self._record_start(start - deadline)
+            if start >= next_report:
+                next_report = start + self._report_period_ns
+                self._log_window()
+            self._tick_deadline_ns = deadline + period
+            try:
+                self.tick(start)
+            except Exception as exc:
+                self._errors += 1
+                _log.exception('scheduler tick failed')
+                if self.on_error is None or not self.on_error(exc):
+                    _log.error('scheduler stopped after an error')
+                    break
+            self._tick_deadline_ns = None
+            observer = self._observer
+            if observer is not None:
+                observer(start - deadline, clock() - start)
+            if holder is not None:
+                t0 = time.perf_counter_ns()
+                if garbage.collect_if_due(holder) is not None:
+                    gc_time.record(time.perf_counter_ns() - t0)
+            end = clock()
+            self._max_tick_ns = max(self._max_tick_ns, end - start)
+            deadline += period
+            if end > deadline:
+                self._overruns += 1
+                # Late by less than a period: the next tick runs at once, late, in its
+                # own period. Periods that passed whole are skipped, never burst.
+                missed = (end - deadline) // period
+                self._skipped += missed
+                deadline += missed * period
+            delay_ns = deadline - clock()
+            if delay_ns > 0:
+                self._sleep(delay_ns / 1e9)
 
     def time_left_ns(self) -> int | None:
         """Time until the running tick's deadline (the next period's start) [ns].

@@ -8,6 +8,7 @@ import pytest
 from rm_base.hardware.errors import HardwareConfigError
 from rm_base.hardware.scheduler import Scheduler
 from rm_base.hardware.timing import HISTOGRAM_EDGES_US
+from rm_base.realtime import in_loop_thread
 from support.hardware import MS, T0
 from support.ros import wait_until
 
@@ -363,3 +364,30 @@ def test_a_loop_told_not_to_leaves_garbage_collection_to_the_interpreter():
     assert gc.isenabled()
     scheduler.stop()
     assert dict(scheduler.component_stats())['gc'].count == 0
+
+
+
+class LoopMark:
+    """A stage that records whether it runs in a thread marked as a control loop's."""
+
+    name = 'mark'
+
+    def __init__(self):
+        self.marks = []
+
+    def __call__(self, now_ns, dt):
+        self.marks.append(in_loop_thread())
+        return False
+
+
+def test_the_loop_thread_is_marked_as_one_while_it_ticks_and_not_in_final():
+    scheduler, _ = make([], rate_hz=1000.0)
+    probe = LoopMark()
+    scheduler.add_stage(probe)
+    scheduler.tick(T0)  # a stepped tick runs in the caller's thread: not a loop's
+    final = []
+    scheduler.start(final=lambda: final.append(in_loop_thread()))
+    assert wait_until(lambda: len(probe.marks) >= 5, timeout=10.0)
+    scheduler.stop()
+    assert probe.marks[0] is False and all(probe.marks[1:]) and final == [False]
+    assert not in_loop_thread()
