@@ -17,6 +17,7 @@ import time
 
 import pytest
 import rclpy
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from fixtures.extra_plugins import install_extra_plugins
 from geometry_msgs.msg import TwistStamped
 from rclpy.experimental import EventsExecutor
@@ -352,6 +353,24 @@ def test_state_is_published_periodically(harness):
     assert (heartbeat.state_name, heartbeat.reason, heartbeat.enabled) == (
         'ACTIVE', 'counting', True
     )
+
+
+def test_the_inbox_reports_what_it_took_per_topic_on_diagnostics(harness):
+    h = harness(plugins=['echo'], state_period=0.05, **echo(rate=50.0, command_timeout=5.0))
+    diagnostics = h.collect(DiagnosticArray, '/diagnostics')
+    h.start()
+    publish_once(h, 1.0)
+
+    def inbox_status():
+        statuses = [s for m in diagnostics for s in m.status if s.name == 'rm_robot: inbox']
+        return statuses[-1] if statuses else None
+
+    assert wait_until(
+        lambda: (s := inbox_status()) is not None
+        and {kv.key: kv.value for kv in s.values}.get('/echo_cmd taken') == '1', WAIT)
+    status = inbox_status()
+    assert (status.level, status.message) == (DiagnosticStatus.OK, 'ok')
+    assert {kv.key: kv.value for kv in status.values}['/echo_cmd dropped'] == '0'
 
 
 def test_shutdown_disables_every_plugin_with_zero_output(harness):

@@ -18,13 +18,13 @@ Levels:
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections.abc import Mapping, Sequence
 from typing import Any
 
 from builtin_interfaces.msg import Time
-from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 
+from rm_base.diagnostic_status import diagnostic_status
 from rm_base.hardware import BusStats, HoldReason, JointState, Mode, PeriodStats
 from rm_base.hardware.timing import HISTOGRAM_EDGES_US
 
@@ -68,24 +68,6 @@ class CommandStats:
     def rejected_total(self) -> int:
         """All rejected messages."""
         return sum(self.rejected.values())
-
-
-def _kv(key: str, value: Any) -> KeyValue:
-    if isinstance(value, float):
-        text = 'nan' if math.isnan(value) else f'{value:.6g}'
-    else:
-        text = str(value)
-    return KeyValue(key=key, value=text)
-
-
-def _status(name: str, level: bytes, message: str, hardware_id: str, values: dict) -> Any:
-    return DiagnosticStatus(
-        level=level,
-        name=name,
-        message=message,
-        hardware_id=hardware_id,
-        values=[_kv(k, v) for k, v in values.items()],
-    )
 
 
 class DiagnosticsReporter:
@@ -156,7 +138,7 @@ class DiagnosticsReporter:
             'update_errors': diag['update_errors'],
             **diag.get('details', {}),
         }
-        return _status(
+        return diagnostic_status(
             f'{self._prefix}joint {state.name}',
             level,
             message,
@@ -188,7 +170,9 @@ class DiagnosticsReporter:
             'open_failures': stats.open_failures,
             'last_error': stats.last_error or '',
         }
-        return _status(f'{self._prefix}bus {stats.name}', level, message, stats.name, values)
+        return diagnostic_status(
+            f'{self._prefix}bus {stats.name}', level, message, stats.name, values
+        )
 
     def _scheduler(self, stats: PeriodStats) -> DiagnosticStatus:
         new_overruns = stats.overruns - self._last_overruns
@@ -227,7 +211,7 @@ class DiagnosticsReporter:
             values[f'{name} p50 [us]'] = summary.p50_us
             values[f'{name} p99 [us]'] = summary.p99_us
             values[f'{name} max [us]'] = summary.max_us
-        return _status(f'{self._prefix}scheduler', level, message, 'scheduler', values)
+        return diagnostic_status(f'{self._prefix}scheduler', level, message, 'scheduler', values)
 
     def _commands(self, stats: CommandStats) -> DiagnosticStatus:
         total = stats.rejected_total
@@ -241,4 +225,4 @@ class DiagnosticsReporter:
         values: dict[str, Any] = {'accepted': stats.accepted, 'rejected': total}
         values.update({f'rejected {reason}': n for reason, n in sorted(stats.rejected.items())})
         values['last_rejection'] = stats.last_rejection or ''
-        return _status(f'{self._prefix}commands', level, message, 'actuator_cmd', values)
+        return diagnostic_status(f'{self._prefix}commands', level, message, 'actuator_cmd', values)

@@ -56,6 +56,7 @@ from rm_base.hardware.config import SAFETY_SCHEMA, SCHEDULER_SCHEMA
 from rm_base.hardware.errors import CommandRejectedError, ValueRangeError
 from rm_base.node_main import inbox_node
 from rm_base.plugin.inbox import Inbox
+from rm_base.plugin.inbox_status import InboxReport
 from rm_base.plugin.params import PluginParams
 from rm_base.plugin.remote_power import POWER_LIMIT_QOS, POWER_LIMIT_TOPIC
 from rm_base.realtime import EDGE_PRIORITY, LOOP_PRIORITY
@@ -205,6 +206,7 @@ class CanBridgeNode(Node):
                 lambda msg, _receive_ns: self._on_actuator_cmd(msg), _COMMAND_QOS,
             )
             hw.scheduler.add_stage(self._inbox)
+        self._inbox_report = InboxReport(self.get_name())
         # rm_robot in a process of its own asks for its power stages here (rare: executor)
         self._power_limits = RemotePowerLimits(hw)
         self.power_limit_rejections = 0
@@ -536,6 +538,9 @@ class CanBridgeNode(Node):
             self.command_stats(),
             self.get_clock().now().to_msg(),
         )
+        inbox = self._inbox
+        if inbox is not None:  # /actuator_cmd taken and dropped
+            msg.status.append(self._inbox_report.status(inbox))
         publish(self._diagnostics_pub, msg)
 
     def publish_frames(self) -> None:

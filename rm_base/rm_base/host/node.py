@@ -8,6 +8,7 @@ from collections.abc import Callable
 from enum import Enum
 from typing import Any
 
+from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.duration import Duration
 from rclpy.node import Node
 from std_srvs.srv import SetBool
@@ -19,6 +20,7 @@ from rm_base.plugin import PluginBase, PluginLoader, PluginParams
 from rm_base.plugin.errors import ParameterError
 from rm_base.plugin.inbox import STAGE_NAME as INBOX_STAGE
 from rm_base.plugin.inbox import Inbox
+from rm_base.plugin.inbox_status import InboxReport
 from rm_base.plugin.node_io import DdsJointIO, NodeIO, node_io, use_local_io
 from rm_base.plugin.outbox import Outbox
 from rm_base.realtime import (
@@ -68,7 +70,8 @@ class RobotHost(Node):
     - Services: ``~/<name>/enable`` (std_srvs/SetBool) per plugin and
       ``~/enable_all`` (std_srvs/SetBool, true = enable all, false = disable all).
     - Publishes each plugin's rm_msgs/PluginState on ``~/<name>/state`` (latched) at
-      every transition and every ``state_period`` seconds.
+      every transition and every ``state_period`` seconds, and with them its inbox's
+      status on /diagnostics (``<node>: inbox``: messages taken and dropped per topic).
     - ``shutdown()`` (also run by ``destroy_node``) takes the plugins out of the loop,
       then disables every plugin, so zero output is sent before the node goes away.
     - Lowers the interpreter's GIL switch interval to 0.5 ms (process-wide) so a busy
@@ -132,6 +135,9 @@ class RobotHost(Node):
         # ticks that differ from run to run, so nothing takes them.
         self._inbox = Inbox(inbox_node(self), self.get_clock()) if take_from_dds else None
         io.inbox = self._inbox
+        self._inbox_report = InboxReport(node_name)
+        self._diagnostics_pub = self._outbox.wrap(
+            self.create_publisher(DiagnosticArray, '/diagnostics', 10))
         self._warned_foreign: set[str] = set()
         self._io = io
         self._outbox.start()
@@ -377,6 +383,12 @@ class RobotHost(Node):
     def _on_state_timer(self) -> None:
         for task in self._tasks.values():
             task.plugin.publish_state()
+        inbox = self._inbox
+        if inbox is not None and self._diagnostics_pub.heard():
+            msg = DiagnosticArray()
+            msg.header.stamp = self.get_clock().now().to_msg()
+            msg.status = [self._inbox_report.status(inbox)]
+            self._diagnostics_pub.publish(msg)
         for topic, count in self._io.foreign_publishers().items():
             if topic not in self._warned_foreign:
                 self._warned_foreign.add(topic)
