@@ -119,3 +119,24 @@ def power_scale(hardware: Any, joint: str) -> Callable[[], float] | None:
                 return 1.0 if last is None else float(last.scale)
             return scale
     return None
+
+
+class FeedSpan:
+    """The longest the shooter fed (FEED or PUSH) without a break, from its sampled states.
+
+    A jammed trigger shows only once it stalled for the shooter's jam time while feeding: a
+    feed that ended sooner (the last step of a burst) cannot show it.
+    """
+
+    def __init__(self) -> None:
+        self._since: float | None = None
+        self.longest = 0.0  # [s]
+
+    def sample(self, feeding: bool, now: float) -> None:
+        """One sampled state: whether the shooter was feeding at now [s]."""
+        if not feeding:
+            self._since = None
+            return
+        if self._since is None:
+            self._since = now
+        self.longest = max(self.longest, now - self._since)

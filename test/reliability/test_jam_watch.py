@@ -13,7 +13,7 @@ from rm_base.hardware import MODE_POSITION, MODE_VELOCITY
 from rm_base.joints import Mode
 from rm_base.sim import Fault
 
-from reliability.jam_watch import JamWatch, power_scale, stall_demand, stall_push
+from reliability.jam_watch import FeedSpan, JamWatch, power_scale, stall_demand, stall_push
 from reliability.rigs import LockstepRig
 
 YAW = {
@@ -149,3 +149,19 @@ def test_power_scale_reads_the_stage_of_the_joints_group():
     stage.last = SimpleNamespace(scale=0.8)
     assert scale() == 0.8
     assert power_scale(hardware, 'yaw') is None
+
+
+def test_the_feed_span_is_the_longest_unbroken_feed():
+    span = FeedSpan()
+    for now, feeding in [(0.00, True), (0.02, True), (0.07, True), (0.09, False),
+                         (0.30, True), (0.40, True), (0.52, True), (0.60, False)]:
+        span.sample(feeding, now)
+    assert span.longest == pytest.approx(0.22)  # 0.30 -> 0.52, not 0.00 -> 0.52
+
+
+def test_a_feed_seen_once_lasts_nothing():
+    span = FeedSpan()
+    span.sample(False, 0.0)
+    span.sample(True, 0.1)
+    span.sample(False, 0.2)
+    assert span.longest == 0.0

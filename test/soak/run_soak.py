@@ -59,7 +59,7 @@ from rclpy.context import Context  # noqa: E402
 from rclpy.experimental import EventsExecutor  # noqa: E402
 from rclpy.parameter import Parameter  # noqa: E402
 from rclpy.qos import qos_profile_sensor_data  # noqa: E402
-from reliability.jam_watch import JamWatch, power_scale  # noqa: E402
+from reliability.jam_watch import FeedSpan, JamWatch, power_scale  # noqa: E402
 from reliability.referee_watch import RefereeWatch  # noqa: E402
 from reliability.rigs import WireWatch, hardware_config  # noqa: E402
 from reliability.wire import check_actuator_states, max_efforts  # noqa: E402
@@ -369,6 +369,12 @@ class FaultInjector:
         self.robot = robot
         self.rng = rng
         self.tally = Tally()
+        shooter = load_parameters(CONFIG_FILES)['rm_robot']
+        # The shooter counts a jam after the trigger stalled this long while feeding; its
+        # state reaches the soak up to two state periods late.
+        self.trigger_jam_s = (
+            float(shooter['shooter.jam.time']) + 2.0 / float(shooter['shooter.state_rate'])
+        )
         kinds = ['offline', 'jam', 'over_temperature', 'garbage', 'bus_off']
         weights = [3, 2, 2, 2, 1]
         if host_restarts:
@@ -424,28 +430,33 @@ class FaultInjector:
     def _jam(self) -> FaultRecord:
         """Detected: trigger -> the shooter counts a jam or blocks; any other joint -> its
         output reaches its clamp (the loop pushes against the stall). Not judged: a trigger
-        not asked to feed, or another joint whose commands never asked its loop for a push
-        that reaches the clamp against a stall (reliability.jam_watch)."""
+        not asked to feed for as long as the shooter's jam rule needs, or another joint
+        whose commands never asked its loop for a push that reaches the clamp against a
+        stall (reliability.jam_watch)."""
         joint = self.rng.choice(('trigger', 'trigger', 'friction_l', 'wheel_fl', 'yaw'))
         rec = self._record('jam', joint)
         before = self.robot.state('shooter_state')
         jams = before.jam_count if before is not None else 0
         self.robot.world.inject(joint, Fault.jam())
-        fed = []  # trigger: whether the shooter fed while jammed
+        fed = FeedSpan()  # trigger: how long the shooter fed while jammed
         watch = JamWatch(self.robot.joint(joint), power_scale(self.robot.hardware, joint))
 
         def shown() -> bool:
             if joint != 'trigger':
                 return watch.sample()
             s = self.robot.state('shooter_state')
-            fed.append(s is not None and s.state in (ShooterState.FEED, ShooterState.PUSH))
+            feeding = s is not None and s.state in (ShooterState.FEED, ShooterState.PUSH)
+            fed.sample(feeding, time.monotonic())
             return s is not None and (s.jam_count > jams or s.state == ShooterState.BLOCK)
 
         lat = wait_for(shown, 3.0)
         if lat is not None:
             rec.detected, rec.latency_ms = True, 1e3 * lat
-        elif joint == 'trigger' and not any(fed):
-            rec.note = 'not asked to feed while jammed: nothing to detect'
+        elif joint == 'trigger' and fed.longest < self.trigger_jam_s:
+            rec.note = (
+                f'fed for {1e3 * fed.longest:.0f} ms while jammed, under the '
+                f'{1e3 * self.trigger_jam_s:.0f} ms the shooter needs to see a jam'
+            )
         elif joint != 'trigger' and not watch.judged:
             rec.note = f'never asked for a push that reaches the clamp: {watch.note()}'
         else:
