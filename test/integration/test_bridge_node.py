@@ -329,6 +329,25 @@ def test_malformed_commands_are_rejected_whole_and_counted(make_rig):
     assert rig.bridge.command_stats().accepted == 0
 
 
+def test_targets_computed_from_another_bridges_states_are_refused(make_rig):
+    # rm_robot echoes the stamp of the states its targets came from: after a restart of
+    # the bridge, a position computed against the old bridge's encoders is refused.
+    rig = make_rig()
+    rig.state()  # the first /actuator_states reached the driver
+    first = rig.latest['actuator_states'].header.stamp
+    old = velocity_cmd({'wheel': TARGET})
+    old.states_stamp.sec, old.states_stamp.nanosec = first.sec - 1, first.nanosec
+    rig.command = old
+    assert wait_until(lambda: rig.bridge.command_stats().rejected.get('old_states', 0) >= 3, WAIT)
+    assert wait_until(lambda: len(rig.wheel_currents()) >= ZERO_RUN, WAIT)
+    assert not any(rig.wheel_currents()) and rig.bridge.command_stats().accepted == 0
+    assert 'older than this bridge' in rig.bridge.command_stats().last_rejection
+    own = velocity_cmd({'wheel': TARGET})
+    own.states_stamp = rig.latest['actuator_states'].header.stamp
+    rig.command = own
+    assert wait_until(rig.spinning, WAIT), rig.bridge.command_stats()
+
+
 def test_parameters_cannot_be_changed_at_run_time(make_rig):
     rig = make_rig()
     typed, hardware = rig.bridge.set_parameters(

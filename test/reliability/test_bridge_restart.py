@@ -21,6 +21,8 @@ import time
 
 import pytest
 from rm_base.bridge import CanBridgeNode
+from rm_base.hardware.can_hardware import CanHardware
+from rm_base.joints import Mode
 from support.robot import SHOOTER_SIM_LOADS, SimRobot, _parameter
 from support.ros import wait_until
 
@@ -73,7 +75,7 @@ def shooter(robot: SimRobot) -> ShooterState | None:
 
 
 def test_when_the_bridge_restarts_expect_the_shooter_safe_meanwhile_and_no_shot_on_its_own(
-    shooter_robot,
+    shooter_robot, monkeypatch
 ):
     robot = shooter_robot
     robot.publish('/shoot_cmd', ShootCmd(mode=ShootCmd.READY, speed=15.0), rate_hz=50.0)
@@ -89,6 +91,14 @@ def test_when_the_bridge_restarts_expect_the_shooter_safe_meanwhile_and_no_shot_
     assert held > 3 * SLOT
 
     mark = len(robot.history('/shooter_state'))
+    applied = []  # (hardware, joint, target) of every target a bridge applied
+    real_set_target = CanHardware.set_target
+
+    def set_target(hardware, name, target, **kwargs):
+        applied.append((hardware, name, target))
+        real_set_target(hardware, name, target, **kwargs)
+
+    monkeypatch.setattr(CanHardware, 'set_target', set_target)
     restart_bridge(robot)
     restarted = time.monotonic()
     # A new world: the trigger starts at 0. The new bridge's loop takes /actuator_cmd from
@@ -99,14 +109,17 @@ def test_when_the_bridge_restarts_expect_the_shooter_safe_meanwhile_and_no_shot_
     assert wait_until(
         lambda: (s := shooter(robot)) and s.state == ShooterState.READY and s.header.stamp, WAIT
     )
-    # What the robot guarantees today: the new trigger is never driven to the old hold.
-    # Until the shooter sees the joint states go stale (its joint_timeout), the new bridge
-    # applies the hold it keeps sending, and the trigger turns towards the old hold, then
-    # coasts once the shooter goes PASSIVE: 0.3-2.5 slots in the runs measured
-    # (docs/RELIABILITY.md, "A restarted bridge applies the old bridge's hold": open).
+    # The new trigger is never driven towards the old hold: the shooter keeps sending it
+    # until it sees the joint states go stale, and the new bridge refuses it, computed
+    # from the old bridge's states (docs/RELIABILITY.md, "A restarted bridge").
     while time.monotonic() < restarted + 1.5:  # long enough for a 3 rad move at 12 rad/s
         assert trigger_angle(robot) < held - SLOT, 'the trigger went back to the old hold'
         time.sleep(0.01)
+    new_hardware = robot.bridge.hardware
+    trigger = [t for hw, name, t in applied if hw is new_hardware and name == 'trigger']
+    assert trigger, 'the new bridge applied no trigger target'
+    old_holds = [t for t in trigger if t.mode == Mode.POSITION and t.position > held - SLOT]
+    assert not old_holds, f'the new bridge applied the old hold: {old_holds[0]}'
     # The shooter noticed, and said why: the joint states went stale in between (PASSIVE
     # naming the trigger), or, when the new bridge answered within the joint timeout, the
     # trigger was far from its hold (FEED again; in 2 of 6 runs, which before 2026-11-21

@@ -10,6 +10,12 @@ or within ``safety.command_timeout_s`` of the bridge's clock (:func:`check_stamp
 command delayed or replayed from long ago (or from a sender whose clock is far ahead) would
 otherwise be applied as new, and drive a motor for another command timeout.
 
+A message is also computed from *this bridge's* states (:func:`check_states_stamp`): its
+``states_stamp`` is zero (not computed from states) or no older than the first states this
+bridge published. After a restart the bridge's encoders count from a new zero, so a
+position computed against the old bridge's states would drive the motor somewhere else
+(docs/RELIABILITY.md, "A restarted bridge").
+
 Only a well-formed, fresh message is applied, all of its joints in the same callback; one bad
 entry rejects the whole message. A plugin's message is one coordinated set of targets
 (four mecanum wheels, a yaw/pitch pair): applying three of four wheels would turn a
@@ -71,6 +77,34 @@ def check_stamp(msg: object, now_ns: int, timeout_s: float) -> int:
             Rejection.STALE, f'stamp is {when} (command timeout {timeout_s:g} s)'
         )
     return max(0, age_ns)
+
+
+def check_states_stamp(msg: object, first_states_ns: int | None) -> None:
+    """Reject a message computed from states this bridge did not publish.
+
+    Args:
+        msg: the message; a missing ``states_stamp`` or a zero one passes.
+        first_states_ns: stamp [ns] of the first states this bridge published (None
+            before it published any). The sender echoes stamps of this bridge's clock,
+            so the two compare whatever the sender's clock.
+
+    Raises:
+        ActuatorCmdRejectedError: ``Rejection.OLD_STATES``.
+    """
+    stamp = getattr(msg, 'states_stamp', None)
+    if stamp is None or not (stamp.sec or stamp.nanosec):
+        return
+    if first_states_ns is None:
+        raise ActuatorCmdRejectedError(
+            Rejection.OLD_STATES, 'computed from joint states, and this bridge has sent none yet'
+        )
+    before_s = (first_states_ns - (stamp.sec * 1_000_000_000 + stamp.nanosec)) / 1e9
+    if before_s > 0:
+        raise ActuatorCmdRejectedError(
+            Rejection.OLD_STATES,
+            f"computed from joint states {before_s:.3f} s older than this bridge's first "
+            '(another bridge, before a restart)',
+        )
 
 
 def parse_actuator_cmd(

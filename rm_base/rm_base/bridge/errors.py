@@ -36,6 +36,7 @@ class Rejection(enum.Enum):
     NON_FINITE = 'non_finite'  # NaN or inf in any value
     NEGATIVE_GAIN = 'negative_gain'  # kp or kd < 0
     STALE = 'stale'  # header stamp older than the command timeout (or as far in the future)
+    OLD_STATES = 'old_states'  # computed from states older than this bridge's first
 
 
 class ActuatorCmdRejectedError(InputRejectedError):

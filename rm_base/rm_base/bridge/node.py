@@ -23,7 +23,7 @@ from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 
 from rm_base import compiled
-from rm_base.bridge.commands import check_stamp, parse_actuator_cmd
+from rm_base.bridge.commands import check_stamp, check_states_stamp, parse_actuator_cmd
 from rm_base.bridge.diagnostics import CommandStats, DiagnosticsReporter
 from rm_base.bridge.errors import (
     ActuatorCmdRejectedError,
@@ -94,8 +94,9 @@ class CanBridgeNode(Node):
       loop (update all, pack all, send) and enforces every safety rule.
     - Subscribes ``actuator_cmd`` (rm_msgs/ActuatorCmd, reliable): each well-formed
       message is applied whole; a malformed or stale one (stamp older than the command
-      timeout) is rejected whole, counted per reason and logged at most once a second per
-      call site (:mod:`rm_base.bridge.commands`).
+      timeout), or one computed from states older than this bridge's first (another
+      bridge's, before a restart), is rejected whole, counted per reason and logged at
+      most once a second per call site (:mod:`rm_base.bridge.commands`).
     - Publishes ``joint_states`` (sensor_msgs/JointState, output shaft, SI) and
       ``actuator_states`` (rm_msgs/ActuatorState) at ``publish_rate``, ``/diagnostics``
       at ``diagnostics_rate`` (:mod:`rm_base.bridge.diagnostics`), and with
@@ -137,6 +138,9 @@ class CanBridgeNode(Node):
         self._accepted = 0
         self._rejected: dict[str, int] = {}
         self._last_rejection: str | None = None
+        # stamp of the first states published [ns]: targets computed from older ones are
+        # another bridge's (bridge/commands.py, check_states_stamp)
+        self._first_states_ns: int | None = None
         self._frames_dropped_reported = 0
         self.states_unheard = 0  # state publications skipped: nobody subscribed
         try:
@@ -437,6 +441,7 @@ class CanBridgeNode(Node):
         try:
             age_ns = check_stamp(msg, self.get_clock().now().nanoseconds,
                                  self._command_timeout_s)
+            check_states_stamp(msg, self._first_states_ns)
             # checked whole here (every joint is this bridge's): applied without a second look
             for name, target in parse_actuator_cmd(msg, self._joints):
                 self.hardware.set_target(name, target, age_ns=age_ns)
@@ -513,7 +518,10 @@ class CanBridgeNode(Node):
             self.states_unheard += 1
             return
         states = self.hardware.states()
-        stamp = self.get_clock().now().to_msg()
+        now = self.get_clock().now()
+        if self._first_states_ns is None:  # before the publish: a reply may come at once
+            self._first_states_ns = now.nanoseconds
+        stamp = now.to_msg()
         if joints and actuators:
             joint_states, actuator_states = state_msgs(states, stamp)
             publish(self._joint_states_pub, joint_states)

@@ -47,6 +47,7 @@ from tf2_msgs.msg import TFMessage
 
 from rm_base.errors import ConfigError
 from rm_base.geometry.frame_tree import FrameTree
+from rm_base.joints import JointState
 from rm_base.plugin.commands import CommandInput
 from rm_base.plugin.errors import PluginConfigError, PluginInitError, TargetRejectedError
 from rm_base.plugin.frames import TF_QOS, TF_STATIC_QOS, FramePublisher
@@ -129,6 +130,7 @@ class PluginBase:
         self._lost_reason: str | None = None
         self._last_run_ns: int | None = None
         self._tick_now: Time | None = None  # the now of the run() in progress
+        self._tick_states: Mapping[str, JointState] | None = None  # its joint states
         self._next_error_log_ns = 0
         self._suppressed_errors = 0
 
@@ -261,6 +263,8 @@ class PluginBase:
             dt = (now_ns - last) / _NS_PER_S if last is not None else 1.0 / self.rate
         self._last_run_ns = now_ns
         self._tick_now = now
+        # what this run's targets are computed from (a split bridge checks their stamp)
+        self._tick_states = self._nio.joint_states.snapshot()
         try:
             reasons = [
                 reason
@@ -281,6 +285,7 @@ class PluginBase:
             self._on_run_error(err, now_ns)
         finally:
             self._tick_now = None
+            self._tick_states = None
 
     # -- framework: state ---------------------------------------------------------------
 
@@ -579,7 +584,7 @@ class PluginBase:
         now = self._tick_now
         if now is None:
             now = self.node.get_clock().now()
-        self._nio.send(targets, now)
+        self._nio.send(targets, now, self._tick_states)
 
     def _on_transition(self, change: Transition) -> None:
         if change.previous == change.current:

@@ -54,6 +54,22 @@ def build_actuator_cmd(targets: Mapping[str, JointTarget]) -> ActuatorCmd:
     )
 
 
+def oldest_stamp(states: Mapping[str, JointState], joints: Iterable[str]) -> int:
+    """The oldest state stamp [ns] of joints in states: what targets for them came from.
+
+    0 when a joint has no state (targets not computed from states; the bridge takes them
+    as a hand-written command).
+    """
+    oldest = 0
+    for joint in joints:
+        state = states.get(joint)
+        if state is None:
+            return 0
+        if not oldest or state.stamp_ns < oldest:
+            oldest = state.stamp_ns
+    return oldest
+
+
 _STATE_ARRAYS = (
     'position', 'velocity', 'effort', 'temperature', 'online', 'error_code', 'mode', 'command',
 )

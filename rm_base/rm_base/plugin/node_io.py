@@ -40,7 +40,7 @@ from rm_base.geometry.frame_tree import FrameTree
 from rm_base.joints import JointState, JointTarget
 from rm_base.plugin.errors import JointClaimError, TargetRejectedError
 from rm_base.plugin.inbox import Inbox
-from rm_base.plugin.joints import JointStateView, build_actuator_cmd, check_targets
+from rm_base.plugin.joints import JointStateView, build_actuator_cmd, check_targets, oldest_stamp
 from rm_base.plugin.outbox import Outbox
 from rm_base.plugin.remote_power import POWER_LIMIT_QOS, POWER_LIMIT_TOPIC, RemotePowerStage
 from rm_msgs.msg import ActuatorCmd, ActuatorState, PowerLimit
@@ -99,8 +99,19 @@ class NodeIO(abc.ABC):
         self._local: dict[str, int] = {}  # topic: publishers of this node's plugins
 
     @abc.abstractmethod
-    def send(self, targets: Mapping[str, JointTarget], now: Time) -> None:
+    def send(
+        self,
+        targets: Mapping[str, JointTarget],
+        now: Time,
+        states: Mapping[str, JointState] | None = None,
+    ) -> None:
         """Apply one coordinated set of joint targets (all or none), stamped now.
+
+        Args:
+            targets: {joint: target}.
+            now: the time they are for.
+            states: the joint states they were computed from (the view at the start of
+                the plugin's run); None: the view now.
 
         Raises:
             TargetRejectedError: a target is invalid (``check_targets``); nothing is sent.
@@ -280,15 +291,26 @@ class DdsJointIO(NodeIO):
         )
         self._power_limit_pub: Any = None
 
-    def send(self, targets: Mapping[str, JointTarget], now: Time) -> None:
+    def send(
+        self,
+        targets: Mapping[str, JointTarget],
+        now: Time,
+        states: Mapping[str, JointState] | None = None,
+    ) -> None:
         """Publish targets as one rm_msgs/ActuatorCmd stamped now.
 
+        Its ``states_stamp`` is the oldest stamp of their joints' states, so a bridge
+        restarted since refuses them (docs/RELIABILITY.md, "A restarted bridge").
         Through the host's outbox where it has one: the loop thread never hands a message
         to DDS, whose send can block while a node joins (docs/PERFORMANCE.md, "A publish
         that stopped every thread").
         """
         msg = build_actuator_cmd(targets)
         msg.header.stamp = now.to_msg()
+        used = self.joint_states.snapshot() if states is None else states
+        msg.states_stamp.sec, msg.states_stamp.nanosec = divmod(
+            oldest_stamp(used, targets), 1_000_000_000
+        )
         self._command_publisher().publish(msg)
 
     def _command_publisher(self) -> Any:
@@ -319,7 +341,12 @@ class LocalJointIO(NodeIO):
         self._hardware = hardware
         self._power_limits: list[str] = []
 
-    def send(self, targets: Mapping[str, JointTarget], now: Time) -> None:
+    def send(
+        self,
+        targets: Mapping[str, JointTarget],
+        now: Time,
+        states: Mapping[str, JointState] | None = None,
+    ) -> None:
         """Set targets on the actuators (checked here, once; the hardware clock stamps them)."""
         set_target = self._hardware.set_target
         for joint, target in check_targets(targets):

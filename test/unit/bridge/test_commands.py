@@ -3,7 +3,7 @@
 import math
 
 import pytest
-from rm_base.bridge.commands import check_stamp, parse_actuator_cmd
+from rm_base.bridge.commands import check_stamp, check_states_stamp, parse_actuator_cmd
 from rm_base.bridge.errors import ActuatorCmdRejectedError, Rejection
 from rm_base.joints import JointTarget, Mode
 
@@ -95,3 +95,39 @@ def test_when_a_stamp_is_beyond_the_timeout_expect_stale(age_s, text):
     with pytest.raises(ActuatorCmdRejectedError, match=text) as info:
         check_stamp(stamped(age_s), NOW_NS, 0.1)
     assert info.value.reason is Rejection.STALE
+
+
+FIRST_NS = NOW_NS - 2_000_000_000  # this bridge published its first states 2 s ago
+
+
+def from_states(stamp_ns: int) -> ActuatorCmd:
+    msg = ActuatorCmd()
+    msg.states_stamp.sec, msg.states_stamp.nanosec = divmod(stamp_ns, 1_000_000_000)
+    return msg
+
+
+@pytest.mark.parametrize(
+    ('stamp_ns', 'first_ns'),
+    [
+        (0, FIRST_NS),  # not computed from states: a hand-written command
+        (0, None),
+        (FIRST_NS, FIRST_NS),  # from this bridge's very first states
+        (FIRST_NS + 5_000_000, FIRST_NS),
+    ],
+)
+def test_targets_from_this_bridges_states_or_from_none_pass(stamp_ns, first_ns):
+    check_states_stamp(from_states(stamp_ns), first_ns)
+
+
+@pytest.mark.parametrize(
+    ('stamp_ns', 'first_ns', 'text'),
+    [
+        (FIRST_NS - 1_000_000, FIRST_NS, '0.001 s older than this bridge.s first'),
+        (FIRST_NS - 1, FIRST_NS, '0.000 s older'),
+        (FIRST_NS, None, 'this bridge has sent none yet'),
+    ],
+)
+def test_targets_from_states_before_this_bridges_first_are_rejected(stamp_ns, first_ns, text):
+    with pytest.raises(ActuatorCmdRejectedError, match=text) as info:
+        check_states_stamp(from_states(stamp_ns), first_ns)
+    assert info.value.reason is Rejection.OLD_STATES

@@ -10,7 +10,7 @@ from rm_base.plugin.node_io import DdsJointIO
 from rm_base.plugin.outbox import Outbox
 from support.ros import spin_until, wait_until
 
-from rm_msgs.msg import ActuatorCmd
+from rm_msgs.msg import ActuatorCmd, ActuatorState
 
 
 def _io_and_bridge(context):
@@ -58,5 +58,27 @@ def test_without_an_outbox_joint_targets_are_published_at_once(ros_context):
     io.send({'wheel': JointTarget(Mode.EFFORT, effort=0.5)}, node.get_clock().now())
     assert spin_until(bridge, lambda: got)
     assert list(got[0].name) == ['wheel'] and got[0].effort[0] == 0.5
+    bridge.destroy_node()
+    node.destroy_node()
+
+
+def test_joint_targets_carry_the_stamp_of_the_states_they_came_from(ros_context):
+    node, io, bridge, got = _io_and_bridge(ros_context)
+    state = ActuatorState(name=['wheel', 'yaw'], position=[0.0, 0.0], velocity=[0.0, 0.0],
+                          effort=[0.0, 0.0], temperature=[0.0, 0.0], online=[True, True],
+                          error_code=[0, 0])
+    state.header.stamp.sec, state.header.stamp.nanosec = 100, 5
+    io.joint_states.handle(state, receive_ns=1)
+    run_start = io.joint_states.snapshot()
+    state.header.stamp.sec = 101  # newer states, arrived while the plugin ran
+    io.joint_states.handle(state, receive_ns=2)
+    target = {'wheel': JointTarget(Mode.POSITION, position=3.3)}
+    io.send(target, node.get_clock().now(), run_start)
+    io.send(target, node.get_clock().now())  # outside a run: the view now
+    io.send({'lift': JointTarget(Mode.OFF)}, node.get_clock().now())  # no state: from none
+    assert spin_until(bridge, lambda: len(got) == 3)
+    assert [(m.states_stamp.sec, m.states_stamp.nanosec) for m in got] == [
+        (100, 5), (101, 5), (0, 0)
+    ]
     bridge.destroy_node()
     node.destroy_node()

@@ -6,6 +6,7 @@ import threading
 import pytest
 from rm_base.plugin import JointStateView, JointTarget, Mode, TargetRejectedError
 from rm_base.plugin import build_actuator_cmd as build
+from rm_base.plugin.joints import oldest_stamp
 
 from rm_msgs.msg import ActuatorCmd, ActuatorState
 
@@ -87,6 +88,17 @@ def test_view_returns_the_latest_state_per_joint():
     assert b.online and b.error_code == 0 and b.mode == Mode.VELOCITY
     assert b.stamp_ns == 123  # zero header stamp: receive time
     assert view.get('c') is None
+
+
+def test_targets_come_from_the_oldest_state_of_their_joints_or_from_none():
+    view = JointStateView()
+    view.handle(actuator_state(['a', 'b']), receive_ns=10)
+    view.handle(actuator_state(['b']), receive_ns=20)
+    states = view.snapshot()
+    assert oldest_stamp(states, ['b']) == 20
+    assert oldest_stamp(states, ['b', 'a']) == 10
+    assert oldest_stamp(states, ['a', 'never_seen']) == 0  # not computed from states
+    assert oldest_stamp(states, []) == 0
 
 
 def test_messages_with_disjoint_joints_are_merged():
