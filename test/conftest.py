@@ -15,3 +15,12 @@ def ros_context():
     """A private rclpy Context on the test domain, shut down after the test."""
     with rclpy_context() as context:
         yield context
+
+
+@pytest.fixture(autouse=True)
+def loop_lines_in_their_test():
+    """Write what a control loop logged before the test ends (its thread writes later)."""
+    yield
+    from rm_base.ros_logging import flush_loop_lines  # imports rclpy: after the isolation
+
+    flush_loop_lines()

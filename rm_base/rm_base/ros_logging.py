@@ -164,6 +164,15 @@ _LOOP_LINES = LoopLines()
 atexit.register(_LOOP_LINES.flush)
 
 
+def flush_loop_lines() -> None:
+    """Write the control loops' queued lines now, in the calling thread.
+
+    At exit this happens by itself; a test calls it so that a loop's lines show in the
+    output of the test that logged them, not after it.
+    """
+    _LOOP_LINES.flush()
+
+
 def emit(line: LogLine) -> None:
     """Write line now, or from the writing thread if the caller runs a control loop."""
     if in_loop_thread():

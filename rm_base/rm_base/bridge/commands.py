@@ -79,6 +79,15 @@ def check_stamp(msg: object, now_ns: int, timeout_s: float) -> int:
     return max(0, age_ns)
 
 
+def first_states_stamp(first_ns: int | None, stamp_ns: int) -> int:
+    """The stamp this bridge's states count from, after publishing states stamped stamp_ns.
+
+    The first stamp it published; a clock that went back (simulated time replayed again)
+    starts the count anew, else every target computed since would be refused.
+    """
+    return stamp_ns if first_ns is None or stamp_ns < first_ns else first_ns
+
+
 def check_states_stamp(msg: object, first_states_ns: int | None) -> None:
     """Reject a message computed from states this bridge did not publish.
 

@@ -23,7 +23,12 @@ from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 
 from rm_base import compiled
-from rm_base.bridge.commands import check_stamp, check_states_stamp, parse_actuator_cmd
+from rm_base.bridge.commands import (
+    check_stamp,
+    check_states_stamp,
+    first_states_stamp,
+    parse_actuator_cmd,
+)
 from rm_base.bridge.diagnostics import CommandStats, DiagnosticsReporter
 from rm_base.bridge.errors import (
     ActuatorCmdRejectedError,
@@ -519,8 +524,8 @@ class CanBridgeNode(Node):
             return
         states = self.hardware.states()
         now = self.get_clock().now()
-        if self._first_states_ns is None:  # before the publish: a reply may come at once
-            self._first_states_ns = now.nanoseconds
+        # before the publish: a reply may come at once
+        self._first_states_ns = first_states_stamp(self._first_states_ns, now.nanoseconds)
         stamp = now.to_msg()
         if joints and actuators:
             joint_states, actuator_states = state_msgs(states, stamp)

@@ -3,7 +3,12 @@
 import math
 
 import pytest
-from rm_base.bridge.commands import check_stamp, check_states_stamp, parse_actuator_cmd
+from rm_base.bridge.commands import (
+    check_stamp,
+    check_states_stamp,
+    first_states_stamp,
+    parse_actuator_cmd,
+)
 from rm_base.bridge.errors import ActuatorCmdRejectedError, Rejection
 from rm_base.joints import JointTarget, Mode
 
@@ -131,3 +136,15 @@ def test_targets_from_states_before_this_bridges_first_are_rejected(stamp_ns, fi
     with pytest.raises(ActuatorCmdRejectedError, match=text) as info:
         check_states_stamp(from_states(stamp_ns), first_ns)
     assert info.value.reason is Rejection.OLD_STATES
+
+
+@pytest.mark.parametrize(
+    ('first_ns', 'stamp_ns', 'counted_from'),
+    [
+        (None, 500, 500),  # the first states published
+        (500, 700, 500),  # later states: still counted from the first
+        (500, 300, 300),  # the clock went back (simulated time replayed): anew
+    ],
+)
+def test_a_bridges_states_count_from_its_first_stamp(first_ns, stamp_ns, counted_from):
+    assert first_states_stamp(first_ns, stamp_ns) == counted_from
