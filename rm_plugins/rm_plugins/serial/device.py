@@ -16,7 +16,8 @@ from enum import IntEnum
 from typing import Any
 
 import serial
-from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
+from diagnostic_msgs.msg import DiagnosticStatus
+from rm_base.diagnostic_status import diagnostic_status
 from rm_base.plugin import PluginConfigError, PluginParams
 
 from rm_plugins.serial.reader import FrameStream, ReaderStats, SerialReader
@@ -228,13 +229,8 @@ def link_status(
     level = LEVELS[state]
     if level == DiagnosticStatus.OK and new_bad:
         level = DiagnosticStatus.WARN
-    status = DiagnosticStatus(
-        level=level,
-        name=name,
-        message=reason if not new_bad else f'{reason}; {new_bad} bad frame(s) skipped',
-        hardware_id=settings.port,
-    )
-    every = {
+    message = reason if not new_bad else f'{reason}; {new_bad} bad frame(s) skipped'
+    return diagnostic_status(name, level, message, settings.port, {
         'state': state.name,
         'port': settings.port,
         'baudrate [bit/s]': settings.baudrate,
@@ -250,6 +246,4 @@ def link_status(
         'open_failures': stats.open_failures,
         'port_losses': stats.port_losses,
         'last_error': stats.last_error or '',
-    }
-    status.values = [KeyValue(key=k, value=str(v)) for k, v in every.items()]
-    return status
+    })
