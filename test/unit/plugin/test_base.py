@@ -156,6 +156,32 @@ def test_when_run_sends_targets_expect_them_stamped_with_the_ticks_now(plugin, s
     assert (sent[-1].header.stamp.sec, sent[-1].header.stamp.nanosec) == (1000, 10 * MS)
 
 
+def wheel_state(stamp_ns):
+    msg = ActuatorState(name=['wheel'], position=[0.0], velocity=[0.0], effort=[0.0],
+                        temperature=[0.0], online=[True], error_code=[0])
+    msg.header.stamp.sec, msg.header.stamp.nanosec = divmod(stamp_ns, 1_000_000_000)
+    return msg
+
+
+def test_targets_carry_the_stamp_of_the_states_their_run_started_with(plugin, sent):
+    plugin.joint_states.handle(wheel_state(T0), receive_ns=T0)
+    plugin.enable()
+    command(plugin, 1.5, T0)
+    real_update = plugin.update
+
+    def update(now, dt):  # newer states arrive while the plugin runs
+        plugin.joint_states.handle(wheel_state(T0 + 3 * MS), receive_ns=T0 + 3 * MS)
+        real_update(now, dt)
+
+    plugin.update = update
+    plugin.run(at(T0 + 5 * MS))
+    stamp = sent[-1].states_stamp
+    assert (stamp.sec, stamp.nanosec) == (1000, 0)  # T0: what the run started from
+    plugin.disable()  # outside a run: the view now
+    stamp = sent[-1].states_stamp
+    assert (stamp.sec, stamp.nanosec) == (1000, 3 * MS)
+
+
 def test_when_disabled_outside_a_tick_expect_zero_output_stamped_by_the_clock(plugin, node, sent):
     plugin.enable()
     before = node.get_clock().now().nanoseconds
