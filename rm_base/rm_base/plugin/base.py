@@ -47,11 +47,10 @@ from tf2_msgs.msg import TFMessage
 
 from rm_base.errors import ConfigError
 from rm_base.geometry.frame_tree import FrameTree
-from rm_base.joints import JointState
 from rm_base.plugin.commands import CommandInput
 from rm_base.plugin.errors import PluginConfigError, PluginInitError, TargetRejectedError
 from rm_base.plugin.frames import TF_QOS, TF_STATIC_QOS, FramePublisher
-from rm_base.plugin.joints import JointStateView, JointTarget
+from rm_base.plugin.joints import JointStates, JointStateView, JointTarget
 from rm_base.plugin.node_io import NodeIO, node_io
 from rm_base.plugin.outbox import is_heard, publish_built
 from rm_base.plugin.params import PluginParams
@@ -130,7 +129,7 @@ class PluginBase:
         self._lost_reason: str | None = None
         self._last_run_ns: int | None = None
         self._tick_now: Time | None = None  # the now of the run() in progress
-        self._tick_states: Mapping[str, JointState] | None = None  # its joint states
+        self._tick_states: JointStates | None = None  # the joint states it started with
         self._next_error_log_ns = 0
         self._suppressed_errors = 0
 

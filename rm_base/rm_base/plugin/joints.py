@@ -18,8 +18,13 @@ from rm_base.joints import InvalidTargetError, JointState, JointTarget, Mode, ch
 from rm_base.plugin.errors import TargetRejectedError
 from rm_msgs.msg import ActuatorCmd, ActuatorState
 
+#: {joint: target}: one coordinated set of a plugin's joint targets.
+JointTargets = Mapping[str, JointTarget]
+#: {joint: state}: the joint states a plugin reads (a snapshot of the view).
+JointStates = Mapping[str, JointState]
 
-def check_targets(targets: Mapping[str, JointTarget]) -> list[tuple[str, JointTarget]]:
+
+def check_targets(targets: JointTargets) -> list[tuple[str, JointTarget]]:
     """Validate a plugin's joint targets where they enter, once (``rm_base.joints``).
 
     Raises:
@@ -36,7 +41,7 @@ def check_targets(targets: Mapping[str, JointTarget]) -> list[tuple[str, JointTa
     return out
 
 
-def build_actuator_cmd(targets: Mapping[str, JointTarget]) -> ActuatorCmd:
+def build_actuator_cmd(targets: JointTargets) -> ActuatorCmd:
     """Return one ActuatorCmd holding targets (header left for the caller to stamp).
 
     Raises:
@@ -54,7 +59,7 @@ def build_actuator_cmd(targets: Mapping[str, JointTarget]) -> ActuatorCmd:
     )
 
 
-def oldest_stamp(states: Mapping[str, JointState], joints: Iterable[str]) -> int:
+def oldest_stamp(states: JointStates, joints: Iterable[str]) -> int:
     """The oldest state stamp [ns] of joints in states: what targets for them came from.
 
     0 when a joint has no state (targets not computed from states; the bridge takes them

@@ -28,7 +28,7 @@ from __future__ import annotations
 import abc
 import threading
 import weakref
-from collections.abc import Callable, Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Sequence
 from typing import Any, Protocol
 
 from rclpy.qos import qos_profile_sensor_data
@@ -40,7 +40,14 @@ from rm_base.geometry.frame_tree import FrameTree
 from rm_base.joints import JointState, JointTarget
 from rm_base.plugin.errors import JointClaimError, TargetRejectedError
 from rm_base.plugin.inbox import Inbox
-from rm_base.plugin.joints import JointStateView, build_actuator_cmd, check_targets, oldest_stamp
+from rm_base.plugin.joints import (
+    JointStates,
+    JointStateView,
+    JointTargets,
+    build_actuator_cmd,
+    check_targets,
+    oldest_stamp,
+)
 from rm_base.plugin.outbox import Outbox
 from rm_base.plugin.remote_power import POWER_LIMIT_QOS, POWER_LIMIT_TOPIC, RemotePowerStage
 from rm_msgs.msg import ActuatorCmd, ActuatorState, PowerLimit
@@ -99,12 +106,7 @@ class NodeIO(abc.ABC):
         self._local: dict[str, int] = {}  # topic: publishers of this node's plugins
 
     @abc.abstractmethod
-    def send(
-        self,
-        targets: Mapping[str, JointTarget],
-        now: Time,
-        states: Mapping[str, JointState] | None = None,
-    ) -> None:
+    def send(self, targets: JointTargets, now: Time, states: JointStates | None = None) -> None:
         """Apply one coordinated set of joint targets (all or none), stamped now.
 
         Args:
@@ -291,12 +293,7 @@ class DdsJointIO(NodeIO):
         )
         self._power_limit_pub: Any = None
 
-    def send(
-        self,
-        targets: Mapping[str, JointTarget],
-        now: Time,
-        states: Mapping[str, JointState] | None = None,
-    ) -> None:
+    def send(self, targets: JointTargets, now: Time, states: JointStates | None = None) -> None:
         """Publish targets as one rm_msgs/ActuatorCmd stamped now.
 
         Its ``states_stamp`` is the oldest stamp of their joints' states, so a bridge
@@ -341,12 +338,7 @@ class LocalJointIO(NodeIO):
         self._hardware = hardware
         self._power_limits: list[str] = []
 
-    def send(
-        self,
-        targets: Mapping[str, JointTarget],
-        now: Time,
-        states: Mapping[str, JointState] | None = None,
-    ) -> None:
+    def send(self, targets: JointTargets, now: Time, states: JointStates | None = None) -> None:
         """Set targets on the actuators (checked here, once; the hardware clock stamps them)."""
         set_target = self._hardware.set_target
         for joint, target in check_targets(targets):
