@@ -1,16 +1,15 @@
 """CanBridgeNode: the thin rclpy edge over the CAN hardware layer (``can_bridge``).
 
-Why one module: the node's set-up (parameters, simulator or hardware, publishers, services)
-and its ROS edges; the work is in the modules it imports.
+Why one module: the node's set-up (simulator or hardware, publishers, services) and its
+ROS edges; the work is in the modules it imports, its parameters in
+:mod:`rm_base.bridge.node_params`.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import functools
 import threading
 import time
-from collections.abc import Callable
 from typing import Any
 
 import can
@@ -23,18 +22,9 @@ from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 
 from rm_base import compiled
-from rm_base.bridge.commands import (
-    check_stamp,
-    check_states_stamp,
-    first_states_stamp,
-    parse_actuator_cmd,
-)
+from rm_base.bridge.command_input import ActuatorCmdInput
 from rm_base.bridge.diagnostics import CommandStats, DiagnosticsReporter
-from rm_base.bridge.errors import (
-    ActuatorCmdRejectedError,
-    BridgeConfigError,
-    PowerLimitRejectedError,
-)
+from rm_base.bridge.errors import BridgeConfigError, PowerLimitRejectedError
 from rm_base.bridge.frames import FrameTap
 from rm_base.bridge.messages import (
     actuator_state_msg,
@@ -43,28 +33,19 @@ from rm_base.bridge.messages import (
     state_msgs,
     time_msg,
 )
-from rm_base.bridge.params import (
-    BridgeSettings,
-    is_ros_own,
-    plain,
-    settings_from_parameters,
-    with_sim_world,
-)
+from rm_base.bridge.node_params import read_parameters
+from rm_base.bridge.params import with_sim_world
 from rm_base.bridge.power_limits import RemotePowerLimits, parse_power_limit
 from rm_base.bridge.sim_config import world_config
 from rm_base.bridge.sim_services import SimFaultServices
-from rm_base.calibration import CalibrationError, CalibrationFile, joint_zero_offsets
-from rm_base.config_schema import Schema
+from rm_base.calibration import CalibrationError
 from rm_base.hardware import CanHardware
 from rm_base.hardware.bus import BusFactory
-from rm_base.hardware.config import SAFETY_SCHEMA, SCHEDULER_SCHEMA
 from rm_base.hardware.errors import CommandRejectedError, ValueRangeError
 from rm_base.node_main import inbox_node
 from rm_base.plugin.inbox import Inbox
 from rm_base.plugin.inbox_status import InboxReport
-from rm_base.plugin.params import PluginParams
 from rm_base.plugin.remote_power import POWER_LIMIT_QOS, POWER_LIMIT_TOPIC
-from rm_base.realtime import EDGE_PRIORITY, LOOP_PRIORITY
 from rm_base.ros_logging import FastLogger
 from rm_base.ros_publish import publish
 from rm_base.sim import SimConfigError, SimWorld, Timing
@@ -139,13 +120,7 @@ class CanBridgeNode(Node):
         self._publisher_thread: threading.Thread | None = None
         self._tick_done = threading.Event()
         self._inbox: Inbox | None = None
-        self._stats_lock = threading.Lock()
-        self._accepted = 0
-        self._rejected: dict[str, int] = {}
-        self._last_rejection: str | None = None
-        # stamp of the first states published [ns]: targets computed from older ones are
-        # another bridge's (bridge/commands.py, check_states_stamp)
-        self._first_states_ns: int | None = None
+        self._commands: ActuatorCmdInput | None = None
         self._frames_dropped_reported = 0
         self.states_unheard = 0  # state publications skipped: nobody subscribed
         try:
@@ -156,7 +131,8 @@ class CanBridgeNode(Node):
 
     # --- set-up ------------------------------------------------------------------------
     def _setup(self) -> None:
-        self.settings = settings = self._read_parameters()
+        settings, self._calibration = read_parameters(self)
+        self.settings = settings
         hardware = dict(settings.hardware)
         if settings.sim is not None:
             try:
@@ -185,7 +161,11 @@ class CanBridgeNode(Node):
         else:
             self.hardware = hw = CanHardware(hardware, bus_factory=bus_factory)
         self._joints = frozenset(hw.joint_names)
-        self._command_timeout_s = settings.hardware_config.safety.command_timeout_s
+        self._commands = commands = ActuatorCmdInput(
+            hw, self._joints, settings.hardware_config.safety.command_timeout_s,
+            lambda: self.get_clock().now().nanoseconds,
+            self._warn_rejected,
+        )
         self._diagnostics = DiagnosticsReporter(
             NODE_NAME,
             {j.name: f'{j.bus} {j.type} id {j.id}' for j in settings.hardware_config.joints},
@@ -206,13 +186,13 @@ class CanBridgeNode(Node):
         if self.stepped:  # lockstep: the test's executor delivers, in its own order
             self._inbox = None
             self._command_sub = self.create_subscription(
-                ActuatorCmd, 'actuator_cmd', self._on_actuator_cmd, _COMMAND_QOS
+                ActuatorCmd, 'actuator_cmd', commands, _COMMAND_QOS
             )
         else:  # the loop hands /actuator_cmd out at the start of each tick (no executor hop)
             self._inbox = Inbox(inbox_node(self), self.get_clock(), name='actuator_cmd')
             self._inbox.subscribe(
                 ActuatorCmd, self.resolve_topic_name('actuator_cmd'),
-                lambda msg, _receive_ns: self._on_actuator_cmd(msg), _COMMAND_QOS,
+                lambda msg, _receive_ns: commands(msg), _COMMAND_QOS,
             )
             hw.scheduler.add_stage(self._inbox)
         self._inbox_report = InboxReport(self.get_name())
@@ -251,144 +231,6 @@ class CanBridgeNode(Node):
             f', {_loop_build()}'
         )
 
-    def _read_parameters(self) -> BridgeSettings:
-        self._check_sim_group()
-        params = PluginParams(self, plugin='', prefix='')
-        typed: dict[str, Any] = {}
-
-        def fresh(name: str) -> str:
-            # Declared from the overrides already (if set): redeclare with a descriptor.
-            if self.has_parameter(name):
-                self.undeclare_parameter(name)
-            return name
-
-        def declare(name: str, read: Callable[..., Any], *args: Any, **kwargs: Any) -> None:
-            typed[name] = read(fresh(name), *args, **kwargs)
-
-        def declare_schema(prefix: str, schema: Schema, **defaults: Any) -> None:
-            group = params.group(prefix)
-            for key in schema.keys:
-                if key.name in defaults:
-                    key = dataclasses.replace(key, default=defaults[key.name])  # noqa: PLW2901
-                fresh(group.key(key.name))
-                typed[group.key(key.name)] = group.declare_key(key)
-
-        declare(
-            'publish_rate',
-            params.double,
-            200.0,
-            unit='Hz',
-            gt=0.0,
-            le=1000.0,
-            description='rate of joint_states and actuator_states',
-        )
-        declare(
-            'diagnostics_rate',
-            params.double,
-            1.0,
-            unit='Hz',
-            gt=0.0,
-            le=100.0,
-            description='rate of /diagnostics',
-        )
-        declare(
-            'publish_frames',
-            params.boolean,
-            False,
-            description='publish every CAN frame sent and received on ~/frames (debugging)',
-        )
-        declare(
-            'log_file',
-            params.string,
-            '',
-            description='python-can log of every frame (.asc/.blf/.log/...); empty: none; '
-            'with several buses <stem>_<bus><suffix>',
-        )
-        # a robot's loop runs at real-time priority
-        declare_schema('scheduler', SCHEDULER_SCHEMA, priority=LOOP_PRIORITY)
-        declare(
-            'scheduler.edge_priority',
-            params.integer,
-            EDGE_PRIORITY,
-            ge=0,
-            le=99,
-            description="real-time priority the executable gives the process's other "
-            'threads, below the loop (a thread holding the GIL must not be preempted); 0: '
-            'normal scheduling',
-        )
-        declare(
-            'scheduler.one_cpu',
-            params.boolean,
-            True,
-            description='the executable runs every Python thread of the process on one CPU '
-            '(scheduler.cpu), where the loop keeps the GIL for its whole tick',
-        )
-        declare(
-            'scheduler.cpu',
-            params.integer,
-            -1,
-            description='with scheduler.one_cpu, which CPU: an index into the CPUs the '
-            'process may use, -1 the last',
-        )
-        declare_schema('safety', SAFETY_SCHEMA)
-        declare(
-            'sim',
-            params.boolean,
-            False,
-            description='run every bus on the simulator rm_sim (world from sim.* and joints)',
-        )
-        declare(
-            'sim.timing',
-            params.choice,
-            Timing,
-            Timing.REALTIME,
-            description='realtime: a physics thread; stepped: only sim_world.step() (tests)',
-        )
-        declare(
-            'sim.seed',
-            params.integer,
-            0,
-            ge=0,
-            description='random seed of the simulated world (garbage faults)',
-        )
-        declare(
-            'calibration.file',
-            params.string,
-            '',
-            description='calibration file (~ and ${VAR} expanded): joint zeros set by '
-            '~/<joint>/set_zero are kept there and replace joints.<joint>.zero_offset at '
-            'start-up; empty: zeros last until the node stops',
-        )
-        declare(
-            'calibration.max_speed',
-            params.double,
-            0.05,
-            unit='rad/s',
-            gt=0.0,
-            description='a joint turning faster is moving: set_zero refuses',
-        )
-        open_params = {
-            name: plain(parameter.value)
-            for name, parameter in self._parameters_under('').items()
-            if name not in typed and not is_ros_own(name)
-        }
-        self._calibration = (
-            CalibrationFile(typed['calibration.file']) if typed['calibration.file'] else None
-        )
-        if self._calibration is not None:
-            for joint, zero in joint_zero_offsets(self._calibration).items():
-                if not any(name.startswith(f'joints.{joint}.') for name in open_params):
-                    self.get_logger().warning(
-                        f'{self._calibration.path} has a zero for joint {joint!r}, which '
-                        'this robot does not have: ignored'
-                    )
-                    continue
-                open_params[f'joints.{joint}.zero_offset'] = zero
-                self.get_logger().info(
-                    f'{joint}: zero_offset {zero:.6f} rad from {self._calibration.path}'
-                )
-        return settings_from_parameters(typed, open_params)
-
     def _on_set_zero(
         self, joint: str, request: Trigger.Request, response: Trigger.Response
     ) -> Trigger.Response:
@@ -421,47 +263,9 @@ class CanBridgeNode(Node):
         self.get_logger().info(message)
         return True, message
 
-    def _parameters_under(self, prefix: str) -> dict[str, Parameter]:
-        # rclpy 7.1.6 annotates the values as parameter values; they are Parameter objects
-        parameters: dict[str, Any] = self.get_parameters_by_prefix(prefix)
-        return parameters
-
-    def _check_sim_group(self) -> None:
-        # A params file with both `sim: true` and a `sim:` group (one YAML key twice) is
-        # read by rcl as no `sim` at all and the `true` moved onto the group's first key.
-        if self.has_parameter('sim'):
-            return
-        for name, parameter in self._parameters_under('sim').items():
-            if isinstance(parameter.value, bool):
-                raise BridgeConfigError(
-                    f"parameter 'sim.{name}' is {parameter.value} and 'sim' is missing: the "
-                    "params file has the key 'sim' twice (sim: true and a sim: group); write "
-                    "sim: true and the group's keys as dotted names: sim.timing: realtime, "
-                    'sim.body: {...}, sim.imu: {...}'
-                )
-
     # --- callbacks -----------------------------------------------------------------------
-    def _on_actuator_cmd(self, msg: ActuatorCmd) -> None:
-        assert self.hardware is not None
-        try:
-            age_ns = check_stamp(msg, self.get_clock().now().nanoseconds,
-                                 self._command_timeout_s)
-            check_states_stamp(msg, self._first_states_ns)
-            # checked whole here (every joint is this bridge's): applied without a second look
-            for name, target in parse_actuator_cmd(msg, self._joints):
-                self.hardware.set_target(name, target, age_ns=age_ns)
-        except ActuatorCmdRejectedError as err:
-            with self._stats_lock:
-                count = self._rejected.get(err.reason.value, 0) + 1
-                self._rejected[err.reason.value] = count
-                self._last_rejection = f'{err.reason.value}: {err}'
-            self.get_logger().warning(
-                f'rejected /actuator_cmd ({err.reason.value}, {count} so far): {err}',
-                throttle_duration_sec=_REJECT_LOG_PERIOD,
-            )
-            return
-        with self._stats_lock:
-            self._accepted += 1
+    def _warn_rejected(self, text: str) -> None:
+        self.get_logger().warning(text, throttle_duration_sec=_REJECT_LOG_PERIOD)
 
     def _on_power_limit(self, msg: PowerLimit) -> None:
         try:
@@ -507,8 +311,8 @@ class CanBridgeNode(Node):
     # --- publishing (own thread) -----------------------------------------------------------
     def command_stats(self) -> CommandStats:
         """Counters of the /actuator_cmd input."""
-        with self._stats_lock:
-            return CommandStats(self._accepted, dict(self._rejected), self._last_rejection)
+        assert self._commands is not None
+        return self._commands.stats()
 
     def publish_states(self) -> None:
         """Publish joint_states and actuator_states once (the publisher thread's job).
@@ -524,8 +328,8 @@ class CanBridgeNode(Node):
             return
         states = self.hardware.states()
         now = self.get_clock().now()
-        # before the publish: a reply may come at once
-        self._first_states_ns = first_states_stamp(self._first_states_ns, now.nanoseconds)
+        assert self._commands is not None
+        self._commands.states_published(now.nanoseconds)
         stamp = now.to_msg()
         if joints and actuators:
             joint_states, actuator_states = state_msgs(states, stamp)
