@@ -207,7 +207,8 @@ class SerialReader:
         self._parser = parser
         self._name = name
         self._lock = threading.Lock()
-        self._stats = ReaderStats()
+        self._stats = ReaderStats()  # the rare events; what every read counts is below
+        self._bytes_read = 0  # written by whichever thread reads (the loop when polled)
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._port: Any = None
@@ -280,9 +281,22 @@ class SerialReader:
         return self._thread is not None and self._thread.is_alive()
 
     def stats(self) -> ReaderStats:
-        """Return the counters, read together."""
+        """Return the counters, read together.
+
+        The byte and frame counts are taken here, not copied on every read: they change
+        hundreds of times a second in the control loop, and are read once a second.
+        """
+        parser = self._parser
         with self._lock:
-            return self._stats
+            return dataclasses.replace(
+                self._stats,
+                bytes_read=self._bytes_read,
+                frames_ok=parser.frames_ok,
+                crc_errors=parser.crc_errors,
+                length_errors=parser.length_errors,
+                decode_errors=parser.decode_errors,
+                bytes_discarded=parser.bytes_discarded,
+            )
 
     # -- thread -----------------------------------------------------------------------------
 
@@ -362,17 +376,8 @@ class SerialReader:
                 return f'no byte from {self.url} for {self._silence_ns / _NS_PER_S:.1f} s'
             return None
         self._last_byte_ns = now_ns
-        parser = self._parser
-        samples = parser.feed(data)
-        with self._lock:
-            self._update(
-                bytes_read=self._stats.bytes_read + len(data),
-                frames_ok=parser.frames_ok,
-                crc_errors=parser.crc_errors,
-                length_errors=parser.length_errors,
-                decode_errors=parser.decode_errors,
-                bytes_discarded=parser.bytes_discarded,
-            )
+        samples = self._parser.feed(data)
+        self._bytes_read += len(data)
         for sample in samples:
             try:
                 self._on_sample(sample)

@@ -92,6 +92,7 @@ def test_when_frames_arrive_on_a_pty_expect_each_decoded(tmp_path, reader_factor
     assert got.samples[4].gyr[2] == pytest.approx(0.5, abs=1e-6)
     stats = reader.stats()
     assert stats.frames_ok == 5 and stats.bad_frames == 0 and stats.bytes_discarded == 0
+    assert stats.bytes_read == 5 * len(frame())
     port.close()
 
 
@@ -259,7 +260,9 @@ def test_a_polled_reader_reads_only_when_polled_and_in_the_polling_thread(reader
     # one read of what was waiting, never a blocking read for more
     assert port.reads == [len(frame()) * 5]
     reader.poll()  # nothing waits: no read at all
-    assert port.reads == [len(frame()) * 5] and reader.stats().frames_ok == 5
+    stats = reader.stats()
+    assert port.reads == [len(frame()) * 5] and stats.frames_ok == 5
+    assert stats.bytes_read == len(frame()) * 5
 
 
 def test_a_polled_reader_on_a_pty_reads_what_waits_without_blocking(tmp_path, reader_factory):
