@@ -306,7 +306,8 @@ def test_on_the_simulator_imu_follows_the_turning_gimbal():
     # The whole simulated robot (standard.yaml + standard_sim.yaml) with only the Hi220
     # plugin: the simulated IMU on the gimbal writes HiPNUC 0x91 frames into its pty. The
     # test turns the yaw joint at 2 rad/s (MODE_VELOCITY on /actuator_cmd) and compares
-    # /imu with the simulator's ground truth.
+    # /imu with the simulator's ground truth. The pitch is held level: unpowered, the
+    # nose-heavy gimbal would tip over while the yaw spins up, and tilt /imu's gravity.
     from support.robot import SimRobot
 
     from rm_msgs.msg import ActuatorCmd
@@ -316,13 +317,13 @@ def test_on_the_simulator_imu_follows_the_turning_gimbal():
         robot.publish(
             '/actuator_cmd',
             ActuatorCmd(
-                name=['yaw'],
-                mode=[ActuatorCmd.MODE_VELOCITY],
-                position=[0.0],
-                velocity=[2.0],
-                effort=[0.0],
-                kp=[0.0],
-                kd=[0.0],
+                name=['yaw', 'pitch'],
+                mode=[ActuatorCmd.MODE_VELOCITY, ActuatorCmd.MODE_POSITION],
+                position=[0.0, 0.0],
+                velocity=[2.0, 0.0],
+                effort=[0.0, 0.0],
+                kp=[0.0, 0.0],
+                kd=[0.0, 0.0],
             ),
             rate_hz=100.0,
         )
