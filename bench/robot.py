@@ -137,7 +137,9 @@ class RobotPlan:
     switch_interval_us: float | None = None
 
 
-QUICK_PLAN = RobotPlan(idle_s=0.3, load_s=0.5, steps=3, hold_s=0.12, rest_s=0.25, settle_s=0.3)
+# rest long enough for the wheels to stop between steps on a loaded machine: a step from
+# a wheel still turning is left out (unsettled), and a quick run must keep one
+QUICK_PLAN = RobotPlan(idle_s=0.3, load_s=0.5, steps=4, hold_s=0.15, rest_s=0.6, settle_s=0.3)
 
 
 def _domain_conflict(measure: dict[str, Any]) -> list[str]:

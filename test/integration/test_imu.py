@@ -71,7 +71,36 @@ class Harness(HostedPlugins):
 
 
 @pytest.fixture
-def run(ros_context):
+def ports():
+    """Opens ptys (``ports(path)``); they close after the robot (``run`` depends on this).
+
+    A port closed under a running robot is a device gone: it would log that fault after
+    the test.
+    """
+    opened = []
+
+    def open_port(path):
+        opened.append(Pty(path))
+        return opened[-1]
+
+    yield open_port
+    for port in opened:
+        port.close()
+
+
+@pytest.fixture
+def streamer():
+    """Streams 0x91 frames into the pty it is started on; stops after the robot."""
+    s = Streamer(imusol_frame)
+    yield s
+    s.stop()
+    if s.port is not None:
+        s.port.close()
+
+
+@pytest.fixture
+def run(ros_context, ports, streamer):
+    # ports and streamer are set up first, so they are torn down after the robot
     made = []
 
     def make(port, **params):
@@ -81,15 +110,6 @@ def run(ros_context):
     yield made, make
     for h in made:
         h.close()
-
-
-@pytest.fixture
-def streamer():
-    s = Streamer(imusol_frame)
-    yield s
-    s.stop()
-    if s.port is not None:
-        s.port.close()
 
 
 def test_hi220_loads_by_name(run, tmp_path):
@@ -134,29 +154,26 @@ def test_the_port_name_expands_environment_variables(run, tmp_path, streamer, mo
     assert h.states[-1].reason == f'streaming from {tmp_path}/imu'
 
 
-def test_when_garbage_comes_between_frames_expect_it_skipped_and_counted(run, tmp_path):
+def test_when_garbage_comes_between_frames_expect_it_skipped_and_counted(run, ports, tmp_path):
     _, make = run
     path = str(tmp_path / 'imu')
     h = make(path)
-    port = Pty(path)
-    try:
-        assert wait_until(lambda: h.state() is ImuState.NO_DATA, WAIT)  # open, nothing yet
-        good = imusol_frame()
-        corrupted = bytearray(good)
-        corrupted[30] ^= 0x55
-        garbage = bytes(range(0x20, 0x40))  # 32 bytes with no sync word
-        port.write(garbage + good + bytes(corrupted) + good[:50] + good + garbage + good)
-        # Three good frames get through; the corrupted one and the cut-off one fail their
-        # CRC (the cut-off one's length runs into the next frame, which is then found by
-        # rescanning), and the garbage is discarded.
-        assert wait_until(lambda: len(h.imu) == 3, WAIT)
-        assert wait_until(lambda: (s := h.imu_status()) is not None and s['frames_ok'] == '3', WAIT)
-        status = h.imu_status()
-        assert status['crc_errors'] == '2'
-        assert int(status['bytes_discarded']) >= 2 * len(garbage)
-        assert h.host.plugin('imu').error_count == 0
-    finally:
-        port.close()
+    port = ports(path)
+    assert wait_until(lambda: h.state() is ImuState.NO_DATA, WAIT)  # open, nothing yet
+    good = imusol_frame()
+    corrupted = bytearray(good)
+    corrupted[30] ^= 0x55
+    garbage = bytes(range(0x20, 0x40))  # 32 bytes with no sync word
+    port.write(garbage + good + bytes(corrupted) + good[:50] + good + garbage + good)
+    # Three good frames get through; the corrupted one and the cut-off one fail their
+    # CRC (the cut-off one's length runs into the next frame, which is then found by
+    # rescanning), and the garbage is discarded.
+    assert wait_until(lambda: len(h.imu) == 3, WAIT)
+    assert wait_until(lambda: (s := h.imu_status()) is not None and s['frames_ok'] == '3', WAIT)
+    status = h.imu_status()
+    assert status['crc_errors'] == '2'
+    assert int(status['bytes_discarded']) >= 2 * len(garbage)
+    assert h.host.plugin('imu').error_count == 0
 
 
 def test_when_frames_stop_expect_no_data_and_no_stale_imu(run, tmp_path, streamer):
@@ -185,27 +202,24 @@ def counted_frame(device_ms):
     ))
 
 
-def test_when_frames_queued_expect_them_stamped_when_the_device_took_them(run, tmp_path):
+def test_when_frames_queued_expect_them_stamped_when_the_device_took_them(run, ports, tmp_path):
     _, make = run
     path = str(tmp_path / 'imu')
     h = make(path)
-    port = Pty(path)
-    try:
-        assert wait_until(lambda: h.state() is ImuState.NO_DATA, WAIT)
-        # 0.3 s of frames as they come, 5 ms apart, the counter in real milliseconds...
-        start = time.monotonic()
-        for k in range(60):
-            time.sleep(max(0.0, start + 0.005 * k - time.monotonic()))
-            port.write(counted_frame(round(1e3 * (time.monotonic() - start))))
-        assert wait_until(lambda: len(h.imu) == 60, WAIT)
-        # ...then 20 frames the device took over 100 ms arrive at once (the serial buffer
-        # of a reader that was starved)
-        time.sleep(0.1)
-        last_ms = round(1e3 * (time.monotonic() - start))
-        port.write(b''.join(counted_frame(last_ms - 5 * (19 - k)) for k in range(20)))
-        assert wait_until(lambda: len(h.imu) == 80, WAIT)
-    finally:
-        port.close()
+    port = ports(path)
+    assert wait_until(lambda: h.state() is ImuState.NO_DATA, WAIT)
+    # 0.3 s of frames as they come, 5 ms apart, the counter in real milliseconds...
+    start = time.monotonic()
+    for k in range(60):
+        time.sleep(max(0.0, start + 0.005 * k - time.monotonic()))
+        port.write(counted_frame(round(1e3 * (time.monotonic() - start))))
+    assert wait_until(lambda: len(h.imu) == 60, WAIT)
+    # ...then 20 frames the device took over 100 ms arrive at once (the serial buffer
+    # of a reader that was starved)
+    time.sleep(0.1)
+    last_ms = round(1e3 * (time.monotonic() - start))
+    port.write(b''.join(counted_frame(last_ms - 5 * (19 - k)) for k in range(20)))
+    assert wait_until(lambda: len(h.imu) == 80, WAIT)
     stamps = [m.header.stamp.sec + m.header.stamp.nanosec * 1e-9 for m in h.imu[60:]]
     # 95 ms apart as taken (a few ms off for the writer's own lateness), not all at receipt
     assert stamps == sorted(stamps)
@@ -272,33 +286,30 @@ def test_a_bad_config_is_one_clear_error(ros_context, tmp_path, params, message)
         )
 
 
-def test_euler_only_legacy_frames_give_an_orientation(run, tmp_path):
+def test_euler_only_legacy_frames_give_an_orientation(run, ports, tmp_path):
     _, make = run
     path = str(tmp_path / 'imu')
     h = make(path)
-    port = Pty(path)
-    try:
-        assert wait_until(lambda: h.state() is ImuState.NO_DATA, WAIT)
-        # Legacy 0xD0 Euler (0.01 deg pitch/roll, 0.1 deg yaw) + 0xB0 gyro (0.1 deg/s).
-        payload = hipnuc.encode_legacy(euler=(0.0, 0.0, math.radians(30.0)), gyr=(0, 0, 0.1),
-                                       user_id=7)
-        port.write(hipnuc.encode_frame(payload))
-        assert wait_until(lambda: len(h.imu) == 1, WAIT)
-        # the unit's user id (0x90) is reported on /diagnostics
-        assert wait_until(lambda: (s := h.imu_status()) is not None and s['user_id'] == '7', WAIT)
-        o = h.imu[0].orientation
-        assert (o.z, o.w) == pytest.approx((math.sin(math.radians(15)), math.cos(math.radians(15))))
-        assert h.imu[0].linear_acceleration_covariance[0] == -1.0  # not provided
-        # A unit that appends an item this driver cannot read (0x83): what came before it
-        # is published, and /diagnostics counts the frames whose tail was left unread.
-        port.write(hipnuc.encode_frame(payload + b'\x83' + bytes(60)))
-        assert wait_until(lambda: len(h.imu) == 2, WAIT)
-        assert wait_until(
-            lambda: (s := h.imu_status()) is not None
-            and s['frames with unread items'] == '1 (item 0x83)', WAIT,
-        )
-    finally:
-        port.close()
+    port = ports(path)
+    assert wait_until(lambda: h.state() is ImuState.NO_DATA, WAIT)
+    # Legacy 0xD0 Euler (0.01 deg pitch/roll, 0.1 deg yaw) + 0xB0 gyro (0.1 deg/s).
+    payload = hipnuc.encode_legacy(euler=(0.0, 0.0, math.radians(30.0)), gyr=(0, 0, 0.1),
+                                   user_id=7)
+    port.write(hipnuc.encode_frame(payload))
+    assert wait_until(lambda: len(h.imu) == 1, WAIT)
+    # the unit's user id (0x90) is reported on /diagnostics
+    assert wait_until(lambda: (s := h.imu_status()) is not None and s['user_id'] == '7', WAIT)
+    o = h.imu[0].orientation
+    assert (o.z, o.w) == pytest.approx((math.sin(math.radians(15)), math.cos(math.radians(15))))
+    assert h.imu[0].linear_acceleration_covariance[0] == -1.0  # not provided
+    # A unit that appends an item this driver cannot read (0x83): what came before it
+    # is published, and /diagnostics counts the frames whose tail was left unread.
+    port.write(hipnuc.encode_frame(payload + b'\x83' + bytes(60)))
+    assert wait_until(lambda: len(h.imu) == 2, WAIT)
+    assert wait_until(
+        lambda: (s := h.imu_status()) is not None
+        and s['frames with unread items'] == '1 (item 0x83)', WAIT,
+    )
 
 
 @pytest.mark.slow

@@ -76,11 +76,12 @@ def rig(ros_context, tmp_path):
         return h
 
     yield make, tmp_path / 'calibration.yaml'
+    # the robot first: a port closed under it is a device gone, a fault it would log
+    for h in made:
+        h.close()
     for s in streamers:
         s.stop()
         s.port.close()
-    for h in made:
-        h.close()
 
 
 def rate(msg):

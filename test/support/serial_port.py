@@ -50,5 +50,7 @@ class Streamer:
                     port.write(self.make_frame())
 
     def stop(self):
+        """Stop writing (a streamer never started has nothing to stop)."""
         self._stop.set()
-        self._thread.join()
+        if self._thread.ident is not None:
+            self._thread.join()
