@@ -1,7 +1,8 @@
 """Measurement 4: how many feedback frames per second the bridge decodes and dispatches.
 
 First the cost of one scheduler tick of the standard robot alone on a thread (update,
-pack, send; the work the 1 kHz loop has to fit). Then three views, all on the bridge's
+pack, send; the work the 1 kHz loop has to fit), back to back and each after a 0.9 ms
+sleep, as the loop runs them. Then three views, all on the bridge's
 own code (``ManagedBus`` receive thread and
 ``dispatch``, the actuators' ``handle_frame``), on rigs without motor physics
 (:mod:`bench.rigs`):
@@ -38,6 +39,8 @@ from bench.stats import linear_fit
 #: (motors, buses) of the CPU-per-motor sweep; 9 is the standard robot itself.
 MOTOR_SWEEP = ((4, 1), (9, 2), (16, 2), (32, 4))
 KNEE_RATES = (5_000, 10_000, 20_000, 30_000, 40_000, 60_000, 80_000)
+#: Sleep after each tick of the slept tick cost [s]: about the loop's own between ticks.
+TICK_PAUSE_S = 0.0009
 
 
 @dataclass(frozen=True)
@@ -46,6 +49,7 @@ class ThroughputPlan:
 
     cost_frames: int = 200_000
     tick_count: int = 5_000
+    slept_tick_count: int = 2_000
     knee_rates: tuple[int, ...] = KNEE_RATES
     knee_s: float = 1.5
     sweep_s: float = 3.0
@@ -55,6 +59,7 @@ class ThroughputPlan:
 QUICK_PLAN = ThroughputPlan(
     cost_frames=20_000,
     tick_count=500,
+    slept_tick_count=200,
     knee_rates=(5_000, 20_000),
     knee_s=0.2,
     sweep_s=0.25,
@@ -85,11 +90,13 @@ def dispatch_cost(frames_total: int) -> dict[str, Any]:
     return {'us_per_frame': cost_ns / 1e3, 'frames_per_cpu_s': 1e9 / cost_ns}
 
 
-def tick_cost(ticks: int) -> dict[str, Any]:
+def tick_cost(ticks: int, pause_s: float = 0.0) -> dict[str, Any]:
     """CPU time of one ``Scheduler.tick`` of the standard robot, alone on one thread.
 
     Every joint online and commanded (velocity targets, fresh feedback every 10 ticks), the
     frames sent to empty rm_sim channels: the work of a tick without any contention.
+    With pause_s, the thread sleeps that long after each tick, as the 1 kHz loop does: on
+    a VM the same work can cost more after a sleep (docs/PERFORMANCE.md, "Latest run").
     """
     rig = Rig(standard_hardware())
     try:
@@ -117,6 +124,8 @@ def tick_cost(ticks: int) -> dict[str, Any]:
             c0 = time.thread_time_ns()
             rig.hw.tick()
             spent += time.thread_time_ns() - c0
+            if pause_s:
+                time.sleep(pause_s)
         holds = {a.hold_reason.value for a in rig.hw.actuators.values()}
     finally:
         rig.close()
@@ -261,6 +270,7 @@ def run_once(plan: ThroughputPlan) -> dict[str, Any]:
     sys.setswitchinterval(0.001)  # as in bringup (RobotHost lowers it process-wide)
     return {
         'tick': tick_cost(plan.tick_count),
+        'tick_after_sleep': tick_cost(plan.slept_tick_count, TICK_PAUSE_S),
         'cost': dispatch_cost(plan.cost_frames),
         'knee': knee(plan),
         'sweep': motor_sweep(plan),
