@@ -62,8 +62,8 @@ def test_when_raw_forward_is_commanded_expect_the_body_to_drive_forward(robot):
     robot.publish('/vel_cmd', forward, rate_hz=20)
     # 1 m/s after a ramp of at most 0.25 s: 0.5 m takes well under a second of sim time.
     assert robot.wait_until(lambda: robot.world.body.x > 0.5, WAIT), robot.world.body.x
-    # Straight ahead within 0.2 rad (11 deg): the wheel loops close in the plugin at
-    # 200 Hz, and a late tick under CPU steal hits the four wheels unevenly.
+    # Straight ahead within 0.2 rad (11 deg): real time, and a late tick under CPU steal
+    # hits the four wheels' velocity loops unevenly.
     assert abs(robot.world.body.y) < 0.2 * robot.world.body.x
 
 
