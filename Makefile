@@ -5,6 +5,8 @@
 
 ROBOT ?= standard
 PYTEST_ARGS ?=
+# pytest-xdist workers of the suite's first pass: auto = one per CPU; 0 = this process
+export TEST_WORKERS ?= auto
 
 .PHONY: all setup test run lint lock clean bench soak
 
@@ -13,9 +15,9 @@ all: test
 setup:
 	@scripts/setup.sh
 
-## test: the whole suite (unit, integration, replay, linters), one pass
+## test: the whole suite (unit, integration, replay, linters), each test once
 test: setup
-	@scripts/with_env.sh python -m pytest $(PYTEST_ARGS)
+	@scripts/run_tests.sh $(PYTEST_ARGS)
 
 ## run: the standard robot on the simulated CAN bus (ROBOT=hero for the hero)
 run: setup

@@ -15,7 +15,7 @@ import sys
 import pytest
 from support.ros import start_process
 
-pytestmark = [pytest.mark.ros, pytest.mark.slow]
+pytestmark = [pytest.mark.ros, pytest.mark.slow, pytest.mark.realtime]
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 TIMEOUT = 180.0  # [s] the quick run takes ~15 s on a quiet machine; generous under load

@@ -37,7 +37,7 @@ from support.ros import wait_until
 
 from rm_msgs.msg import ActuatorCmd, ActuatorState, CanFrame
 
-pytestmark = pytest.mark.ros
+pytestmark = [pytest.mark.ros, pytest.mark.realtime]
 
 WAIT = 10.0  # longest wait for any condition [s]
 TARGET = 20.0  # wheel velocity target [rad/s], well inside the M3508's 50 rad/s

@@ -21,7 +21,7 @@ from support.ros import start_process, stop_process, wait_until
 
 from rm_msgs.msg import ActuatorCmd
 
-pytestmark = [pytest.mark.ros, pytest.mark.slow]
+pytestmark = [pytest.mark.ros, pytest.mark.slow, pytest.mark.realtime]
 
 CAN_BRIDGE = pathlib.Path(get_package_prefix('rm_base')) / 'lib' / 'rm_base' / 'can_bridge'
 WAIT = 15.0  # longest wait for any condition [s], process start-up included

@@ -9,7 +9,7 @@ import pytest
 from ament_index_python.packages import get_package_prefix
 from support.ros import call_idempotent, isolate_ros_environment, wait_until
 
-pytestmark = [pytest.mark.ros, pytest.mark.slow]
+pytestmark = [pytest.mark.ros, pytest.mark.slow, pytest.mark.realtime]
 
 BRINGUP = pathlib.Path(get_package_prefix('rm_bringup')) / 'lib' / 'rm_bringup' / 'bringup'
 

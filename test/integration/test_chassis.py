@@ -276,6 +276,7 @@ def wheel_speeds_near(r: ChassisRig, expected: dict[str, float], tolerance: floa
 # -- loading and configuration ------------------------------------------------------------------
 
 
+@pytest.mark.realtime
 def test_when_loaded_by_name_expect_the_stand_chassis_with_its_wheels(ros_context):
     assert PluginLoader().describe('rm_plugins/StandChassis').package == 'rm_plugins'
     host = RobotHost(context=ros_context, parameter_overrides=robot_parameters())
@@ -907,6 +908,7 @@ def fake(ros_context):
         f.close()
 
 
+@pytest.mark.realtime
 def test_when_omni_drives_forward_expect_the_omni_wheel_targets(fake):
     # Four omni wheels at the corners of the standard chassis (0.283 m from the centre),
     # each rolling counter-clockwise: w_i = (-sin(a_i) vx + cos(a_i) vy + R wz) / r.
@@ -930,6 +932,7 @@ def test_when_omni_drives_forward_expect_the_omni_wheel_targets(fake):
     assert f.wait_until(at_target), f.states[-1] if f.states else None
 
 
+@pytest.mark.realtime
 def test_when_the_wheel_angles_jump_after_a_long_gap_expect_the_odometry_pose_kept(fake):
     f = fake()
     f.commanding = False  # PASSIVE: only the odometry works
@@ -952,6 +955,7 @@ def test_when_the_wheel_angles_jump_after_a_long_gap_expect_the_odometry_pose_ke
     assert f.wait_until(lambda: f.odom[-1].pose.pose.position.x == pytest.approx(2 * radius))
 
 
+@pytest.mark.realtime
 def test_when_following_the_gimbal_without_yaw_feedback_expect_passive_with_the_reason(fake):
     f = fake(yaw_joint='turret')  # a joint the bridge does not report
     f.cmd.mode = ChassisCmd.FOLLOW
@@ -964,6 +968,7 @@ def test_when_following_the_gimbal_without_yaw_feedback_expect_passive_with_the_
     assert f.wait_until(lambda: f.states[-1].state == ChassisCmd.FOLLOW)
 
 
+@pytest.mark.realtime
 def test_when_vel_cmd_is_nan_expect_it_rejected_and_no_motion(fake):
     f = fake()
     f.vel.linear.x = math.nan

@@ -23,7 +23,7 @@ from support.ros import wait_until
 
 from rm_msgs.msg import ActuatorCmd, ActuatorState, GimbalCmd, GimbalState
 
-pytestmark = pytest.mark.ros
+pytestmark = [pytest.mark.ros, pytest.mark.realtime]
 
 WAIT = 10.0  # longest wait for any condition [s]; normally met in well under a second
 

@@ -21,7 +21,7 @@ from support.ros import wait_until
 
 from rm_msgs.msg import ActuatorState, GpioCmd, GpioState
 
-pytestmark = pytest.mark.ros
+pytestmark = [pytest.mark.ros, pytest.mark.realtime]
 
 WAIT = 10.0  # longest wait for a condition [s]; normally met within a few ticks (10 ms)
 SLOT = 2.0 * math.pi / 8  # 8 pockets: 0.785 rad per slot

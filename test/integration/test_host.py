@@ -39,7 +39,7 @@ from support.ros import wait_until
 
 from rm_msgs.msg import ActuatorCmd, PluginState
 
-pytestmark = pytest.mark.ros
+pytestmark = [pytest.mark.ros, pytest.mark.realtime]
 
 RM_BASE_SOURCES = pathlib.Path(__file__).resolve().parents[2] / 'rm_base' / 'rm_base'
 

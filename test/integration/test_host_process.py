@@ -20,7 +20,7 @@ from support.ros import start_process, wait_until
 
 from rm_msgs.msg import ActuatorCmd, PluginState
 
-pytestmark = [pytest.mark.ros, pytest.mark.slow]
+pytestmark = [pytest.mark.ros, pytest.mark.slow, pytest.mark.realtime]
 
 RM_ROBOT = pathlib.Path(get_package_prefix('rm_base')) / 'lib' / 'rm_base' / 'rm_robot'
 

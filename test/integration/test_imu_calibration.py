@@ -22,7 +22,7 @@ from support.serial_port import Pty, Streamer
 
 from rm_msgs.msg import PluginState
 
-pytestmark = pytest.mark.ros
+pytestmark = [pytest.mark.ros, pytest.mark.realtime]
 
 WAIT = 10.0  # longest wait for any condition [s]; normally met in well under a second
 BIAS = (0.004, -0.006, 0.002)  # [rad/s] what the still sensor reads

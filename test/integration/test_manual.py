@@ -19,7 +19,7 @@ from support.serial_port import Pty, Streamer
 
 from rm_msgs.msg import ChassisCmd, GimbalCmd, PluginState, ShootCmd
 
-pytestmark = pytest.mark.ros
+pytestmark = [pytest.mark.ros, pytest.mark.realtime]
 
 WAIT = 10.0  # longest wait for any condition [s]; normally met in well under a second
 

@@ -5,7 +5,7 @@ import pathlib
 import pytest
 from rm_bringup.param_reference import collect, other_robots, render
 
-pytestmark = pytest.mark.ros
+pytestmark = [pytest.mark.ros, pytest.mark.realtime]
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 

@@ -28,7 +28,7 @@ from rm_msgs.msg import (
     RefereeShot,
 )
 
-pytestmark = pytest.mark.ros
+pytestmark = [pytest.mark.ros, pytest.mark.realtime]
 
 WAIT = 10.0  # longest wait for any condition [s]; normally met in well under a second
 

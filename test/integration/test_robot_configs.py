@@ -13,7 +13,7 @@ from support.robot import SimRobot
 
 from rm_msgs.msg import ChassisCmd, GimbalCmd, GimbalState, ShootCmd, ShooterState
 
-pytestmark = [pytest.mark.ros, pytest.mark.slow]
+pytestmark = [pytest.mark.ros, pytest.mark.slow, pytest.mark.realtime]
 
 ROBOTS = ['standard', 'hero']
 JOINTS = {

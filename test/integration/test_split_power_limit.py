@@ -19,6 +19,8 @@ from support.ros import wait_until
 
 from rm_msgs.msg import ChassisCmd, ChassisState
 
+pytestmark = [pytest.mark.ros, pytest.mark.realtime]
+
 WAIT = 15.0  # [s] longest wait for a condition
 AT_REST_S = 1.0  # how long the wheels are watched at rest [s]
 # |effort| a wheel at rest may show: friction and the ramp's last steps, far under the

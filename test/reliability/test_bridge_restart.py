@@ -28,7 +28,7 @@ from support.ros import wait_until
 
 from rm_msgs.msg import ShootCmd, ShooterState
 
-pytestmark = [pytest.mark.ros, pytest.mark.slow]
+pytestmark = [pytest.mark.ros, pytest.mark.slow, pytest.mark.realtime]
 
 WAIT = 10.0  # [s] longest wait for a condition
 SLOT = 2.0 * math.pi / 8  # shooter.slots = 8

@@ -32,6 +32,8 @@ from support.ros import wait_until
 from reliability.rigs import FlakyAdapter, unique_channel
 from reliability.wire import WireChecker
 
+pytestmark = pytest.mark.realtime
+
 WAIT = 10.0  # [s] longest wait for any condition
 GRACE = 0.05  # [s] checker timing grace in real time (CPU steal)
 

@@ -37,7 +37,7 @@ from support.ros import start_process, wait_until
 from reliability.wire import WireChecker
 from rm_msgs.msg import ActuatorCmd
 
-pytestmark = pytest.mark.ros
+pytestmark = [pytest.mark.ros, pytest.mark.realtime]
 
 WAIT = 10.0  # [s] longest wait for any condition
 GRACE = 0.05  # [s] checker timing grace in real time (CPU steal)

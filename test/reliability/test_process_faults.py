@@ -39,7 +39,7 @@ from support.ros import start_process, stop_process, wait_until
 
 from rm_msgs.msg import ActuatorCmd, ActuatorState, ChassisCmd, ChassisState
 
-pytestmark = [pytest.mark.ros, pytest.mark.slow]
+pytestmark = [pytest.mark.ros, pytest.mark.slow, pytest.mark.realtime]
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 CONFIG = ROOT / 'rm_bringup' / 'config'

@@ -388,6 +388,7 @@ def test_after_a_bus_error_the_bus_reopens_and_sends_zero_until_commanded(channe
 
 
 # --- the real scheduler thread ---
+@pytest.mark.realtime
 def test_started_hardware_runs_at_its_rate_and_shuts_down_with_zero(channel):
     cfg = config(channel, safety={'command_timeout_s': 60.0})
     del cfg['joints']['arm']

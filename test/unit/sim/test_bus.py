@@ -240,6 +240,7 @@ def test_when_world_config_file_given_expect_buses_share_one_world(tmp_path):
     assert a.sim.closed
 
 
+@pytest.mark.realtime
 def test_realtime_bus_receives_feedback_from_the_physics_thread():
     with SimBus(unique_channel(), motors=[MOTOR]) as bus:
         assert bus.sim.running

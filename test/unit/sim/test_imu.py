@@ -227,6 +227,7 @@ def test_frame_carries_the_device_clock_when_given(imu_path):
     assert hipnuc.decode_payload(hipnuc.decode_frame(frame)).system_time_ms == 98_765
 
 
+@pytest.mark.realtime
 def test_when_running_in_real_time_expect_the_counter_on_real_time(imu_path):
     # A real IMU's counter runs on whatever the simulation's clock does (it slips when the
     # machine is starved): the world hands it the real-time clock.

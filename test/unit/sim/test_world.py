@@ -108,6 +108,7 @@ def test_stepped_world_has_no_physics_thread(make_world):
         make_world({}).start()
 
 
+@pytest.mark.realtime
 def test_when_physics_raises_expect_on_error_hook_decides():
     errors = []
 
@@ -129,6 +130,7 @@ def test_when_physics_raises_expect_on_error_hook_decides():
         assert isinstance(world.error, RuntimeError)
 
 
+@pytest.mark.realtime
 def test_realtime_world_advances_with_the_wall_clock():
     with SimWorld() as world:
         world.start()
@@ -140,6 +142,7 @@ def test_realtime_world_advances_with_the_wall_clock():
         assert world.time_ns == stopped_at + world.period_ns
 
 
+@pytest.mark.realtime
 def test_when_the_physics_tick_holds_the_lock_expect_send_not_to_wait():
     # A sender waiting for the world lock gives up the GIL and has to win it back; the
     # CAN scheduler lost most of its deadlines that way (bench/). The frame is handed to
