@@ -12,6 +12,9 @@ from rm_base.realtime import in_loop_thread
 from support.hardware import MS, T0
 from support.ros import wait_until
 
+# most tests here run the loop's thread in real time (the rest take milliseconds)
+pytestmark = pytest.mark.realtime
+
 
 class Recorder:
     def __init__(self, events, name, frame=True):
@@ -94,7 +97,6 @@ class SteppedClock:
         self.now += int(seconds * 1e9)
 
 
-@pytest.mark.realtime
 def test_thread_sleeps_to_absolute_deadlines_runs_late_ticks_at_once_and_counts_overruns():
     clock = SteppedClock()
     starts = []
@@ -130,7 +132,6 @@ def test_thread_sleeps_to_absolute_deadlines_runs_late_ticks_at_once_and_counts_
     assert len(stats.histogram) == len(HISTOGRAM_EDGES_US) + 1
 
 
-@pytest.mark.realtime
 def test_an_observer_gets_each_ticks_start_error_and_duration():
     clock = SteppedClock()
     seen = []
@@ -158,7 +159,6 @@ def test_an_observer_gets_each_ticks_start_error_and_duration():
     assert len(seen) == 3
 
 
-@pytest.mark.realtime
 def test_on_error_decides_whether_to_go_on():
     clock = SteppedClock()
     failures = []
@@ -183,7 +183,6 @@ def test_on_error_decides_whether_to_go_on():
     assert not scheduler.running
 
 
-@pytest.mark.realtime
 def test_without_on_error_the_loop_stops_at_the_first_exception():
     clock = SteppedClock()
 
@@ -201,7 +200,6 @@ def test_without_on_error_the_loop_stops_at_the_first_exception():
     assert scheduler.stats().errors == 1
 
 
-@pytest.mark.realtime
 def test_real_thread_runs_and_stops_idempotently():
     events = []
     scheduler, _ = make(events, rate_hz=1000.0)
@@ -273,7 +271,6 @@ def test_a_removed_stage_no_longer_runs_and_a_name_cannot_be_taken_twice():
     scheduler.add_stage(Stage(events, 'plugin x'))  # the name is free again
 
 
-@pytest.mark.realtime
 def test_priority_is_asked_for_on_the_loop_thread_and_a_refusal_is_a_warning(caplog):
     asked = []
 
@@ -290,7 +287,6 @@ def test_priority_is_asked_for_on_the_loop_thread_and_a_refusal_is_a_warning(cap
     assert 'without real-time priority (SCHED_FIFO 50' in caplog.text
 
 
-@pytest.mark.realtime
 def test_priority_zero_keeps_normal_scheduling():
     asked = []
     scheduler = Scheduler([], [], priority=0, set_priority=asked.append)
@@ -322,7 +318,6 @@ def test_after_tick_callbacks_run_once_per_tick_after_the_frames_went_out():
     assert events[-1] == ('after',)
 
 
-@pytest.mark.realtime
 def test_time_left_is_known_only_inside_a_tick_of_the_loop_thread():
     seen = []
 
@@ -344,7 +339,6 @@ def test_time_left_is_known_only_inside_a_tick_of_the_loop_thread():
     assert scheduler.time_left_ns() is None
 
 
-@pytest.mark.realtime
 def test_while_the_thread_runs_the_loop_collects_garbage_after_its_ticks():
     class Cycles:
         # each tick leaves reference cycles behind: only a collection frees them
@@ -366,7 +360,6 @@ def test_while_the_thread_runs_the_loop_collects_garbage_after_its_ticks():
     assert gc.isenabled()  # given back
 
 
-@pytest.mark.realtime
 def test_a_loop_told_not_to_leaves_garbage_collection_to_the_interpreter():
     scheduler = Scheduler([], [], rate_hz=1000.0, collect_garbage=False)
     scheduler.start()
@@ -390,7 +383,6 @@ class LoopMark:
         return False
 
 
-@pytest.mark.realtime
 def test_the_loop_thread_is_marked_as_one_while_it_ticks_and_not_in_final():
     scheduler, _ = make([], rate_hz=1000.0)
     probe = LoopMark()
