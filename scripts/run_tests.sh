@@ -5,17 +5,31 @@
 # robot in real time, spread over TEST_WORKERS pytest-xdist workers (default auto: one
 # per CPU), a test file per worker at a time; then the tests marked realtime, in this
 # process, one after another, with nothing else of the suite running beside them.
+# A marker expression of the caller's (-m EXPR) narrows both passes.
 set -uo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
 workers=${TEST_WORKERS:-auto}
+selection=''
+args=()
+while [ $# -gt 0 ]; do
+  case "$1" in
+    -m) selection=$2; shift 2 ;;
+    --markexpr=*) selection=${1#--markexpr=}; shift ;;
+    -m*) selection=${1#-m}; shift ;;
+    *) args+=("$1"); shift ;;
+  esac
+done
+within() {  # the pass's marker expression, within the caller's
+  if [ -n "$selection" ]; then echo "($selection) and ($1)"; else echo "$1"; fi
+}
+
 status=0
 empty=0
-
 run() {
   scripts/with_env.sh python -m pytest "$@"
   local rc=$?
-  if [ "$rc" -eq 5 ]; then  # this pass selected no test (-k matched the other's only)
+  if [ "$rc" -eq 5 ]; then  # this pass selected no test (the selection was the other's)
     empty=$((empty + 1))
   elif [ "$rc" -ne 0 ]; then
     status=$rc
@@ -23,9 +37,9 @@ run() {
 }
 
 echo "[test] pass 1 of 2: the tests that run no robot in real time, $workers worker(s)"
-run -n "$workers" --dist loadfile -m 'not realtime' "$@"
+run -n "$workers" --dist loadfile -m "$(within 'not realtime')" ${args[@]+"${args[@]}"}
 echo "[test] pass 2 of 2: the real-time tests, one at a time"
-run -m realtime "$@"
+run -m "$(within realtime)" ${args[@]+"${args[@]}"}
 if [ "$status" -eq 0 ] && [ "$empty" -eq 2 ]; then
   status=5  # neither pass selected a test: as pytest says for an empty selection
 fi
