@@ -6,10 +6,7 @@ import pytest
 from support.ros import isolate_ros_environment, rclpy_context
 
 # Network rule: localhost-only discovery and a private domain, set before any test (or
-# any process a test starts) can touch DDS. Each pytest-xdist worker claims a domain of
-# its own: two tests running at once must not hear each other's topics.
-if os.environ.get('PYTEST_XDIST_WORKER'):
-    os.environ.pop('RM_TEST_DOMAIN_ID', None)  # the controller's, inherited
+# any process a test starts) can touch DDS; each pytest-xdist worker claims its own.
 isolate_ros_environment(os.environ)
 
 

@@ -73,10 +73,18 @@ def isolate_ros_environment(environ: dict[str, str] | os._Environ) -> int:
     """Force localhost-only discovery and a private domain id into environ; return the id.
 
     A domain already chosen through RM_TEST_DOMAIN_ID is kept, so a test process and the
-    processes it starts agree.
+    processes it starts agree; but a pytest-xdist worker (``PYTEST_XDIST_WORKER``) claims
+    one of its own, since tests on two workers run at once and must not hear each other.
+    RM_TEST_DOMAIN_OWNER names the worker that claimed it ('' for a session without
+    workers), so the processes a worker starts keep the worker's domain.
     """
     environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
-    domain = int(environ.get('RM_TEST_DOMAIN_ID') or claim_domain_id(os.getpid()))
+    worker = environ.get('PYTEST_XDIST_WORKER', '')
+    chosen = environ.get('RM_TEST_DOMAIN_ID')
+    if environ.get('RM_TEST_DOMAIN_OWNER', '') != worker:
+        chosen = None  # the xdist controller's, inherited by this worker
+    domain = int(chosen or claim_domain_id(os.getpid()))
+    environ['RM_TEST_DOMAIN_OWNER'] = worker
     environ['RM_TEST_DOMAIN_ID'] = str(domain)
     environ['ROS_DOMAIN_ID'] = str(domain)
     return domain

@@ -27,3 +27,23 @@ def test_a_child_holds_the_sessions_domain_claim():
     finally:
         child.kill()
         child.communicate()
+
+
+def test_a_pytest_xdist_worker_claims_a_domain_of_its_own_and_its_children_keep_it():
+    mine = os.environ['ROS_DOMAIN_ID']
+    owner = os.environ['RM_TEST_DOMAIN_OWNER']  # this process's: a worker's name, or ''
+    inherited = {'RM_TEST_DOMAIN_ID': mine, 'RM_TEST_DOMAIN_OWNER': owner, 'ROS_DOMAIN_ID': mine}
+    if owner:
+        inherited['PYTEST_XDIST_WORKER'] = owner
+    # a process this session starts keeps the session's domain
+    assert ros.isolate_ros_environment(dict(inherited)) == int(mine)
+    worker = {**inherited, 'PYTEST_XDIST_WORKER': owner + 'x'}  # a worker of this session
+    try:
+        other = ros.isolate_ros_environment(worker)
+        assert other != int(mine)
+        assert worker['ROS_DOMAIN_ID'] == worker['RM_TEST_DOMAIN_ID'] == str(other)
+        # and a process the worker starts keeps the worker's
+        child = dict(worker)
+        assert ros.isolate_ros_environment(child) == other
+    finally:
+        ros._CLAIMED.pop().close()  # give the extra domain back
