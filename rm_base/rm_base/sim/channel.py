@@ -168,7 +168,8 @@ class SimChannel:
             sender: the sending bus (it gets the frame back only with
                 ``receive_own_messages``), or None for a frame from outside any bus.
             msg: the frame.
-            timestamp: timestamp for the copies [s]; None uses the world's clock.
+            timestamp: timestamp for the copies [s]; None uses the world's clock when
+                the frame is sent (also for one handed over to a running tick).
 
         Raises:
             can.CanOperationError: the channel is closed or in (injected) bus-off.
@@ -180,8 +181,10 @@ class SimChannel:
                 lock.acquire()
             else:
                 # Waiting for the physics tick's lock would cost the sender the GIL; hand
-                # the frame (a copy) to the tick, which sends it before it lets go.
-                self._handed_over.append((sender, copy.copy(msg), timestamp))
+                # the frame (a copy) to the tick, which sends it before it lets go. Stamped
+                # now: a tick that lost the CPU must not move the frame later on the wire.
+                stamp = self.world.timestamp() if timestamp is None else timestamp
+                self._handed_over.append((sender, copy.copy(msg), stamp))
                 if not lock.acquire(blocking=False):
                     return
                 direct = None  # the tick ended meanwhile: the flush below sends it, in order

@@ -169,9 +169,12 @@ def test_when_the_physics_tick_holds_the_lock_expect_send_not_to_wait():
         armed.set()
         assert in_tick.wait(5.0)  # the physics thread is in a tick, holding the lock
         started = time.monotonic()
+        sent_at = time.time()
         sender.send(command)
         send_took = time.monotonic() - started
         on_bus_during_tick = listener.recv(timeout=0)
+        time.sleep(0.3)  # the tick goes on (it lost the CPU)
+        released_at = time.time()
         release.set()
         on_bus_after_tick = listener.recv(timeout=5.0)
     finally:
@@ -182,6 +185,8 @@ def test_when_the_physics_tick_holds_the_lock_expect_send_not_to_wait():
     assert send_took < 1.0  # the tick holds the lock for 5 s
     assert on_bus_during_tick is None
     assert on_bus_after_tick is not None and on_bus_after_tick.arbitration_id == 0x200
+    # on the wire when it was sent, not when the tick let it go
+    assert sent_at <= on_bus_after_tick.timestamp < released_at
     assert world.motor('wheel').command_raw == 1000
 
 
