@@ -17,10 +17,34 @@ def ros_context():
         yield context
 
 
-@pytest.fixture(autouse=True)
-def loop_lines_in_their_test():
-    """Write what a control loop logged before the test ends (its thread writes later)."""
-    yield
-    from rm_base.ros_logging import flush_loop_lines  # imports rclpy: after the isolation
+def _loop_lines_within(phase):
+    """Run a test phase with the control loops' lines written only while it runs.
 
-    flush_loop_lines()
+    A loop's lines are written by a thread of their own (rm_base.ros_logging); pytest
+    captures output only during a phase, so a line written while pytest reports between
+    phases reached the terminal. trylast: inside pytest's own capture wrapper.
+    """
+
+    @pytest.hookimpl(wrapper=True, trylast=True)
+    def hook(item):
+        from rm_base.ros_logging import hold_loop_lines, release_loop_lines  # after isolation
+
+        release_loop_lines()
+        try:
+            return (yield)
+        finally:
+            hold_loop_lines()
+
+    hook.__name__ = f'pytest_runtest_{phase}'
+    return hook
+
+
+pytest_runtest_setup = _loop_lines_within('setup')
+pytest_runtest_call = _loop_lines_within('call')
+pytest_runtest_teardown = _loop_lines_within('teardown')
+
+
+def pytest_sessionfinish(session):
+    from rm_base.ros_logging import release_loop_lines
+
+    release_loop_lines()

@@ -102,6 +102,7 @@ class LoopLines:
         self._order = threading.Lock()  # one writer at a time, queued lines first
         self._start_lock = threading.Lock()
         self._thread: threading.Thread | None = None
+        self._held = False
         self.dropped = 0
         self._reported = 0
 
@@ -125,6 +126,21 @@ class LoopLines:
         """Write what is queued, in the calling thread."""
         with self._order:
             self._drain()
+
+    def hold(self) -> None:
+        """Write what is queued in the calling thread, then hold the writing thread.
+
+        Its lines stay queued until :meth:`release`; other threads' lines are still
+        written, after the queued ones.
+        """
+        with self._order:
+            self._drain()
+            self._held = True
+
+    def release(self) -> None:
+        """Let the writing thread write again, starting with the lines held back."""
+        self._held = False
+        self._wake.set()
 
     def _drain(self) -> None:
         # Caller holds self._order.
@@ -154,6 +170,8 @@ class LoopLines:
         while True:
             self._wake.wait()
             self._wake.clear()
+            if self._held:
+                continue  # release() wakes the thread again
             try:
                 self.flush()
             except Exception as err:  # the thread must go on; rcutils is what failed
@@ -171,6 +189,20 @@ def flush_loop_lines() -> None:
     output of the test that logged them, not after it.
     """
     _LOOP_LINES.flush()
+
+
+def hold_loop_lines() -> None:
+    """Write the control loops' queued lines now, then hold their thread's lines back.
+
+    pytest captures output only while a test phase runs; a line written between phases
+    goes to the terminal. test/conftest.py holds the lines between phases.
+    """
+    _LOOP_LINES.hold()
+
+
+def release_loop_lines() -> None:
+    """Undo :func:`hold_loop_lines`: the lines held back are written, then the new ones."""
+    _LOOP_LINES.release()
 
 
 def emit(line: LogLine) -> None:

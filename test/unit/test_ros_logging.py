@@ -244,3 +244,32 @@ def test_outside_a_loop_thread_a_line_is_written_in_the_callers_thread():
     lines = LoopLines(write=writer)
     lines.write(LogLine(20, 'rm_robot', 'now', 'f', 'p', 1))
     assert writer.lines == [(threading.current_thread().name, 'rm_robot', 'now')]
+
+
+
+def test_while_held_a_loop_threads_lines_wait_until_release():
+    writer = BlockingWriter()
+    writer.release.set()
+    lines = LoopLines(write=writer)
+    with loop_thread():
+        lines.put(LogLine(20, 'rm_robot', 'before', 'f', 'p', 1))
+        lines.hold()  # writes what is queued, here if the thread has not yet
+        assert [m for _, _, m in writer.lines] == ['before']
+        writer.entered.clear()
+        lines.put(LogLine(20, 'rm_robot', 'held', 'f', 'p', 1))  # wakes the writing thread
+        assert not writer.entered.wait(0.2)
+    lines.release()
+    assert writer.entered.wait(10.0)
+    assert writer.lines[1] == ('rm-log', 'rm_robot', 'held')
+
+
+def test_while_held_another_threads_line_comes_after_the_held_ones():
+    writer = BlockingWriter()
+    writer.release.set()
+    lines = LoopLines(write=writer)
+    lines.hold()
+    with loop_thread():
+        lines.put(LogLine(20, 'rm_robot', 'held', 'f', 'p', 1))
+    lines.write(LogLine(20, 'rm_robot', 'now', 'f', 'p', 1))
+    assert [m for _, _, m in writer.lines] == ['held', 'now']
+    lines.release()
