@@ -122,19 +122,25 @@ def power_scale(hardware: Any, joint: str) -> Callable[[], float] | None:
 
 
 class FeedSpan:
-    """The longest the shooter fed (FEED or PUSH) without a break, from its sampled states.
+    """The longest the shooter pushed its trigger while feeding (FEED or PUSH), unbroken.
 
-    A jammed trigger shows only once it stalled for the shooter's jam time while feeding: a
-    feed that ended sooner (the last step of a burst) cannot show it.
+    A jammed trigger shows only once it stalled, pushed harder than the jam effort, for
+    the shooter's jam time while feeding. A feed that ended sooner (the last step of a
+    burst), or one that waited for the friction wheels with the trigger at rest, cannot
+    show it.
+
+    Args:
+        effort_threshold: the shooter's jam effort (``shooter.jam.effort``) [N·m].
     """
 
-    def __init__(self) -> None:
+    def __init__(self, effort_threshold: float) -> None:
+        self.effort_threshold = effort_threshold
         self._since: float | None = None
         self.longest = 0.0  # [s]
 
-    def sample(self, feeding: bool, now: float) -> None:
-        """One sampled state: whether the shooter was feeding at now [s]."""
-        if not feeding:
+    def sample(self, feeding: bool, effort: float, now: float) -> None:
+        """One sample at now [s]: whether the shooter fed, and the trigger's effort [N·m]."""
+        if not (feeding and abs(effort) > self.effort_threshold):
             self._since = None
             return
         if self._since is None:

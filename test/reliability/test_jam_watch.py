@@ -151,17 +151,25 @@ def test_power_scale_reads_the_stage_of_the_joints_group():
     assert power_scale(hardware, 'yaw') is None
 
 
-def test_the_feed_span_is_the_longest_unbroken_feed():
-    span = FeedSpan()
+def test_the_feed_span_is_the_longest_unbroken_push():
+    span = FeedSpan(effort_threshold=1.0)
     for now, feeding in [(0.00, True), (0.02, True), (0.07, True), (0.09, False),
                          (0.30, True), (0.40, True), (0.52, True), (0.60, False)]:
-        span.sample(feeding, now)
+        span.sample(feeding, -1.5, now)  # pushing backwards counts too (BLOCK)
     assert span.longest == pytest.approx(0.22)  # 0.30 -> 0.52, not 0.00 -> 0.52
 
 
 def test_a_feed_seen_once_lasts_nothing():
-    span = FeedSpan()
-    span.sample(False, 0.0)
-    span.sample(True, 0.1)
-    span.sample(False, 0.2)
+    span = FeedSpan(effort_threshold=1.0)
+    span.sample(False, 1.5, 0.0)
+    span.sample(True, 1.5, 0.1)
+    span.sample(False, 1.5, 0.2)
     assert span.longest == 0.0
+
+
+def test_a_feed_that_does_not_push_past_the_jam_effort_does_not_count():
+    # FEED while the friction wheels spin up: the trigger waits, at rest
+    span = FeedSpan(effort_threshold=1.0)
+    for now, effort in [(0.0, 0.0), (0.1, 0.2), (0.2, 1.2), (0.25, 1.4), (0.3, 0.9), (0.4, 1.5)]:
+        span.sample(True, effort, now)
+    assert span.longest == pytest.approx(0.05)  # 0.2 -> 0.25; at 1.0 itself it does not push

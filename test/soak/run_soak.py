@@ -370,8 +370,9 @@ class FaultInjector:
         self.rng = rng
         self.tally = Tally()
         shooter = load_parameters(CONFIG_FILES)['rm_robot']
-        # The shooter counts a jam after the trigger stalled this long while feeding; its
-        # state reaches the soak up to two state periods late.
+        # The shooter counts a jam after the trigger stalled, pushing harder than this, this
+        # long while feeding; its state reaches the soak up to two state periods late.
+        self.trigger_jam_effort = float(shooter['shooter.jam.effort'])
         self.trigger_jam_s = (
             float(shooter['shooter.jam.time']) + 2.0 / float(shooter['shooter.state_rate'])
         )
@@ -430,7 +431,8 @@ class FaultInjector:
     def _jam(self) -> FaultRecord:
         """Detected: trigger -> the shooter counts a jam or blocks; any other joint -> its
         output reaches its clamp (the loop pushes against the stall). Not judged: a trigger
-        not asked to feed for as long as the shooter's jam rule needs, or another joint
+        that did not push past the jam effort while feeding for as long as the shooter's
+        jam rule needs (it may wait for the friction wheels, at rest), or another joint
         whose commands never asked its loop for a push that reaches the clamp against a
         stall (reliability.jam_watch)."""
         joint = self.rng.choice(('trigger', 'trigger', 'friction_l', 'wheel_fl', 'yaw'))
@@ -438,7 +440,8 @@ class FaultInjector:
         before = self.robot.state('shooter_state')
         jams = before.jam_count if before is not None else 0
         self.robot.world.inject(joint, Fault.jam())
-        fed = FeedSpan()  # trigger: how long the shooter fed while jammed
+        fed = FeedSpan(self.trigger_jam_effort)  # trigger: how long it pushed while jammed
+        trigger = self.robot.joint('trigger')
         watch = JamWatch(self.robot.joint(joint), power_scale(self.robot.hardware, joint))
 
         def shown() -> bool:
@@ -446,7 +449,7 @@ class FaultInjector:
                 return watch.sample()
             s = self.robot.state('shooter_state')
             feeding = s is not None and s.state in (ShooterState.FEED, ShooterState.PUSH)
-            fed.sample(feeding, time.monotonic())
+            fed.sample(feeding, trigger.state().effort, time.monotonic())
             return s is not None and (s.jam_count > jams or s.state == ShooterState.BLOCK)
 
         lat = wait_for(shown, 3.0)
@@ -454,8 +457,8 @@ class FaultInjector:
             rec.detected, rec.latency_ms = True, 1e3 * lat
         elif joint == 'trigger' and fed.longest < self.trigger_jam_s:
             rec.note = (
-                f'fed for {1e3 * fed.longest:.0f} ms while jammed, under the '
-                f'{1e3 * self.trigger_jam_s:.0f} ms the shooter needs to see a jam'
+                f'pushed past the jam effort for {1e3 * fed.longest:.0f} ms while feeding, '
+                f'under the {1e3 * self.trigger_jam_s:.0f} ms the shooter needs to see a jam'
             )
         elif joint != 'trigger' and not watch.judged:
             rec.note = f'never asked for a push that reaches the clamp: {watch.note()}'
