@@ -170,25 +170,16 @@ class LoopLines:
         while True:
             self._wake.wait()
             self._wake.clear()
-            if self._held:
-                continue  # release() wakes the thread again
             try:
-                self.flush()
+                with self._order:  # held is read under the lock hold() sets it under
+                    if not self._held:  # else release() wakes the thread again
+                        self._drain()
             except Exception as err:  # the thread must go on; rcutils is what failed
                 sys.stderr.write(f'rm_base.ros_logging: a log line was lost: {err!r}\n')
 
 
 _LOOP_LINES = LoopLines()
 atexit.register(_LOOP_LINES.flush)
-
-
-def flush_loop_lines() -> None:
-    """Write the control loops' queued lines now, in the calling thread.
-
-    At exit this happens by itself; a test calls it so that a loop's lines show in the
-    output of the test that logged them, not after it.
-    """
-    _LOOP_LINES.flush()
 
 
 def hold_loop_lines() -> None:
