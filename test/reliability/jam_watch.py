@@ -135,14 +135,22 @@ class FeedSpan:
 
     def __init__(self, effort_threshold: float) -> None:
         self.effort_threshold = effort_threshold
-        self._since: float | None = None
-        self.longest = 0.0  # [s]
+        self._fed_since: float | None = None
+        self._pushed_since: float | None = None
+        self.longest_fed = 0.0  # [s] fed, pushing or not
+        self.longest = 0.0  # [s] fed and pushed past the jam effort
 
     def sample(self, feeding: bool, effort: float, now: float) -> None:
         """One sample at now [s]: whether the shooter fed, and the trigger's effort [N·m]."""
-        if not (feeding and abs(effort) > self.effort_threshold):
-            self._since = None
+        if not feeding:
+            self._fed_since = self._pushed_since = None
             return
-        if self._since is None:
-            self._since = now
-        self.longest = max(self.longest, now - self._since)
+        if self._fed_since is None:
+            self._fed_since = now
+        self.longest_fed = max(self.longest_fed, now - self._fed_since)
+        if abs(effort) <= self.effort_threshold:
+            self._pushed_since = None
+            return
+        if self._pushed_since is None:
+            self._pushed_since = now
+        self.longest = max(self.longest, now - self._pushed_since)

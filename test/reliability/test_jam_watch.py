@@ -157,6 +157,7 @@ def test_the_feed_span_is_the_longest_unbroken_push():
                          (0.30, True), (0.40, True), (0.52, True), (0.60, False)]:
         span.sample(feeding, -1.5, now)  # pushing backwards counts too (BLOCK)
     assert span.longest == pytest.approx(0.22)  # 0.30 -> 0.52, not 0.00 -> 0.52
+    assert span.longest_fed == pytest.approx(0.22)
 
 
 def test_a_feed_seen_once_lasts_nothing():
@@ -173,3 +174,4 @@ def test_a_feed_that_does_not_push_past_the_jam_effort_does_not_count():
     for now, effort in [(0.0, 0.0), (0.1, 0.2), (0.2, 1.2), (0.25, 1.4), (0.3, 0.9), (0.4, 1.5)]:
         span.sample(True, effort, now)
     assert span.longest == pytest.approx(0.05)  # 0.2 -> 0.25; at 1.0 itself it does not push
+    assert span.longest_fed == pytest.approx(0.4)

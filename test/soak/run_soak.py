@@ -457,8 +457,9 @@ class FaultInjector:
             rec.detected, rec.latency_ms = True, 1e3 * lat
         elif joint == 'trigger' and fed.longest < self.trigger_jam_s:
             rec.note = (
-                f'pushed past the jam effort for {1e3 * fed.longest:.0f} ms while feeding, '
-                f'under the {1e3 * self.trigger_jam_s:.0f} ms the shooter needs to see a jam'
+                f'fed for {1e3 * fed.longest_fed:.0f} ms while jammed, pushing past the jam '
+                f'effort for {1e3 * fed.longest:.0f} ms of it, under the '
+                f'{1e3 * self.trigger_jam_s:.0f} ms the shooter needs to see a jam'
             )
         elif joint != 'trigger' and not watch.judged:
             rec.note = f'never asked for a push that reaches the clamp: {watch.note()}'
