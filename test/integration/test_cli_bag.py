@@ -127,16 +127,22 @@ def read_bag(bag: Path):
 
 
 def play(bag: Path, *options, topics=None) -> list:
-    """Play bag into test subscribers of topics (TYPES by default): (receive time [s],
-    topic, msg) in order."""
+    """Play bag into test subscribers of topics (TYPES by default): (time the player sent
+    it [s], topic, msg), in the order sent.
+
+    The player's send times (DDS source timestamps), not this process's: after it lost the
+    CPU, this process takes all queued messages of one topic before the other's.
+    """
     received = []
+
+    def keep(topic):
+        return lambda msg, info: received.append((info['source_timestamp'] * 1e-9, topic, msg))
+
     with rclpy_context() as context:
         graph = Graph(context)
         try:
             for topic, cls in (topics or TYPES).items():
-                graph.node.create_subscription(
-                    cls, topic, lambda msg, t=topic: received.append((time.monotonic(), t, msg)), 10
-                )
+                graph.node.create_subscription(cls, topic, keep(topic), 10)
             # The subscribers exist, so the wait ends when discovery has matched them.
             player = rmcli(
                 'bag', 'play', str(bag), '--wait-for-subscribers', str(TIMEOUT_S), *options
@@ -153,7 +159,7 @@ def play(bag: Path, *options, topics=None) -> list:
             assert player.returncode == 0, f'{out}\n{err}'
         finally:
             graph.close()
-    return received
+    return sorted(received, key=lambda r: r[0])
 
 
 @pytest.fixture(scope='module')
@@ -243,17 +249,23 @@ def test_play_with_clock_publishes_the_bag_time_while_it_plays(recording):
 
     recorded = read_bag(recording['bag'])
     first, last = recorded[0][2], recorded[-1][2]
-    # arrivals in order: /clock and the commands are two DDS streams, so the tick sent just
-    # before a command may arrive just after it
-    arrivals: list[tuple[str, float]] = []
+    # (when the player sent it [ns], kind, clock): ordered by the player's send time, since
+    # this process takes the two topics' messages in its own order (all of a queued topic
+    # first, after it lost the CPU)
+    arrivals: list[tuple[int, str, float]] = []
     with rclpy_context() as context:
         graph = Graph(context)
         try:
             graph.node.create_subscription(
                 Clock, '/clock',
-                lambda m: arrivals.append(('clock', m.clock.sec + m.clock.nanosec * 1e-9)), 100)
+                lambda m, info: arrivals.append(
+                    (info['source_timestamp'], 'clock', m.clock.sec + m.clock.nanosec * 1e-9)
+                ),
+                100,
+            )
             graph.node.create_subscription(
-                ChassisCmd, CMD_TOPIC, lambda m: arrivals.append(('cmd', 0.0)), 10)
+                ChassisCmd, CMD_TOPIC,
+                lambda m, info: arrivals.append((info['source_timestamp'], 'cmd', 0.0)), 10)
             player = rmcli('bag', 'play', str(recording['bag']), '--clock', '50',
                            '--topics', CMD_TOPIC, '--wait-for-subscribers', str(TIMEOUT_S))
             try:
@@ -265,13 +277,14 @@ def test_play_with_clock_publishes_the_bag_time_while_it_plays(recording):
             assert player.returncode == 0, f'{out}\n{err}'
         finally:
             graph.close()
+    arrivals = [(kind, t) for _, kind, t in sorted(arrivals)]
     clocks = [t for kind, t in arrivals if kind == 'clock']
     # ~1.15 s at 50 Hz is ~58 ticks; generous for a loaded machine
     assert len(clocks) >= 20, clocks
     assert clocks == sorted(clocks)
     assert first - 0.001 <= clocks[0] and clocks[-1] <= last + 0.1
-    # each command arrived with the clock at about its recording time: the tick that
-    # arrived last before it, or (the first command) the one right after it
+    # each command was sent with the clock at about its recording time: the tick sent last
+    # before it, or (the first command) the one right after it
     cmd_times = [t for topic, _, t in recorded if topic == CMD_TOPIC]
     at_arrival = []
     for i, (kind, _) in enumerate(arrivals):
