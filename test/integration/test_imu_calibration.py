@@ -117,7 +117,8 @@ def test_a_still_imu_gets_its_bias_subtracted_and_kept_for_the_next_start(rig):
     def call():
         future = client.call_async(Trigger.Request())
         assert wait_until(future.done, WAIT)
-        return future.result().success, future.result().message
+        reply = future.result()
+        return reply.success, reply.message
 
     ok, message = h.calibrate(call)
     assert ok, message
