@@ -151,7 +151,8 @@ class Robot:
         from rm_base.realtime import prepare_loop_process
 
         owner = self.bridge if self.bridge is not None else self.host
-        prepare_loop_process(owner.edge_priority, owner.cpu_index)  # as the executables do
+        # as the executables do
+        prepare_loop_process(owner.edge_priority, owner.cpu_index, owner.cpu_latency_us)
         self.hw = self.bridge.hardware if self.bridge is not None else None
         self.recorder = TickRecorder(self.hw.scheduler) if self.hw is not None else None
         self._sent_taps: list[Any] = []

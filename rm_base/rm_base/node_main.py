@@ -124,8 +124,9 @@ def run_node(
     """Run one node until SIGINT/SIGTERM; return the exit status (1 on a config error).
 
     A configuration error is one line the operator can act on, not a traceback. The
-    node's other threads go below its loop's priority (``node.edge_priority``) and all of
-    them onto one CPU (``node.cpu_index``; docs/ARCHITECTURE.md "Real-time priority"). On
+    node's other threads go below its loop's priority (``node.edge_priority``), idle CPUs
+    are asked to wake quickly (``node.cpu_latency_us``) and the threads go onto one CPU
+    (``node.cpu_index``; docs/ARCHITECTURE.md "Real-time priority"). On
     the way out the node's ``shutdown()`` (zero output on the wire or on /actuator_cmd)
     runs while the context still works.
 
@@ -151,7 +152,7 @@ def run_node(
     try:
         executor = make_executor(node)
         executor.add_node(node)
-        prepare_loop_process(node.edge_priority, node.cpu_index)
+        prepare_loop_process(node.edge_priority, node.cpu_index, node.cpu_latency_us)
         spin_until_shutdown(executor, node.context)
     except KeyboardInterrupt:
         # a SIGINT before the spin took the signals over (the loop already runs): the

@@ -28,6 +28,8 @@ import threading
 from collections.abc import Iterator
 from pathlib import Path
 
+from rm_base import cpu_latency
+
 _log = logging.getLogger(__name__)
 
 #: Priority of the control loop thread (ros2_control's ``thread_priority`` default).
@@ -226,19 +228,45 @@ def raise_edge_priority(priority: int = EDGE_PRIORITY) -> bool:
     return True
 
 
-def prepare_loop_process(edge_priority: int, cpu_index: int | None) -> None:
+def hold_cpu_latency(max_us: int | None) -> bool:
+    """Keep idle CPUs waking within max_us [µs] while the process runs (None: no request).
+
+    See :mod:`rm_base.cpu_latency`. Without the right to it, one warning and no request.
+
+    Returns:
+        Whether the request is held.
+    """
+    if max_us is None:
+        return False
+    try:
+        cpu_latency.hold(max_us)
+    except OSError as err:
+        _log.warning(
+            'idle CPUs may sleep deeply (a wake-up latency of %d us refused: %s): the loop '
+            'may wake late; see docs/PERFORMANCE.md', max_us, err,
+        )
+        return False
+    _log.info('idle CPUs wake within %d us while the process runs (%s)', max_us, cpu_latency.PATH)
+    return True
+
+
+def prepare_loop_process(
+    edge_priority: int, cpu_index: int | None, cpu_latency_us: int | None
+) -> None:
     """Set up a process that runs a control loop, once its nodes (and threads) exist.
 
     What every executable that hosts a loop does, and what a harness that hosts one must do
     alike to measure the same thing: the GIL switch interval shortened
     (:func:`shorten_gil_switch_interval`), the other threads below the loop's priority
-    (:func:`raise_edge_priority`) and every Python thread on one CPU (:func:`keep_on_cpu`;
-    None leaves them where the kernel puts them).
+    (:func:`raise_edge_priority`), idle CPUs kept quick to wake (:func:`hold_cpu_latency`;
+    None asks nothing) and every Python thread on one CPU (:func:`keep_on_cpu`; None leaves
+    them where the kernel puts them).
 
     Raises:
         ValueError: cpu_index is outside the allowed CPUs (a configuration error).
     """
     shorten_gil_switch_interval()
     raise_edge_priority(edge_priority)
+    hold_cpu_latency(cpu_latency_us)
     if cpu_index is not None:
         keep_on_cpu(cpu_index)

@@ -203,7 +203,7 @@ def _run(args: argparse.Namespace, files: list[pathlib.Path]) -> int:
     executor.add_node(host)
     if manual is not None:
         executor.add_node(manual)
-    prepare_loop_process(bridge.edge_priority, bridge.cpu_index)
+    prepare_loop_process(bridge.edge_priority, bridge.cpu_index, bridge.cpu_latency_us)
     printer = None if args.no_status else _StatusPrinter(StatusView(host))
     deadline = None if args.duration is None else time.monotonic() + args.duration
     mode = 'on rm_sim' if args.sim else 'on its CAN buses'

@@ -154,7 +154,9 @@ class Robot:
         self.executor.add_node(self.bridge)
         self.executor.add_node(self.node)
         self._cpus = os.sched_getaffinity(0)  # rm_robot's, before this process is pinned
-        prepare_loop_process(self.bridge.edge_priority, self.bridge.cpu_index)  # as can_bridge
+        prepare_loop_process(
+            self.bridge.edge_priority, self.bridge.cpu_index, self.bridge.cpu_latency_us
+        )  # as can_bridge
         self._stop = threading.Event()
         self._spinner = threading.Thread(target=self._spin, name='soak-spin', daemon=True)
         self._spinner.start()

@@ -67,6 +67,7 @@ def test_a_sigint_while_the_node_starts_up_still_stops_it_cleanly(monkeypatch):
     class Node:
         edge_priority = 0
         cpu_index = None
+        cpu_latency_us = None
         context = None
 
         def shutdown(self):
@@ -82,7 +83,7 @@ def test_a_sigint_while_the_node_starts_up_still_stops_it_cleanly(monkeypatch):
         def shutdown(self):
             calls.append('executor')
 
-    def interrupted(priority, cpu_index):
+    def interrupted(priority, cpu_index, cpu_latency_us):
         raise KeyboardInterrupt  # Ctrl-C after the loop started, before the spin
 
     monkeypatch.setattr(node_main, 'init_ros', lambda name, args: True)

@@ -1,5 +1,6 @@
 """realtime: SCHED_FIFO for the loop, and below it for the process's other threads."""
 
+import logging
 import os
 import subprocess
 import sys
@@ -141,15 +142,30 @@ def test_a_loop_process_gets_the_short_switch_interval_the_edge_priority_and_its
     calls = []
     monkeypatch.setattr(realtime, 'raise_edge_priority', lambda p: calls.append(('fifo', p)))
     monkeypatch.setattr(realtime, 'keep_on_cpu', lambda i: calls.append(('cpu', i)))
+    monkeypatch.setattr(realtime.cpu_latency, 'hold', lambda us: calls.append(('latency', us)))
     before = sys.getswitchinterval()
     sys.setswitchinterval(0.005)  # CPython's default: a busy thread keeps a waking loop 5 ms
     try:
-        realtime.prepare_loop_process(10, -1)
+        realtime.prepare_loop_process(10, -1, 0)
         assert sys.getswitchinterval() == pytest.approx(realtime.GIL_SWITCH_INTERVAL_S)
-        realtime.prepare_loop_process(0, None)  # no CPU asked for: the threads stay put
+        # no CPU and no latency asked for: the threads stay put, the CPUs idle as they will
+        realtime.prepare_loop_process(0, None, None)
     finally:
         sys.setswitchinterval(before)
-    assert calls == [('fifo', 10), ('cpu', -1), ('fifo', 0)]
+    assert calls == [('fifo', 10), ('latency', 0), ('cpu', -1), ('fifo', 0)]
+
+
+def test_a_refused_latency_request_is_one_warning_and_the_process_goes_on(
+    monkeypatch, tmp_path, caplog
+):
+    # not root: /dev/cpu_dma_latency is root's alone (crw-------)
+    monkeypatch.setattr(realtime.cpu_latency, 'PATH', str(tmp_path / 'no_such_file'))
+    with caplog.at_level(logging.WARNING, logger=realtime.__name__):
+        assert realtime.hold_cpu_latency(0) is False
+    assert realtime.cpu_latency.held() == 0
+    [record] = caplog.records
+    assert 'idle CPUs may sleep deeply' in record.getMessage()
+    assert 'no_such_file' in record.getMessage()
 
 
 @pytest.mark.skipif(not hasattr(os, 'SCHED_RESET_ON_FORK'), reason='Linux scheduling API')

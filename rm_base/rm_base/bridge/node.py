@@ -427,6 +427,11 @@ class CanBridgeNode(Node):
         """The CPU (an index into the allowed ones) for every thread; None: no pinning."""
         return self.settings.cpu_index
 
+    @property
+    def cpu_latency_us(self) -> int | None:
+        """The wake-up latency to ask of idle CPUs [µs]; None: no request."""
+        return self.settings.cpu_latency_us
+
     def shutdown(self) -> None:
         """Stop publishing, send zero output (DISABLE to MIT motors), close. Idempotent."""
         if self._shut_down:

@@ -100,6 +100,15 @@ def read_parameters(node: Node) -> tuple[BridgeSettings, CalibrationFile | None]
         'normal scheduling',
     )
     declare(
+        'scheduler.cpu_latency_us',
+        params.integer,
+        0,
+        ge=-1,
+        le=1_000_000,
+        description='the executable asks the kernel to wake idle CPUs within this many '
+        'microseconds while it runs (/dev/cpu_dma_latency; 0: idle CPUs poll); -1: no request',
+    )
+    declare(
         'scheduler.one_cpu',
         params.boolean,
         True,

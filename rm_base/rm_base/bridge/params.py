@@ -50,6 +50,7 @@ from pathlib import PurePath
 from types import MappingProxyType
 from typing import Any
 
+from rm_base import cpu_latency
 from rm_base.bridge.errors import BridgeConfigError
 from rm_base.hardware.config import HardwareConfig
 from rm_base.realtime import EDGE_PRIORITY, LOOP_PRIORITY, choose_cpu
@@ -111,6 +112,8 @@ class BridgeSettings:
         cpu_index: the CPU the executable keeps every Python thread of the process on,
             an index into the CPUs it may use (:func:`rm_base.realtime.keep_on_cpu`);
             None: wherever the kernel puts them.
+        cpu_latency_us: the wake-up latency the executable asks of idle CPUs
+            (:func:`rm_base.realtime.hold_cpu_latency`) [µs]; None: no request.
         calibration_max_speed: a joint turning faster is not at rest (set_zero) [rad/s].
     """
 
@@ -122,6 +125,7 @@ class BridgeSettings:
     sim: SimSettings | None = None
     edge_priority: int = EDGE_PRIORITY
     cpu_index: int | None = -1
+    cpu_latency_us: int | None = 0
     calibration_max_speed: float = 0.05
 
 
@@ -183,6 +187,7 @@ def settings_from_parameters(
             ``sim.timing`` (:class:`Timing` or its value), ``sim.seed``,
             ``scheduler.rate_hz``, ``scheduler.receive_in_loop``, ``scheduler.priority``,
             ``scheduler.edge_priority``, ``scheduler.one_cpu``, ``scheduler.cpu``,
+            ``scheduler.cpu_latency_us``,
             ``scheduler.collect_garbage``,
             ``calibration.max_speed`` and ``safety.*``;
             missing ones take their defaults.
@@ -287,6 +292,7 @@ def settings_from_parameters(
         sim=sim,
         edge_priority=int(typed.get('scheduler.edge_priority', EDGE_PRIORITY)),
         cpu_index=cpu_index(typed),
+        cpu_latency_us=cpu_latency.from_parameter(int(typed.get('scheduler.cpu_latency_us', 0))),
         calibration_max_speed=float(typed.get('calibration.max_speed', 0.05)),
     )
 

@@ -41,7 +41,7 @@ BRIDGE_SECTION = 'can_bridge'
 TYPED = frozenset({
     'publish_rate', 'diagnostics_rate', 'publish_frames', 'log_file', 'scheduler.rate_hz',
     'scheduler.receive_in_loop', 'scheduler.priority', 'scheduler.edge_priority',
-    'scheduler.one_cpu', 'scheduler.cpu',
+    'scheduler.one_cpu', 'scheduler.cpu', 'scheduler.cpu_latency_us',
     'scheduler.collect_garbage',
     'safety.feedback_timeout_s', 'safety.command_timeout_s', 'safety.temperature_hysteresis_c',
     'sim', 'sim.timing', 'sim.seed', 'calibration.file', 'calibration.max_speed',

@@ -13,6 +13,7 @@ from rclpy.duration import Duration
 from rclpy.node import Node
 from std_srvs.srv import SetBool
 
+from rm_base import cpu_latency
 from rm_base.hardware import CanHardware, Scheduler
 from rm_base.host.plugin_task import PluginTask, TickInputs
 from rm_base.node_main import inbox_node
@@ -292,6 +293,16 @@ class RobotHost(Node):
             raise ParameterError(f'cpu: {err}') from err
         #: The CPU every thread of rm_robot's own process runs on (index); None: any.
         self.cpu_index: int | None = cpu if one_cpu else None
+        #: The wake-up latency rm_robot's own process asks of idle CPUs [µs]; None: none.
+        self.cpu_latency_us = cpu_latency.from_parameter(node_params.integer(
+            'cpu_latency_us',
+            0,
+            ge=-1,
+            le=1_000_000,
+            description='rm_robot as a process of its own asks the kernel to wake idle CPUs '
+            'within this many microseconds (/dev/cpu_dma_latency; 0: idle CPUs poll); -1: no '
+            'request',
+        ))
         loop_priority = node_params.integer(
             'loop_priority',
             LOOP_PRIORITY,

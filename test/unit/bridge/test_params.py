@@ -92,6 +92,12 @@ def test_the_process_runs_on_the_last_cpu_unless_told_which_or_none(monkeypatch)
         settings_from_parameters({'scheduler.cpu': 2}, YAW)
 
 
+def test_idle_cpus_are_asked_to_poll_unless_told_a_latency_or_nothing():
+    assert settings_from_parameters({}, YAW).cpu_latency_us == 0
+    assert settings_from_parameters({'scheduler.cpu_latency_us': 20}, YAW).cpu_latency_us == 20
+    assert settings_from_parameters({'scheduler.cpu_latency_us': -1}, YAW).cpu_latency_us is None
+
+
 def test_when_a_hardware_key_is_missing_expect_the_hardware_error_naming_it():
     params = {k: v for k, v in YAW.items() if k != 'joints.yaw.bus'}
     with pytest.raises(HardwareConfigError, match=r'joints\.yaw\.bus is required'):
