@@ -13,9 +13,9 @@ from rclpy.duration import Duration
 from rclpy.node import Node
 from std_srvs.srv import SetBool
 
-from rm_base import cpu_latency
 from rm_base.hardware import CanHardware, Scheduler
 from rm_base.host.plugin_task import PluginTask, TickInputs
+from rm_base.host.process_params import process_settings
 from rm_base.node_main import inbox_node
 from rm_base.plugin import PluginBase, PluginLoader, PluginParams
 from rm_base.plugin.errors import ParameterError
@@ -24,12 +24,7 @@ from rm_base.plugin.inbox import Inbox
 from rm_base.plugin.inbox_status import InboxReport
 from rm_base.plugin.node_io import DdsJointIO, NodeIO, node_io, use_local_io
 from rm_base.plugin.outbox import Outbox
-from rm_base.realtime import (
-    EDGE_PRIORITY,
-    LOOP_PRIORITY,
-    choose_cpu,
-    shorten_gil_switch_interval,
-)
+from rm_base.realtime import shorten_gil_switch_interval
 from rm_base.ros_logging import FastLogger
 
 NODE_NAME = 'rm_robot'
@@ -257,65 +252,15 @@ class RobotHost(Node):
             ExecutorKind.EVENTS,
             description='executor for subscriptions, services and timers',
         )
-        loop_rate = node_params.double(
-            'loop_rate',
-            1000.0,
-            description='rate of the plugin loop when rm_robot runs as a process of its own '
-            '(in the one-process robot the CAN loop, scheduler.rate_hz, runs the plugins)',
-            unit='Hz',
-            gt=0.0,
-            le=10000.0,
-        )
-        self.edge_priority = node_params.integer(
-            'edge_priority',
-            EDGE_PRIORITY,
-            ge=0,
-            le=99,
-            description="real-time priority rm_robot gives the process's other threads, "
-            'below the loop (a thread holding the GIL must not be preempted); 0: normal',
-        )
-        one_cpu = node_params.boolean(
-            'one_cpu',
-            True,
-            description='rm_robot as a process of its own runs every Python thread on one CPU '
-            "(cpu), where its loop keeps the GIL for its whole tick (the one-process robot "
-            "follows can_bridge's scheduler.one_cpu)",
-        )
-        cpu = node_params.integer(
-            'cpu',
-            -2,
-            description='with one_cpu, which CPU: an index into the CPUs the process may '
-            "use, -2 the last but one (can_bridge's loop takes the last)",
-        )
-        try:
-            choose_cpu(cpu)
-        except ValueError as err:
-            raise ParameterError(f'cpu: {err}') from err
-        #: The CPU every thread of rm_robot's own process runs on (index); None: any.
-        self.cpu_index: int | None = cpu if one_cpu else None
-        #: The wake-up latency rm_robot's own process asks of idle CPUs [µs]; None: none.
-        self.cpu_latency_us = cpu_latency.from_parameter(node_params.integer(
-            'cpu_latency_us',
-            0,
-            ge=-1,
-            le=1_000_000,
-            description='rm_robot as a process of its own asks the kernel to wake idle CPUs '
-            'within this many microseconds (/dev/cpu_dma_latency; 0: idle CPUs poll); -1: no '
-            'request',
-        ))
-        loop_priority = node_params.integer(
-            'loop_priority',
-            LOOP_PRIORITY,
-            ge=0,
-            le=99,
-            description='real-time (SCHED_FIFO) priority of the plugin loop thread when '
-            'rm_robot runs as a process of its own; 0: normal scheduling',
-        )
+        process = process_settings(node_params)
+        self.edge_priority = process.edge_priority
+        self.cpu_index = process.cpu_index
+        self.cpu_latency_us = process.cpu_latency_us
         loop = self.loop
         if loop is None:  # rm_robot as a process of its own
             loop = self.loop = Scheduler(
-                [], [], rate_hz=loop_rate, thread_name=f'{self.get_name()}-loop',
-                priority=loop_priority,
+                [], [], rate_hz=process.loop_rate, thread_name=f'{self.get_name()}-loop',
+                priority=process.loop_priority,
             )
             inputs.time_left = loop.time_left_ns
 
