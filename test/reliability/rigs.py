@@ -330,21 +330,27 @@ class WireWatch:
     def watch_commands(self, hardware: CanHardware) -> None:
         """Note every command where the bridge hands it to its hardware layer.
 
-        A subscription of the test's own sees /actuator_cmd up to hundreds of ms after
-        the bridge under CPU load (measured here), which is no oracle for a 100 ms rule;
-        this sees each command when the hardware takes it (after the bridge's validation,
-        which test_command_abuse.py checks on its own).
+        Both ways in are tapped: ``set_command`` (checked fields) and ``set_target`` (the
+        bridge's /actuator_cmd and the in-process plugins). A subscription of the test's
+        own sees /actuator_cmd up to hundreds of ms after the bridge under CPU load
+        (measured here), which is no oracle for a 100 ms rule; this sees each command when
+        the hardware takes it (after the bridge's validation, which test_command_abuse.py
+        checks on its own).
         """
-        original = hardware.set_command
+        set_command, set_target = hardware.set_command, hardware.set_target
         commands = self._commands
-
         clock = self._clock
 
-        def set_command(name: str, mode: int, **kwargs: Any) -> None:
-            original(name, mode, **kwargs)  # raises for a rejected one: not noted
+        def noted_command(name: str, mode: int, **kwargs: Any) -> None:
+            set_command(name, mode, **kwargs)  # raises for a rejected one: not noted
             commands.append((clock(), _JointCommand(name, mode)))
 
-        hardware.set_command = set_command  # type: ignore[method-assign]
+        def noted_target(name: str, target: Any, **kwargs: Any) -> None:
+            set_target(name, target, **kwargs)  # raises for an unknown joint: not noted
+            commands.append((clock(), _JointCommand(name, int(target.mode))))
+
+        hardware.set_command = noted_command  # type: ignore[method-assign]
+        hardware.set_target = noted_target  # type: ignore[method-assign]
 
     def sync(self, timeout: float = 10.0) -> None:
         """Wait until every frame up to now has been checked (lockstep: check them)."""

@@ -110,6 +110,15 @@ def wheels_driven(robot):
     )
 
 
+def test_the_wire_watch_sees_the_plugins_commands(robot):
+    # the checker's no_command rule starts at a joint's first command noted: a tap that
+    # missed the plugins' way in (set_target) left it off without a word
+    drive_chassis(robot)
+    assert robot.wait_until(lambda: wheels_driven(robot), WAIT)
+    robot.wire.sync()
+    assert robot.wire.checker.joints['wheel_fl'].commanded
+
+
 def test_when_a_wheel_goes_silent_expect_zero_and_the_chassis_passive_naming_it(robot):
     drive_chassis(robot)
     assert robot.wait_until(
