@@ -40,6 +40,8 @@ EDGE_PRIORITY = 10
 GIL_SWITCH_INTERVAL_S = 0.0005
 
 _thread_role = threading.local()
+# Native ids of this process's threads that are not the robot's (outside_robot).
+_outside_robot: set[int] = set()
 
 
 @contextlib.contextmanager
@@ -69,6 +71,31 @@ def at_most_edge_priority() -> None:
     if os.sched_getscheduler(0) == os.SCHED_FIFO:
         if os.sched_getparam(0).sched_priority > EDGE_PRIORITY:
             set_fifo_priority(EDGE_PRIORITY)
+
+
+@contextlib.contextmanager
+def outside_robot() -> Iterator[None]:
+    """Within it, the calling thread is not the robot's: normal scheduling, below all of them.
+
+    For what shares a process with a loop but stands for something outside the robot: the
+    physics of a simulated world (``sim: true``: the motors, which have CPUs of their own
+    on a robot) and a test harness's own threads. At real-time priority beside the loop
+    they took more than the 95 % of its CPU that the kernel leaves to real-time threads,
+    and the kernel then stopped them all, the loop with them, for about 50 ms a second
+    (docs/PERFORMANCE.md, "The soak's lost 50 ms"). Wrap the thread's whole body in it:
+    :func:`raise_process_threads` leaves the thread as it is, and a thread started after
+    the process was prepared drops the priority it inherited. It stays on the CPU it is
+    given (:func:`keep_on_cpu` pins it with the loop): it takes the GIL, and there only the
+    loop's own process preempts it, whose threads wait for that lock while it holds it.
+    """
+    tid = threading.get_native_id()
+    _outside_robot.add(tid)
+    try:
+        if os.sched_getscheduler(0) != os.SCHED_OTHER:
+            os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
+        yield
+    finally:
+        _outside_robot.discard(tid)  # the id may be reused by a later thread
 
 
 def shorten_gil_switch_interval() -> None:
@@ -111,8 +138,9 @@ def children_start_normal() -> Iterator[None]:
 def raise_process_threads(priority: int) -> int:
     """Give every thread of this process that runs under normal scheduling SCHED_FIFO.
 
-    Threads already real-time (the loop) keep their priority; threads created later by
-    one of them inherit the creator's policy (Linux' default for new threads).
+    Threads already real-time (the loop) keep their priority, and threads outside the
+    robot (:func:`outside_robot`) normal scheduling; threads created later by one of
+    them inherit the creator's policy (Linux' default for new threads).
 
     Returns:
         The number of threads changed.
@@ -123,6 +151,8 @@ def raise_process_threads(priority: int) -> int:
     changed = 0
     for task in Path('/proc/self/task').iterdir():
         tid = int(task.name)
+        if tid in _outside_robot:
+            continue
         try:
             if os.sched_getscheduler(tid) == os.SCHED_FIFO:
                 continue

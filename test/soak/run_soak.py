@@ -64,7 +64,11 @@ from reliability.referee_watch import RefereeWatch  # noqa: E402
 from reliability.rigs import WireWatch, hardware_config  # noqa: E402
 from reliability.wire import check_actuator_states, max_efforts  # noqa: E402
 from rm_base.bridge import CanBridgeNode  # noqa: E402
-from rm_base.realtime import children_start_normal, prepare_loop_process  # noqa: E402
+from rm_base.realtime import (  # noqa: E402
+    children_start_normal,
+    outside_robot,
+    prepare_loop_process,
+)
 from rm_base.ros_publish import publish  # noqa: E402
 from rm_base.sim import Fault, FaultKind  # noqa: E402
 from support.robot import CONFIG_DIR, load_parameters  # noqa: E402
@@ -303,6 +307,10 @@ class Commander:
             self.silent_until = time.monotonic() + rng.uniform(0.5, 2.0)
 
     def _run(self) -> None:
+        with outside_robot():  # the operator, not the robot (rm_base.realtime)
+            self._publish_mixes()
+
+    def _publish_mixes(self) -> None:
         clock = self.robot.node.get_clock()
         while not self._stop.wait(0.02):
             now = time.monotonic()

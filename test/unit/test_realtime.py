@@ -32,6 +32,29 @@ def test_raise_process_threads_changes_only_threads_under_normal_scheduling(monk
     assert count == len(changed) and all(p == 10 for _, p in changed)
 
 
+def test_raise_process_threads_leaves_a_thread_outside_the_robot(monkeypatch):
+    changed = []
+    monkeypatch.setattr(realtime.os, 'sched_getscheduler', lambda tid: os.SCHED_OTHER)
+    monkeypatch.setattr(realtime, 'set_fifo_priority', lambda priority, tid: changed.append(tid))
+    inside, stop = threading.Event(), threading.Event()
+
+    def simulated_world():
+        with realtime.outside_robot():
+            inside.set()
+            stop.wait()
+
+    worker = threading.Thread(target=simulated_world)
+    worker.start()
+    try:
+        inside.wait()
+        realtime.raise_process_threads(10)
+    finally:
+        stop.set()
+        worker.join()
+    assert threading.get_native_id() in changed and worker.native_id not in changed
+    assert worker.native_id not in realtime._outside_robot  # a new thread may reuse the id
+
+
 def test_a_refusal_is_one_warning_and_normal_scheduling(monkeypatch, caplog):
     def refuse(priority):
         raise PermissionError(1, 'Operation not permitted')
@@ -190,6 +213,24 @@ def test_a_process_started_by_a_real_time_thread_within_children_start_normal_is
         assert result['started normal'] == os.SCHED_OTHER
         # the flag also resets new threads: threads started afterwards inherit FIFO again
         assert result['thread after'] == os.SCHED_FIFO
+
+
+@pytest.mark.skipif(not hasattr(os, 'sched_setscheduler'), reason='Linux scheduling API')
+def test_a_thread_outside_the_robot_started_by_a_real_time_one_runs_normal_within():
+    def body(result):
+        def world():
+            result['inherited'] = os.sched_getscheduler(0)
+            with realtime.outside_robot():
+                result['within'] = os.sched_getscheduler(0)
+
+        thread = threading.Thread(target=world)
+        thread.start()
+        thread.join()
+
+    result = _in_a_real_time_thread(body)
+    if 'refused' not in result:
+        assert result['inherited'] == os.SCHED_FIFO
+        assert result['within'] == os.SCHED_OTHER
 
 
 def _policy_of_a_new_thread():

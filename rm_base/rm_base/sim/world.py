@@ -31,6 +31,7 @@ from enum import Enum
 from pathlib import Path
 from typing import Any
 
+from rm_base import realtime
 from rm_base.sim.body import RobotBody
 from rm_base.sim.body_config import body_from_config
 from rm_base.sim.channel import SimChannel, register_channel, release_channel
@@ -510,6 +511,10 @@ class SimWorld:
         self._thread = None
 
     def _run(self) -> None:
+        with realtime.outside_robot():  # the motors are not the robot's threads
+            self._run_physics()
+
+    def _run_physics(self) -> None:
         period = self.period_ns
         deadline = time.perf_counter_ns() + period
         while not self._stop.is_set():
