@@ -156,21 +156,32 @@ class Robot:
         )
         self.executor = EventsExecutor(context=self.context)
         self.executor.add_node(self.bridge)
-        self.executor.add_node(self.node)
+        # the soak's own subscriptions (states, every /actuator_states checked) are not the
+        # robot's: another executor, in a thread outside it (rm_base.realtime)
+        self.soak_executor = EventsExecutor(context=self.context)
+        self.soak_executor.add_node(self.node)
         self._cpus = os.sched_getaffinity(0)  # rm_robot's, before this process is pinned
         prepare_loop_process(
             self.bridge.edge_priority, self.bridge.cpu_index, self.bridge.cpu_latency_us
         )  # as can_bridge
         self._stop = threading.Event()
-        self._spinner = threading.Thread(target=self._spin, name='soak-spin', daemon=True)
+        self._spinner = threading.Thread(
+            target=self._spin, args=(self.executor,), name='soak-spin', daemon=True
+        )
+        self._listener = threading.Thread(target=self._listen, name='soak-listen', daemon=True)
         self._spinner.start()
+        self._listener.start()
         self.host: subprocess.Popen | None = None
         self.host_log = open(workdir / 'rm_robot.log', 'ab')
         self.host_exits: list[int] = []  # exits not caused by the soak (crashes)
 
-    def _spin(self) -> None:
+    def _spin(self, executor: EventsExecutor) -> None:
         while not self._stop.is_set():
-            self.executor.spin_once(timeout_sec=0.05)
+            executor.spin_once(timeout_sec=0.05)
+
+    def _listen(self) -> None:
+        with outside_robot():
+            self._spin(self.soak_executor)
 
     def _store(self, topic: str, msg: Any) -> None:
         with self._lock:
@@ -221,7 +232,9 @@ class Robot:
                 self.host.kill()
         self._stop.set()
         self._spinner.join(timeout=5.0)
+        self._listener.join(timeout=5.0)
         self.executor.shutdown()
+        self.soak_executor.shutdown()
         self.bridge.destroy_node()
         self.node.destroy_node()
         self.watch.close()
