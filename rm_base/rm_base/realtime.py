@@ -38,10 +38,16 @@ LOOP_PRIORITY = 50
 EDGE_PRIORITY = 10
 #: Longest a thread that wakes waits for the GIL behind a busy one (CPython: 5 ms) [s].
 GIL_SWITCH_INTERVAL_S = 0.0005
+#: The same in a loop's process that also hosts threads outside the robot
+#: (:func:`outside_robot`): they hold the GIL whenever they run, and the loop, which
+#: preempts them as it wakes, waits for it up to this long [s].
+GIL_SWITCH_INTERVAL_BESIDE_OUTSIDE_S = 0.0001
 
 _thread_role = threading.local()
 # Native ids of this process's threads that are not the robot's (outside_robot).
 _outside_robot: set[int] = set()
+# Whether prepare_loop_process ran in this process.
+_loop_process = [False]
 
 
 @contextlib.contextmanager
@@ -86,16 +92,25 @@ def outside_robot() -> Iterator[None]:
     :func:`raise_process_threads` leaves the thread as it is, and a thread started after
     the process was prepared drops the priority it inherited. It stays on the CPU it is
     given (:func:`keep_on_cpu` pins it with the loop): it takes the GIL, and there only the
-    loop's own process preempts it, whose threads wait for that lock while it holds it.
+    loop's own process preempts it, whose threads wait for that lock while it holds it. In
+    a loop's process the switch interval becomes GIL_SWITCH_INTERVAL_BESIDE_OUTSIDE_S.
     """
     tid = threading.get_native_id()
     _outside_robot.add(tid)
     try:
         if os.sched_getscheduler(0) != os.SCHED_OTHER:
             os.sched_setscheduler(0, os.SCHED_OTHER, os.sched_param(0))
+        _shorten_beside_outside_threads()
         yield
     finally:
         _outside_robot.discard(tid)  # the id may be reused by a later thread
+
+
+def _shorten_beside_outside_threads() -> None:
+    if _loop_process[0] and _outside_robot:
+        sys.setswitchinterval(
+            min(sys.getswitchinterval(), GIL_SWITCH_INTERVAL_BESIDE_OUTSIDE_S)
+        )
 
 
 def shorten_gil_switch_interval() -> None:
@@ -295,7 +310,9 @@ def prepare_loop_process(
     Raises:
         ValueError: cpu_index is outside the allowed CPUs (a configuration error).
     """
+    _loop_process[0] = True
     shorten_gil_switch_interval()
+    _shorten_beside_outside_threads()
     raise_edge_priority(edge_priority)
     hold_cpu_latency(cpu_latency_us)
     if cpu_index is not None:

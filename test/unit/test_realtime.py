@@ -166,6 +166,7 @@ def test_a_loop_process_gets_the_short_switch_interval_the_edge_priority_and_its
     monkeypatch.setattr(realtime, 'raise_edge_priority', lambda p: calls.append(('fifo', p)))
     monkeypatch.setattr(realtime, 'keep_on_cpu', lambda i: calls.append(('cpu', i)))
     monkeypatch.setattr(realtime.cpu_latency, 'hold', lambda us: calls.append(('latency', us)))
+    monkeypatch.setattr(realtime, '_loop_process', [False])  # this test's process only
     before = sys.getswitchinterval()
     sys.setswitchinterval(0.005)  # CPython's default: a busy thread keeps a waking loop 5 ms
     try:
@@ -176,6 +177,31 @@ def test_a_loop_process_gets_the_short_switch_interval_the_edge_priority_and_its
     finally:
         sys.setswitchinterval(before)
     assert calls == [('fifo', 10), ('latency', 0), ('cpu', -1), ('fifo', 0)]
+
+
+def test_a_thread_outside_the_robot_in_a_loop_process_shortens_the_switch_interval(
+    monkeypatch,
+):
+    monkeypatch.setattr(realtime, 'raise_edge_priority', lambda p: None)
+    monkeypatch.setattr(realtime, '_loop_process', [False])
+    before = sys.getswitchinterval()
+    try:
+        sys.setswitchinterval(0.005)
+        with realtime.outside_robot():  # no loop in the process yet: nothing to shorten
+            assert sys.getswitchinterval() == pytest.approx(0.005)
+            realtime.prepare_loop_process(0, None, None)
+            assert sys.getswitchinterval() == pytest.approx(
+                realtime.GIL_SWITCH_INTERVAL_BESIDE_OUTSIDE_S
+            )
+        sys.setswitchinterval(0.005)
+        realtime.prepare_loop_process(0, None, None)  # no thread outside it any more
+        assert sys.getswitchinterval() == pytest.approx(realtime.GIL_SWITCH_INTERVAL_S)
+        with realtime.outside_robot():  # one that starts after the process was prepared
+            assert sys.getswitchinterval() == pytest.approx(
+                realtime.GIL_SWITCH_INTERVAL_BESIDE_OUTSIDE_S
+            )
+    finally:
+        sys.setswitchinterval(before)
 
 
 def test_a_refused_latency_request_is_one_warning_and_the_process_goes_on(
