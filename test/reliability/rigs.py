@@ -21,7 +21,6 @@ import math
 import os
 import threading
 import time
-import typing
 from collections.abc import Callable, Mapping
 from typing import Any
 
@@ -225,11 +224,6 @@ def hardware_config(parameters: Mapping[str, Any]) -> dict[str, Any]:
     return config
 
 
-class _JointCommand(typing.NamedTuple):
-    name: str
-    mode: int
-
-
 class WireWatch:
     """Taps every simulated bus of a running bridge and checks every frame, in a thread.
 
@@ -238,6 +232,11 @@ class WireWatch:
     thread works ``lag_s`` behind real time: everything older than that is merged by time
     and checked. A starved executor delivers its commands late to the bridge too (it
     stamps them on arrival), so the two stay in step as long as the lag covers the delay.
+
+    What waits for the lag is kept as tuples of numbers, strings and bytes, not as frames
+    and command objects: a soak holds thousands of them, and the garbage collection that the
+    robot's loop runs in the same process scans every container object that is alive
+    (docs/RELIABILITY.md, "Soak").
 
     Args:
         world: the bridge's SimWorld (real time: frames carry ``time.time()``).
@@ -283,8 +282,10 @@ class WireWatch:
         }
         self._lag_s = lag_s
         self._lead_s = 0.01  # [s] see _work
-        self._frames: list[tuple[float, int, str, can.Message]] = []  # heap by time
-        self._commands: collections.deque[tuple[float, Any]] = collections.deque()
+        # heap by time: (t, seq, bus, id, data, the frame itself only if not a data frame)
+        self._frames: list[tuple[float, int, str, int, bytes, can.Message | None]] = []
+        # (t, joint, mode) of a joint command; (t, message, None) of an /actuator_cmd
+        self._commands: collections.deque[tuple[float, Any, int | None]] = collections.deque()
         self._seq = itertools.count()
         self._lock = threading.Lock()
         self._done_until = 0.0  # everything before this wall time has been checked
@@ -305,29 +306,37 @@ class WireWatch:
         with self._lock:
             for bus, tap in self._taps.items():
                 while (msg := tap.recv(0.0)) is not None:
-                    heapq.heappush(self._frames, (msg.timestamp, next(self._seq), bus, msg))
+                    odd = msg.is_error_frame or msg.is_remote_frame or msg.is_extended_id
+                    heapq.heappush(self._frames, (
+                        msg.timestamp, next(self._seq), bus, msg.arbitration_id,
+                        bytes(msg.data), msg if odd else None,
+                    ))
             frames, commands, checker = self._frames, self._commands, self.checker
             while frames and frames[0][0] <= horizon:
-                t, _, bus, msg = heapq.heappop(frames)
+                t, _, bus, can_id, data, odd = heapq.heappop(frames)
                 # The bridge's and this subscription's callbacks run one after the other
                 # in one executor spin: a command noted just after a frame may already
                 # have been applied to it.
                 while commands and commands[0][0] <= t + self._lead_s:
                     self._note(*commands.popleft())
-                checker.feed(bus, msg)
+                if odd is None:
+                    odd = can.Message(
+                        timestamp=t, arbitration_id=can_id, data=data, is_extended_id=False
+                    )
+                checker.feed(bus, odd)
             while commands and commands[0][0] <= horizon:
                 self._note(*commands.popleft())
             self._done_until = max(self._done_until, horizon)
 
-    def _note(self, t: float, command: Any) -> None:
-        if isinstance(command, _JointCommand):
-            self.checker.note_joint_command(command.name, command.mode, t)
-        else:
+    def _note(self, t: float, command: Any, mode: int | None) -> None:
+        if mode is None:
             self.checker.note_command(command, t)
+        else:
+            self.checker.note_joint_command(command, mode, t)
 
     def note_command(self, msg: Any, t: float) -> None:
         """An /actuator_cmd seen at wall time t (the checker's ``no_command`` rule)."""
-        self._commands.append((t, msg))
+        self._commands.append((t, msg, None))
 
     def watch_commands(self, hardware: CanHardware) -> None:
         """Note every command where the bridge hands it to its hardware layer.
@@ -345,11 +354,11 @@ class WireWatch:
 
         def noted_command(name: str, mode: int, **kwargs: Any) -> None:
             set_command(name, mode, **kwargs)  # raises for a rejected one: not noted
-            commands.append((clock(), _JointCommand(name, mode)))
+            commands.append((clock(), name, mode))
 
         def noted_target(name: str, target: Any, **kwargs: Any) -> None:
             set_target(name, target, **kwargs)  # raises for an unknown joint: not noted
-            commands.append((clock(), _JointCommand(name, int(target.mode))))
+            commands.append((clock(), name, int(target.mode)))
 
         hardware.set_command = noted_command  # type: ignore[method-assign]
         hardware.set_target = noted_target  # type: ignore[method-assign]
