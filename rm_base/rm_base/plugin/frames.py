@@ -21,7 +21,7 @@ from tf2_msgs.msg import TFMessage
 
 from rm_base.geometry.frame_tree import FrameTree
 from rm_base.geometry.transforms import SE3
-from rm_base.plugin.outbox import is_heard
+from rm_base.plugin.outbox import is_heard, publish_built
 
 #: tf2_ros's TransformBroadcaster QoS: depth 100.
 TF_QOS = QoSProfile(depth=100)
@@ -46,6 +46,11 @@ def transform_message(parent: str, child: str, transform: SE3, stamp_ns: int) ->
     t.x, t.y, t.z = (float(v) for v in transform.translation)
     q.x, q.y, q.z, q.w = transform.quaternion
     return msg
+
+
+def tf_message(links: tuple[Link, ...], stamp_ns: int) -> TFMessage:
+    """The links as one tf2_msgs/TFMessage, each stamped stamp_ns [ns]."""
+    return TFMessage(transforms=[transform_message(p, c, t, stamp_ns) for p, c, t in links])
 
 
 def se3_from_message(msg: TransformStamped) -> SE3:
@@ -84,6 +89,5 @@ class FramePublisher:
         for parent, child, transform in links:
             self._frames.set(parent, child, transform, stamp_ns, static=self.static)
         if is_heard(self._publisher):
-            self._publisher.publish(
-                TFMessage(transforms=[transform_message(p, c, t, stamp_ns) for p, c, t in links])
-            )
+            # built by the edge's thread (the transforms are frozen): not the loop's work
+            publish_built(self._publisher, tf_message, links, stamp_ns)
