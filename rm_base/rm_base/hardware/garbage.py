@@ -13,6 +13,13 @@ collection per tick. The objects that exist when the first loop starts (modules,
 the configuration) are collected once and frozen (``gc.freeze``), so a full collection
 scans only what was made since; they are unfrozen when the last loop stops.
 
+CPython also skips a due full collection while fewer objects reached the oldest
+generation since its last collection than a quarter of those it kept then (a full
+collection costs the whole heap; this bounds its share). It does not expose those two
+counts, so the collecting loop keeps them (:class:`OldestGeneration`): the objects it
+finds there after a full collection, and the survivors of each generation-1 collection,
+which move there.
+
 ``gc`` is the process's: with several loops in one process (the CAN loop and rm_manual's
 100 Hz loop), the fastest collects for all, the others only keep automatic collection
 off, and the last one to stop turns it back on.
@@ -59,6 +66,7 @@ def take_over(rate_hz: float) -> Holder:
             gc.disable()
             gc.collect()  # frozen garbage would never be freed
             gc.freeze()
+            oldest.total = oldest.pending = 0
         _holders.append(holder)
     return holder
 
@@ -75,21 +83,47 @@ def give_back(holder: Holder) -> None:
                 gc.enable()
 
 
+@dataclass
+class OldestGeneration:
+    """What CPython weighs before a full collection, kept by the collecting loop.
+
+    Attributes:
+        total: objects in the oldest generation after its last collection.
+        pending: objects that reached it since (survivors of generation-1 collections).
+    """
+
+    total: int = 0
+    pending: int = 0
+
+    @property
+    def worth_collecting(self) -> bool:
+        """Whether a due full collection runs: a quarter of ``total`` has arrived since."""
+        return self.pending >= self.total // 4
+
+
+#: The process's (the frozen objects are in no generation: a loop starts from zero).
+oldest = OldestGeneration()
+
+
 def due_generation(
-    counts: tuple[int, int, int], thresholds: tuple[int, int, int]
+    counts: tuple[int, int, int],
+    thresholds: tuple[int, int, int],
+    oldest: OldestGeneration | None = None,
 ) -> int | None:
     """The generation CPython would collect at these counts, or None (CPython 3.11 rule).
 
     ``counts[0]`` is allocations minus deallocations since the last collection;
     ``counts[1]`` and ``counts[2]`` the collections of the generation below since the last
     collection of their own. Nothing is due until generation 0 is over its threshold; then
-    the oldest generation over its threshold is collected.
+    the oldest generation over its threshold is collected, but the oldest one only when
+    ``oldest`` says it is worth it (None: always).
     """
     if thresholds[0] == 0 or counts[0] <= thresholds[0]:  # threshold 0: collection off
         return None
-    for generation in (2, 1):
-        if counts[generation] > thresholds[generation]:
-            return generation
+    if counts[2] > thresholds[2] and (oldest is None or oldest.worth_collecting):
+        return 2
+    if counts[1] > thresholds[1]:
+        return 1
     return 0
 
 
@@ -101,7 +135,13 @@ def collect_if_due(holder: Holder) -> int | None:
     """
     if not holder.collects:
         return None
-    generation = due_generation(gc.get_count(), gc.get_threshold())
-    if generation is not None:
-        gc.collect(generation)
+    generation = due_generation(gc.get_count(), gc.get_threshold(), oldest)
+    if generation == 2:
+        gc.collect(2)
+        oldest.total, oldest.pending = len(gc.get_objects(2)), 0
+    elif generation == 1:
+        young = len(gc.get_objects(0)) + len(gc.get_objects(1))
+        oldest.pending += max(0, young - gc.collect(1))  # collect returns the unreachable
+    elif generation == 0:
+        gc.collect(0)
     return generation

@@ -22,6 +22,22 @@ def test_the_generation_due_is_the_one_cpython_would_collect(counts, due):
     assert garbage.due_generation(counts, THRESHOLDS) == due
 
 
+@pytest.mark.parametrize(('pending', 'total', 'due'), [
+    (0, 0, 2),  # nothing there yet: as cheap as it gets
+    (24, 100, 0),  # under a quarter arrived: skipped, and generation 1 is not over either
+    (25, 100, 2),
+    (1000, 100, 2),
+])
+def test_a_full_collection_waits_for_a_quarter_of_the_oldest_generation(pending, total, due):
+    oldest = garbage.OldestGeneration(total=total, pending=pending)
+    assert garbage.due_generation((701, 0, 11), THRESHOLDS, oldest) == due
+
+
+def test_a_skipped_full_collection_leaves_generation_1_due():
+    oldest = garbage.OldestGeneration(total=100, pending=0)
+    assert garbage.due_generation((701, 11, 11), THRESHOLDS, oldest) == 1
+
+
 def test_a_zero_threshold_means_never():
     assert garbage.due_generation((10_000, 100, 100), (0, 10, 10)) is None
 
@@ -76,3 +92,38 @@ def test_a_loop_that_does_not_collect_leaves_the_count_alone(restored):
     finally:
         garbage.give_back(slow)
         garbage.give_back(fast)
+
+
+def _collect_while_allocating(holder, rounds, keep=None):
+    """Allocate cycles (and keep some objects when keep is a list); collect what is due."""
+    done = []
+    for _ in range(rounds):
+        for _ in range(gc.get_threshold()[0] + 1):
+            a = []
+            a.append(a)
+            if keep is not None:
+                keep.append([])
+        done.append(garbage.collect_if_due(holder))
+    return done
+
+
+def test_the_loop_skips_full_collections_of_a_heap_that_is_not_growing(restored):
+    thresholds = gc.get_threshold()
+    gc.set_threshold(100, 2, 2)
+    holder = garbage.take_over(1000.0)
+    try:
+        keep = [[] for _ in range(20_000)]  # long-lived: in the oldest generation soon
+        done = _collect_while_allocating(holder, 30)
+        assert 2 in done
+        assert garbage.oldest.total >= len(keep)  # counted after the full collection
+        # only garbage since: 10 full collections would be due, none is worth it
+        done = _collect_while_allocating(holder, 100)
+        assert 2 not in done and 1 in done and 0 in done
+        assert garbage.oldest.pending < garbage.oldest.total // 4
+        # a growing heap: a quarter more reaches the oldest generation, which is collected
+        grown: list[list[object]] = []
+        done = _collect_while_allocating(holder, 200, keep=grown)
+        assert 2 in done and len(grown) >= len(keep) // 4
+    finally:
+        garbage.give_back(holder)
+        gc.set_threshold(*thresholds)
