@@ -76,9 +76,24 @@ def evaluate_targets(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
         out.append({
             'label': t.label, 'before': t.before,
             'median': median, 'min': min(numbers, default=None), 'max': max(numbers, default=None),
-            'target': f'{t.op} {_fmt(t.bound)}', 'verdict': verdict,
+            'target': f'{t.op} {_fmt(t.bound)}', 'bound': t.bound, 'verdict': verdict,
         })
     return out
+
+
+def _fmt_beside(x: float | None, bound: float) -> str:
+    """x as the tables print it, with more digits while it would read as the bound.
+
+    998.6 ticks/s would print as 999 beside a target of >= 999 and a MISS.
+    """
+    text = _fmt(x)
+    if x is None or x == bound or text != _fmt(bound):
+        return text
+    for digits in range(1, 7):
+        text = f'{x:.{digits}f}'
+        if text != f'{bound:.{digits}f}':
+            break
+    return text
 
 
 def format_targets(evaluated: list[dict[str, Any]]) -> str:
@@ -90,7 +105,8 @@ def format_targets(evaluated: list[dict[str, Any]]) -> str:
         '|---|---|---|---|---|',
     ]
     for e in evaluated:
-        now = (f'{_fmt(e["median"])} ({_fmt(e["min"])}-{_fmt(e["max"])})'
-               if e['median'] is not None else 'n/a')
+        shown = [_fmt_beside(e[k], e['bound']) for k in ('median', 'min', 'max')]
+        now = f'{shown[0]} ({shown[1]}-{shown[2]})' if e['median'] is not None else 'n/a'
+
         lines.append(f'| {e["label"]} | {e["before"]} | {now} | {e["target"]} | {e["verdict"]} |')
     return '\n'.join(lines)
