@@ -107,6 +107,5 @@ def format_targets(evaluated: list[dict[str, Any]]) -> str:
     for e in evaluated:
         shown = [_fmt_beside(e[k], e['bound']) for k in ('median', 'min', 'max')]
         now = f'{shown[0]} ({shown[1]}-{shown[2]})' if e['median'] is not None else 'n/a'
-
         lines.append(f'| {e["label"]} | {e["before"]} | {now} | {e["target"]} | {e["verdict"]} |')
     return '\n'.join(lines)
