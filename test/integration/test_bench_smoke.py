@@ -68,6 +68,10 @@ def test_when_run_quick_expect_every_row_in_the_table_and_the_json(tmp_path):
     assert all(t['verdict'] in ('PASS', 'MISS') for t in one_process), one_process
     for target in targets:
         assert any(line.startswith(f'| {target["label"]} |') for line in table_lines)
+    # the loop's stages that rows look up by name are the running robot's
+    by_key = {r['key']: r for r in data['rows']}
+    for key in ('cpu.tick.feedback', 'cpu.tick.imu', 'cpu.tick.commands', 'cpu.tick.chassis'):
+        assert by_key[key]['median'] is not None, key
 
 
 def _targets():
