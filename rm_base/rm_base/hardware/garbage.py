@@ -108,7 +108,7 @@ oldest = OldestGeneration()
 def due_generation(
     counts: tuple[int, int, int],
     thresholds: tuple[int, int, int],
-    oldest: OldestGeneration | None = None,
+    record: OldestGeneration | None = None,
 ) -> int | None:
     """The generation CPython would collect at these counts, or None (CPython 3.11 rule).
 
@@ -116,11 +116,12 @@ def due_generation(
     ``counts[1]`` and ``counts[2]`` the collections of the generation below since the last
     collection of their own. Nothing is due until generation 0 is over its threshold; then
     the oldest generation over its threshold is collected, but the oldest one only when
-    ``oldest`` says it is worth it (None: always).
+    ``record`` (the oldest generation's, usually :data:`oldest`) says it is worth it
+    (None: always).
     """
     if thresholds[0] == 0 or counts[0] <= thresholds[0]:  # threshold 0: collection off
         return None
-    if counts[2] > thresholds[2] and (oldest is None or oldest.worth_collecting):
+    if counts[2] > thresholds[2] and (record is None or record.worth_collecting):
         return 2
     if counts[1] > thresholds[1]:
         return 1
