@@ -121,6 +121,17 @@ class LockstepRig:
         while (msg := bus.recv(0.0)) is not None:
             self.bus.dispatch(msg, now_ns)
 
+    def fault(self, joint: str, fault: Any) -> None:
+        """Inject a simulated fault into joint's motor and tell the checker (its own record)."""
+        self.world.inject(joint, fault)
+        self.checker.note_fault(joint, fault.kind.value, self.t,
+                                temperature=fault.temperature)
+
+    def clear_fault(self, joint: str, kind: Any) -> None:
+        """Clear a simulated fault of joint's motor and tell the checker."""
+        self.world.clear_faults(joint, kind)
+        self.checker.note_fault(joint, kind.value, self.t, active=False)
+
     def inject(self, can_id: int, data: bytes) -> None:
         """Put a frame from another node on the wire (seen by the hardware next step)."""
         self.peer.send(can.Message(arbitration_id=can_id, data=data, is_extended_id=False))

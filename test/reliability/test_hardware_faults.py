@@ -29,6 +29,7 @@ from reliability.rigs import LockstepRig
 
 TICK = 1e-3  # [s] one scheduler tick = one world tick
 FEEDBACK_TIMEOUT = 0.1  # [s] safety.feedback_timeout_s (default)
+FAULT_CLEAR = 1.0  # [s] safety.fault_clear_s (default)
 # Wire times are epoch seconds (~1.8e9) in doubles: resolution ~0.2 µs.
 EPS = 1e-5  # [s]
 
@@ -86,7 +87,7 @@ def test_when_a_motor_goes_silent_expect_zero_within_100_ms_and_recovery_without
 ):
     rig.step(300, DRIVE)
     assert all(driven(rig, j, rig.t - 0.01) for j in JOINTS)
-    rig.world.inject(joint, Fault.offline())
+    rig.fault(joint, Fault.offline())
     rig.step(200, DRIVE)  # the plugin keeps commanding all along
     last_feedback = rig.checker.last_feedback(joint)
     t_zero, stays_zero = first_zero_after(rig, joint, last_feedback)
@@ -101,9 +102,12 @@ def test_when_a_motor_goes_silent_expect_zero_within_100_ms_and_recovery_without
     assert all(driven(rig, j, rig.t - 0.01) for j in others)
 
     back = rig.t
-    rig.world.clear_faults(joint, FaultKind.OFFLINE)
+    rig.clear_fault(joint, FaultKind.OFFLINE)
+    rig.step(round(FAULT_CLEAR * 1000) - 10, DRIVE)  # one frame back is no evidence
+    assert rig.hw.actuators[joint].state().online and not driven(rig, joint, back)
+    assert rig.hw.actuators[joint].hold_reason is HoldReason.OFFLINE
     rig.step(100, DRIVE)
-    assert driven(rig, joint, back) and rig.hw.actuators[joint].state().online
+    assert driven(rig, joint, back + FAULT_CLEAR)
     if joint == 'arm':  # the Damiao was re-enabled by the layer when it came back
         enable = damiao.system_frame_id(3, damiao.DmMode.MIT, with_mode_offset=False)
         assert any(
@@ -116,39 +120,62 @@ def test_when_a_motor_goes_silent_expect_zero_within_100_ms_and_recovery_without
 @pytest.mark.parametrize('joint', ['wheel', 'yaw'])
 def test_when_a_dji_motor_overheats_expect_zero_on_the_next_tick_until_below_hysteresis(rig, joint):
     rig.step(200, DRIVE)
-    rig.world.inject(joint, Fault.over_temperature(130.0))  # limit 80 °C (type default)
+    rig.fault(joint, Fault.over_temperature(130.0))  # limit 80 °C (type default)
     rig.step(50, DRIVE)
     hot = next(t for t in _feedback_times(rig, joint) if _temperature(rig, joint, t) >= 80)
     t_zero, stays_zero = first_zero_after(rig, joint, hot - EPS)
     assert stays_zero and t_zero - hot <= TICK + EPS
     assert rig.hw.actuators[joint].hold_reason is HoldReason.OVER_TEMPERATURE
-    rig.world.inject(joint, Fault.over_temperature(76.0))  # above 80 - 5 °C: still held
-    rig.step(50, DRIVE)
-    assert not driven(rig, joint, rig.t - 0.04)
+    rig.fault(joint, Fault.over_temperature(76.0))  # above 80 - 10 °C: still held
+    rig.step(1500, DRIVE)
+    assert not driven(rig, joint, hot)
     cool = rig.t
-    rig.world.inject(joint, Fault.over_temperature(60.0))
+    rig.fault(joint, Fault.over_temperature(60.0))  # below: held for the clear time more
+    rig.step(round(FAULT_CLEAR * 1000) - 10, DRIVE)
+    assert not driven(rig, joint, hot)
+    rig.step(100, DRIVE)
+    assert driven(rig, joint, cool + FAULT_CLEAR)
+    assert_no_unsafe_frame(rig)
+
+
+@pytest.mark.parametrize('joint', ['wheel', 'yaw'])
+def test_when_an_overheated_motor_sends_garbage_expect_it_never_driven(rig, joint):
+    # The finding: one random frame on the feedback id (a cool 28 °C, plausible angle and
+    # speed) lifted the hold and put max_effort into a motor at 123 °C.
+    rig.step(200, DRIVE)
+    rig.fault(joint, Fault.over_temperature(123.0))
     rig.step(50, DRIVE)
-    assert driven(rig, joint, cool)
+    hot = rig.t
+    can_id = 0x201 if joint == 'wheel' else 0x205
+    for k in range(20):  # the finding's frame, and variations of it, between real frames
+        data = bytearray.fromhex('049CF45B2D701C97')
+        data[0] = (data[0] + 13 * k) & 0x1F
+        rig.inject(can_id, bytes(data))
+        rig.step(25, DRIVE)
+    assert not driven(rig, joint, hot - EPS)
+    assert rig.hw.actuators[joint].hold_reason is HoldReason.OVER_TEMPERATURE
+    actuator = rig.hw.actuators[joint]  # each refused: implausible, or corrupt (too fast)
+    assert actuator.implausible_frames + actuator.decode_errors >= 20
     assert_no_unsafe_frame(rig)
 
 
 def test_when_a_damiao_overheats_expect_limp_frames_until_the_fault_is_cleared(rig):
     rig.step(200, DRIVE)
-    rig.world.inject('arm', Fault.over_temperature(130.0))  # sim cut-out 120 °C, joint 80 °C
+    rig.fault('arm', Fault.over_temperature(130.0))  # sim cut-out 120 °C, joint 80 °C
     rig.step(50, DRIVE)
     assert rig.hw.actuators['arm'].hold_reason in (
         HoldReason.OVER_TEMPERATURE,
         HoldReason.DEVICE_FAULT,
     )
     assert not driven(rig, 'arm', rig.t - 0.045)
-    rig.world.inject('arm', Fault.over_temperature(40.0))
+    rig.fault('arm', Fault.over_temperature(40.0))
     rig.step(50, DRIVE)
     # the motor latched COIL_OVER_TEMPERATURE: still limp, whatever the plugin asks
     assert rig.hw.actuators['arm'].hold_reason is HoldReason.DEVICE_FAULT
     assert not driven(rig, 'arm', rig.t - 0.045)
     cleared = rig.t
     rig.hw.request_system_command('arm', SystemCommand.CLEAR_ERROR)
-    rig.step(300, DRIVE)  # clear, re-enable (at most every 100 ms), drive
+    rig.step(round(FAULT_CLEAR * 1000) + 300, DRIVE)  # clear, re-enable, the clear time
     assert driven(rig, 'arm', cleared)
     assert_no_unsafe_frame(rig)
 

@@ -165,12 +165,54 @@ def test_non_zero_after_the_feedback_timeout_plus_grace_is_flagged_and_latency_m
     assert feed(checker, wheel_fb(0.2), wheel_cmd(ONE_NM, 0.2)) == []
 
 
-def test_non_zero_while_over_temperature_is_flagged_until_below_the_hysteresis():
+def test_non_zero_while_over_temperature_is_flagged_until_cool_for_the_clear_time():
     checker = WireChecker(CONFIG, grace_s=0.002)
     feed(checker, wheel_fb(0.0, temperature=80), wheel_cmd(ONE_NM, 0.001))  # within grace
     found = feed(checker, wheel_fb(0.005, temperature=76), wheel_cmd(ONE_NM, 0.005))
-    assert rules(found) == [('wheel', 'over_temperature')]  # 76 °C: above 80 - 5
-    assert feed(checker, wheel_fb(0.01, temperature=74), wheel_cmd(ONE_NM, 0.01)) == []
+    assert rules(found) == [('wheel', 'over_temperature')]  # 76 °C: above 80 - 10
+    t = 0.01
+    for temperature in (72, 69):  # 69 °C: below 80 - 10, the clear time starts here
+        feed(checker, wheel_fb(t, temperature=temperature))
+        t += 0.01
+    cool = t - 0.01
+    while t < cool + 1.0:  # safety.fault_clear_s 1 s of cool frames
+        found = feed(checker, wheel_fb(t, temperature=69), wheel_cmd(ONE_NM, t + 0.0005))
+        assert rules(found) == [('wheel', 'over_temperature')], t - cool
+        t += 0.05
+    t = cool + 1.0
+    assert feed(checker, wheel_fb(t, temperature=69), wheel_cmd(ONE_NM, t + 0.0005)) == []
+
+
+def test_the_checkers_own_record_of_an_injected_fault_outweighs_what_the_wire_says():
+    # A garbage frame saying 28 °C must not make a motor the harness overheated drivable.
+    checker = WireChecker(CONFIG, grace_s=0.002)
+    feed(checker, wheel_fb(0.0), wheel_cmd(ONE_NM, 0.0005))
+    checker.note_fault('wheel', 'over_temperature', 0.001, temperature=123.0)
+    found = feed(checker, wheel_fb(0.004, temperature=28), wheel_cmd(ONE_NM, 0.0045))
+    assert rules(found) == [('wheel', 'injected_over_temperature')]
+    checker.note_fault('wheel', 'over_temperature', 0.5, active=False)
+    found = feed(checker, wheel_fb(1.4, temperature=28), wheel_cmd(ONE_NM, 1.4005))
+    assert rules(found) == [('wheel', 'injected_over_temperature')]  # within the clear time
+    assert feed(checker, wheel_fb(1.51), wheel_cmd(ONE_NM, 1.5105)) == []
+
+
+def test_an_injected_offline_obliges_zero_after_the_timeout_until_back_for_the_clear_time():
+    checker = WireChecker(CONFIG, grace_s=0.002)
+    checker.note_fault('wheel', 'offline', 0.0)
+    feed(checker, wheel_fb(0.0), wheel_cmd(ONE_NM, 0.05))  # within the feedback timeout
+    assert rules(feed(checker, wheel_cmd(ONE_NM, 0.2))) == [('wheel', 'injected_offline')]
+    checker.note_fault('wheel', 'offline', 0.3, active=False)
+    found = feed(checker, wheel_fb(0.31), wheel_cmd(ONE_NM, 0.311))
+    assert rules(found) == [('wheel', 'injected_offline')]
+    assert feed(checker, wheel_fb(1.31), wheel_cmd(ONE_NM, 1.311)) == []
+
+
+def test_an_outage_shorter_than_the_feedback_timeout_obliges_nothing():
+    checker = WireChecker(CONFIG, grace_s=0.002)
+    feed(checker, wheel_fb(0.0))
+    checker.note_fault('wheel', 'offline', 0.0)
+    checker.note_fault('wheel', 'offline', 0.05, active=False)
+    assert feed(checker, wheel_fb(0.06), wheel_cmd(ONE_NM, 0.061)) == []
 
 
 def test_a_damiao_fault_state_requires_zero():

@@ -21,8 +21,14 @@ A command frame is unsafe (a :class:`Violation`) when
 * ``unknown_slot``: a DJI slot with no configured joint is not zero;
 * ``offline``: it is not zero although the joint sent no feedback for longer than
   ``safety.feedback_timeout_s`` (never any feedback counts too);
-* ``over_temperature`` / ``device_fault``: it is not zero although the joint's latest
-  feedback says it is too hot (with the bridge's hysteresis) or in a fault state;
+* ``over_temperature`` / ``device_fault``: it is not zero although the joint's feedback
+  said it is too hot or in a fault state, and has not since said otherwise for
+  ``safety.fault_clear_s`` (below the hysteresis, or no fault);
+* ``injected_<kind>``: it is not zero although the checker's own record of the faults
+  injected into the motor (:meth:`WireChecker.note_fault`, told by the harness that injects
+  them, never read off the wire) says the motor is offline or too hot, or was within
+  ``safety.fault_clear_s`` (plus the feedback timeout for a motor that went silent). Garbage
+  frames cannot talk the checker out of this rule, whatever they say;
 * ``no_command``: it is not zero although the joint has had no fresh, valid command
   (ActuatorCmd with finite values, a known mode other than MODE_OFF, a stamp within the
   command timeout) for longer than ``safety.command_timeout_s`` — only when commands are
@@ -225,7 +231,11 @@ class _Joint:
         self.velocity = _Window(window_s)
         self.position = _Window(window_s)
         self.overheated_since: float | None = None
+        self.cool_since: float | None = None  # below the hysteresis since
         self.fault_since: float | None = None
+        self.fault_gone_since: float | None = None
+        # the harness's record of injected faults: kind -> (since, cleared at or None)
+        self.injected: dict[str, tuple[float, float | None]] = {}
         self.command_until = _NEVER  # fresh command valid until [s]
         self.commanded = False  # a command was noted (the rule starts there)
         # the current "must be zero" episode: since when, and whether zero was reached
@@ -299,6 +309,7 @@ class WireChecker:
         safety = config.safety
         self.feedback_timeout_s = safety.feedback_timeout_s
         self.command_timeout_s = safety.command_timeout_s
+        self.fault_clear_s = safety.fault_clear_s
         self.joints: dict[str, _Joint] = {}
         # (bus, frame id) -> slot -> joint, for the DJI group frames
         self._dji_frames: dict[tuple[str, int], list[_Joint | None]] = {}
@@ -411,6 +422,29 @@ class WireChecker:
             out += self.feed(bus, msg)
         return out
 
+    def note_fault(
+        self, joint: str, kind: str, t: float, *, active: bool = True,
+        temperature: float | None = None,
+    ) -> None:
+        """Record a fault injected into (``active``) or cleared from a motor at time t [s].
+
+        ``kind`` is ``offline`` or ``over_temperature`` (the kinds that oblige zero output);
+        an over-temperature below the joint's limit (a cooling motor) needs ``temperature``
+        and counts as the fault cleared at t. Other kinds are accepted and not judged.
+        """
+        j = self.joints[joint]
+        if kind == 'over_temperature' and active and temperature is not None:
+            active = temperature >= j.temperature_limit
+            if not active and 'over_temperature' not in j.injected:
+                return  # cool from the start: nothing to latch
+        if kind not in ('offline', 'over_temperature'):
+            return
+        if active:
+            since, cleared = j.injected.get(kind, (t, None))
+            j.injected[kind] = (since if cleared is None else t, None)
+        elif kind in j.injected and j.injected[kind][1] is None:
+            j.injected[kind] = (j.injected[kind][0], t)
+
     def note_command(self, msg: Any, t: float) -> None:
         """An rm_msgs/ActuatorCmd (or look-alike) the bridge received at wire time ``t`` [s].
 
@@ -513,17 +547,28 @@ class WireChecker:
         else:
             joint.velocity.add(t, fb.device_velocity)
         temperature = fb.temperature
+        clear = self.fault_clear_s
         if temperature is not None:
             if temperature >= joint.temperature_limit:
+                joint.cool_since = None
                 if joint.overheated_since is None:
                     joint.overheated_since = t
             elif temperature < joint.temperature_resume:
-                joint.overheated_since = None
+                if joint.cool_since is None:
+                    joint.cool_since = t
+                if t - joint.cool_since >= clear:
+                    joint.overheated_since = None
+            else:
+                joint.cool_since = None
         if fb.error_code and shadow._is_fault(fb.error_code):
+            joint.fault_gone_since = None
             if joint.fault_since is None:
                 joint.fault_since = t
-        else:
-            joint.fault_since = None
+        elif joint.fault_since is not None:
+            if joint.fault_gone_since is None:
+                joint.fault_gone_since = t
+            if t - joint.fault_gone_since >= clear:
+                joint.fault_since = None
 
     # --- commands ------------------------------------------------------------------------
     def _must_be_zero_since(self, joint: _Joint, t: float) -> tuple[float, str] | None:
@@ -536,6 +581,17 @@ class WireChecker:
             reasons.append((joint.overheated_since, 'over_temperature'))
         if joint.fault_since is not None:
             reasons.append((joint.fault_since, 'device_fault'))
+        for kind, (since, cleared) in joint.injected.items():
+            # offline: the bridge may drive until its feedback timeout; after either fault
+            # it must wait fault_clear_s of good frames (offline: from the first one back)
+            start = since + (self.feedback_timeout_s if kind == 'offline' else 0.0)
+            end = math.inf
+            if cleared is not None:
+                if cleared < start:
+                    continue  # back before the bridge could tell: no fault to clear
+                end = cleared + self.fault_clear_s
+            if start <= t < end:
+                reasons.append((start, f'injected_{kind}'))
         if self.track_commands and joint.commanded and t > joint.command_until:
             reasons.append((joint.command_until, 'no_command'))
         if not reasons:

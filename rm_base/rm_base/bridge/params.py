@@ -52,7 +52,7 @@ from typing import Any
 
 from rm_base import cpu_latency
 from rm_base.bridge.errors import BridgeConfigError
-from rm_base.hardware.config import HardwareConfig
+from rm_base.hardware.config import SAFETY_SCHEMA, HardwareConfig
 from rm_base.realtime import EDGE_PRIORITY, LOOP_PRIORITY, choose_cpu
 from rm_base.sim import Timing
 
@@ -259,7 +259,7 @@ def settings_from_parameters(
     }
     safety = {
         key: typed[f'safety.{key}']
-        for key in ('feedback_timeout_s', 'command_timeout_s', 'temperature_hysteresis_c')
+        for key in sorted(SAFETY_SCHEMA.names)
         if f'safety.{key}' in typed
     }
     hardware['scheduler'] = scheduler

@@ -29,6 +29,7 @@ from rm_base.bridge.params import settings_from_parameters
 from rm_base.bridge.sim_config import world_config
 from rm_base.bridge.sim_services import SimFaultServices
 from rm_base.errors import ConfigError
+from rm_base.hardware.config import SAFETY_SCHEMA
 from rm_base.node_main import init_ros, spin_until_shutdown
 from rm_base.param_files import load_parameters
 from rm_base.sim import SimWorld
@@ -43,7 +44,7 @@ TYPED = frozenset({
     'scheduler.receive_in_loop', 'scheduler.priority', 'scheduler.edge_priority',
     'scheduler.one_cpu', 'scheduler.cpu', 'scheduler.cpu_latency_us',
     'scheduler.collect_garbage',
-    'safety.feedback_timeout_s', 'safety.command_timeout_s', 'safety.temperature_hysteresis_c',
+    *(f'safety.{key}' for key in SAFETY_SCHEMA.names),
     'sim', 'sim.timing', 'sim.seed', 'calibration.file', 'calibration.max_speed',
 })
 

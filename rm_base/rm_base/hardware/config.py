@@ -202,8 +202,15 @@ SAFETY_SCHEMA = Schema((
            description='a joint without feedback this long is offline and held at zero'),
     number('command_timeout_s', 0.1, unit='s', gt=0.0,
            description='a joint without a command this long is held at zero'),
-    number('temperature_hysteresis_c', 5.0, unit='degC', ge=0.0,
+    number('temperature_hysteresis_c', 10.0, unit='degC', ge=0.0,
            description='after over-temperature, resume below temperature_limit minus this'),
+    number('fault_clear_s', 1.0, unit='s', ge=0.0, le=60.0,
+           description='a latched fault (over-temperature, device fault, implausible feedback, '
+                       'offline after having been online) clears only after its condition has '
+                       'been gone this long, on consistent feedback'),
+    number('max_temperature_step_c', 5.0, unit='degC', gt=0.0,
+           description='a temperature that moves more than this between two frames is '
+                       'implausible feedback'),
 ))
 
 #: ``scheduler``: the control loop.
@@ -229,11 +236,17 @@ class SafetyConfig:
         command_timeout_s: no command this long -> output zero [s].
         temperature_hysteresis_c: after over-temperature, resume below
             ``temperature_limit - hysteresis`` [°C].
+        fault_clear_s: a latched fault clears only after its condition has been gone this
+            long, on consistent feedback [s] (docs/RELIABILITY.md, "Faults latch").
+        max_temperature_step_c: a temperature step between two frames beyond this is
+            implausible feedback [°C].
     """
 
     feedback_timeout_s: float = 0.1
     command_timeout_s: float = 0.1
-    temperature_hysteresis_c: float = 5.0
+    temperature_hysteresis_c: float = 10.0
+    fault_clear_s: float = 1.0
+    max_temperature_step_c: float = 5.0
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any] | None) -> SafetyConfig:

@@ -190,8 +190,9 @@ def test_offline_motor_gets_zero_on_the_wire(rig):
 def test_over_temperature_ends_with_zero_current_on_the_wire(rig):
     hw, peer, _ = rig
     fed(hw, peer)
-    peer.send(dji_feedback(0x201, temperature=85))
-    assert wait_until(lambda: hw.actuators['wheel'].feedback.temperature == 85, TIMEOUT)
+    for temperature in range(34, 86, 4):  # warming as a motor does, a few degC a frame
+        peer.send(dji_feedback(0x201, temperature=temperature))
+    assert wait_until(lambda: hw.actuators['wheel'].feedback.temperature >= 82, TIMEOUT)
     hw.set_command('wheel', MODE_EFFORT, effort=1.0)
     hw.tick()
     assert slots(frames(peer, 3)[0x200]) == (0, 0, 0, 0)
@@ -246,17 +247,35 @@ def test_system_commands_for_mit_joints_only(rig):
 
 
 # --- set_zero: the present position becomes the joint's zero ---
+_YAW_TICKS = {}  # the ticks each CanHardware's yaw was last fed at
+
+
 def yaw_at(hw, peer, ticks, rpm=0):
-    """Feed the GM6020 yaw at encoder ticks (and rotor rpm), tick, return its position."""
-    hw._clock_ns.advance_ms(1)
-    now = hw._clock_ns()
-    peer.send(can.Message(arbitration_id=0x205, data=dji.encode_feedback(ticks, rpm, 0, 30),
-                          is_extended_id=False))
+    """Turn the GM6020 yaw to encoder ticks (rotor rpm), tick, return its position.
+
+    It moves there the short way round in steps of at most 500 ticks (0.38 rad), a frame
+    each: a still shaft's angle that jumps further is implausible feedback.
+    """
     yaw = hw.actuators['yaw']
-    assert wait_until(lambda: yaw.feedback is not None and yaw.feedback.stamp_ns >= now, TIMEOUT)
-    hw.tick()
-    frames(peer, 2)
-    return hw.actuators['yaw'].feedback.position
+    path = [ticks]
+    if yaw.feedback is not None:
+        last = _YAW_TICKS.get(id(hw), 0)  # fed() sends 0
+        delta = (ticks - last + 4096) % 8192 - 4096
+        n = max(1, -(-abs(delta) // 500))
+        path = [(last + round(delta * k / n)) % 8192 for k in range(1, n + 1)]
+    for step_ticks in path:
+        hw._clock_ns.advance_ms(1)
+        now = hw._clock_ns()
+        peer.send(can.Message(arbitration_id=0x205,
+                              data=dji.encode_feedback(step_ticks, rpm, 0, 30),
+                              is_extended_id=False))
+        assert wait_until(
+            lambda now=now: yaw.feedback is not None and yaw.feedback.stamp_ns >= now, TIMEOUT
+        )
+        hw.tick()
+        frames(peer, 2)
+    _YAW_TICKS[id(hw)] = ticks
+    return yaw.feedback.position
 
 
 def test_set_zero_makes_the_present_position_zero_and_returns_the_offset(rig):

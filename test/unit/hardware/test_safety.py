@@ -9,6 +9,7 @@ from rm_base.hardware.config import SafetyConfig
 from rm_base.hardware.errors import CommandRejectedError
 from rm_base.motors import actuator_class
 from rm_base.motors.dji import protocol as dji
+from rm_base.motors.dji.actuator import M3508
 from support.hardware import MS, T0, joint
 
 ONE_NM_RAW = 2731  # 1 N·m / 0.3 N·m/A * 16384/20 (M3508)
@@ -54,9 +55,31 @@ def test_feedback_older_than_the_timeout_means_offline_and_zero():
     assert a.hold_reason is HoldReason.OFFLINE
     assert a.state().online is False
     assert a.state().mode == Mode.OFF
-    feed(a, T0 + 102 * MS)  # feedback again: output resumes with the fresh command
-    a.set_command(Mode.EFFORT, T0 + 102 * MS, effort=1.0)
-    assert step(a, T0 + 102 * MS) == ONE_NM_RAW
+
+
+def test_a_joint_back_online_stays_held_until_it_has_been_back_for_the_clear_time():
+    a = running(SafetyConfig(fault_clear_s=0.5))
+    a.set_command(Mode.EFFORT, T0 + 101 * MS, effort=1.0)
+    assert step(a, T0 + 101 * MS) == 0  # offline
+    now = T0 + 102 * MS
+    back = now
+    while now < back + 500 * MS:  # one frame is no evidence: 0.5 s of frames is
+        feed(a, now)
+        a.set_command(Mode.EFFORT, now, effort=1.0)
+        assert step(a, now) == 0, (now - back) / MS
+        assert a.hold_reason is HoldReason.OFFLINE
+        assert a.state().online  # online, but not yet trusted
+        now += MS
+    feed(a, now)
+    a.set_command(Mode.EFFORT, now, effort=1.0)
+    assert step(a, now) == ONE_NM_RAW
+
+
+def test_the_first_feedback_after_start_is_no_fault_to_clear():
+    a = make()
+    feed(a, T0)
+    a.set_command(Mode.EFFORT, T0, effort=1.0)
+    assert step(a, T0) == ONE_NM_RAW
 
 
 def test_feedback_timeout_is_configurable():
@@ -81,22 +104,125 @@ def test_never_commanded_means_zero():
     assert a.hold_reason is HoldReason.NO_COMMAND
 
 
-def test_over_temperature_holds_zero_with_hysteresis():
-    a = running(temperature_limit=70.0)
-    for temperature, raw in ((70, 0), (66, 0), (65, 0), (64, ONE_NM_RAW)):
-        # resumes only below 70 - 5 = 65 degC
-        now = a.feedback.stamp_ns + MS
+def drive(a, start_ns, ms, temperature):
+    """Feed a frame and a fresh command each ms for ms ms; return the raw commands sent."""
+    out = []
+    for k in range(ms):
+        now = start_ns + k * MS
         feed(a, now, temperature=temperature)
         a.set_command(Mode.EFFORT, now, effort=1.0)
-        assert step(a, now) == raw, temperature
+        out.append(step(a, now))
+    return out
+
+
+def warm(a, start_ns, temperatures):
+    """Frames stepping through temperatures (each within the plausible step); return end."""
+    now = start_ns
+    for temperature in temperatures:
+        assert set(drive(a, now, 1, temperature)) <= {0, ONE_NM_RAW}
+        now += MS
+    return now
+
+
+def test_over_temperature_holds_zero_until_below_the_hysteresis_for_the_clear_time():
+    a = running(SafetyConfig(temperature_hysteresis_c=10.0, fault_clear_s=1.0),
+                temperature_limit=70.0)
+    now = warm(a, T0 + MS, range(30, 71, 4))  # up to 70: the limit
+    assert drive(a, now, 1, 70) == [0]
+    assert a.hold_reason is HoldReason.OVER_TEMPERATURE
+    now = warm(a, now + MS, range(68, 60, -2))  # 60..68: above 70 - 10, still held
+    assert set(drive(a, now, 2000, 61)) == {0}
+    now += 2000 * MS
+    assert drive(a, now, 1, 59) == [0]  # below 60 now: the clear time starts
+    held = drive(a, now + MS, 1000, 59)
+    assert set(held[:998]) == {0} and held[-1] == ONE_NM_RAW
+    assert a.hold_reason is HoldReason.NONE
+
+
+def test_a_warm_frame_restarts_the_clear_time():
+    a = running(SafetyConfig(temperature_hysteresis_c=10.0, fault_clear_s=1.0),
+                temperature_limit=70.0)
+    now = warm(a, T0 + MS, [*range(30, 71, 4), 70, 66, 62, 58])
+    assert set(drive(a, now, 900, 58)) == {0}
+    now += 900 * MS
+    now = warm(a, now, (61, 58))  # one frame at 61: above 60, the clock starts again
+    assert set(drive(a, now, 900, 58)) == {0}
+    assert a.hold_reason is HoldReason.OVER_TEMPERATURE
 
 
 def test_over_temperature_reason_is_reported():
     a = running(temperature_limit=70.0)
-    feed(a, T0 + MS, temperature=90)
-    step(a, T0 + MS)
+    now = warm(a, T0 + MS, range(30, 91, 5))
+    step(a, now)
     assert a.hold_reason is HoldReason.OVER_TEMPERATURE
     assert a.state().temperature == 90.0
+
+
+def test_one_cool_garbage_frame_does_not_lift_an_over_temperature_hold():
+    # The finding: wheel_fl at 123 degC, one random frame said 28 degC and it drove.
+    a = running(SafetyConfig(fault_clear_s=1.0), temperature_limit=100.0)
+    now = warm(a, T0 + MS, range(30, 124, 4))
+    assert drive(a, now, 5, 123) == [0] * 5
+    now += 5 * MS
+    garbage = can.Message(arbitration_id=a.feedback_id,
+                          data=bytes.fromhex('049CF45B2D701C97'))
+    a.handle_frame(garbage, now)
+    a.set_command(Mode.EFFORT, now, effort=1.0)
+    assert step(a, now) == 0
+    assert a.feedback.temperature == 123  # the garbage never became the joint's feedback
+    assert a.implausible_frames == 1
+    assert set(drive(a, now + MS, 100, 123)) == {0}
+    assert a.hold_reason is HoldReason.OVER_TEMPERATURE
+
+
+def test_a_temperature_jump_is_implausible_and_holds_for_the_clear_time():
+    a = running(SafetyConfig(fault_clear_s=0.2, max_temperature_step_c=5.0))
+    assert drive(a, T0 + MS, 1, 36) == [0]  # 30 -> 36 in a ms: no motor does that
+    assert a.hold_reason is HoldReason.IMPLAUSIBLE
+    assert a.feedback.temperature == 30
+    out = drive(a, T0 + 2 * MS, 250, 36)
+    assert set(out[:199]) == {0} and set(out[200:]) == {ONE_NM_RAW}
+    assert a.feedback.temperature == 36  # consistent frames are believed again
+
+
+def test_an_angle_jump_of_a_still_shaft_is_implausible():
+    a = running(SafetyConfig(fault_clear_s=0.2))
+    jump = can.Message(arbitration_id=a.feedback_id, data=dji.encode_feedback(3000, 0, 0, 30))
+    a.handle_frame(jump, T0 + MS)
+    a.set_command(Mode.EFFORT, T0 + MS, effort=1.0)
+    assert step(a, T0 + MS) == 0
+    assert a.hold_reason is HoldReason.IMPLAUSIBLE
+    assert a.feedback.position == 0.0
+
+
+def test_a_fast_shaft_may_move_far_between_frames():
+    a = running()
+    for k, ticks in enumerate((2000, 4000, 6000)):  # 6000 rpm: 0.6 turn a ms
+        msg = can.Message(arbitration_id=a.feedback_id,
+                          data=dji.encode_feedback(ticks, 6000, 0, 30))
+        a.handle_frame(msg, T0 + (k + 1) * MS)
+    assert a.implausible_frames == 0
+
+
+class _ErrorByte(M3508):
+    """An M3508 whose unused last byte is an error code (a family that reports one)."""
+
+    def _decode(self, msg):
+        angle, velocity, torque, temperature, _ = super()._decode(msg)
+        return angle, velocity, torque, temperature, msg.data[7]
+
+
+def test_a_device_fault_latches_for_the_clear_time():
+    a = _ErrorByte(joint(), SafetyConfig(fault_clear_s=0.1))
+    drive(a, T0, 1, 30)
+    data = bytearray(dji.encode_feedback(0, 0, 0, 30))
+    data[7] = 3
+    a.handle_frame(can.Message(arbitration_id=a.feedback_id, data=bytes(data)), T0 + MS)
+    a.set_command(Mode.EFFORT, T0 + MS, effort=1.0)
+    assert step(a, T0 + MS) == 0
+    assert a.hold_reason is HoldReason.DEVICE_FAULT
+    out = drive(a, T0 + 2 * MS, 120, 30)  # no error from here: held 100 ms more
+    assert set(out[:99]) == {0} and set(out[100:]) == {ONE_NM_RAW}
 
 
 @pytest.mark.parametrize('field', ['position', 'velocity', 'effort', 'kp', 'kd'])

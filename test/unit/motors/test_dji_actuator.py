@@ -72,11 +72,11 @@ def test_gm6020_wraps_multi_turn_and_starts_near_zero():
     # 100 ticks next: +292 ticks across the wrap, not -7900
     feed(a, T0 + MS, ticks=100)
     assert a.feedback.position == pytest.approx((100 + 8192 - 8192) * dji.RAD_PER_TICK)
-    # two more turns forward in steps of 4000 ticks
+    # two more turns forward in steps of 4000 ticks (half a turn a frame: turning)
     t = 100
     for k in range(4):
         t = (t + 4000) % 8192
-        feed(a, T0 + (2 + k) * MS, ticks=t)
+        feed(a, T0 + (2 + k) * 50 * MS, ticks=t, rpm=600)
     assert a.feedback.position == pytest.approx((100 + 16000) * dji.RAD_PER_TICK)
 
 

@@ -23,10 +23,17 @@ the moment a frame arrives::
 
 Safety, independent of any plugin: every output is clamped to ``max_effort``; a joint
 without feedback for ``feedback_timeout_s`` is offline; over-temperature, a device fault,
-no command for ``command_timeout_s``, a failed bus (from the failure until it is back, at
-least one tick after that, and until a command newer than the recovery) and shutdown all
-hold the output at zero (``MODE_OFF`` applied). A NaN/inf command is
-rejected, counted, and the previous (safe) target stays in force.
+implausible feedback, no command for ``command_timeout_s``, a failed bus (from the failure
+until it is back, at least one tick after that, and until a command newer than the
+recovery) and shutdown all hold the output at zero (``MODE_OFF`` applied). A NaN/inf
+command is rejected, counted, and the previous (safe) target stays in force.
+
+Faults latch (docs/RELIABILITY.md, "Faults latch and clear on evidence"): over-temperature,
+a device fault, implausible feedback and going offline after having been online clear only
+once their condition has been gone for ``safety.fault_clear_s`` on consistent frames. A
+frame is implausible when its temperature moved more than ``max_temperature_step_c`` since
+the previous frame, or its angle jumped more than an eighth of a turn while both frames say
+the shaft was (nearly) still; such a frame is counted and never becomes the joint's feedback.
 """
 
 from __future__ import annotations
@@ -60,6 +67,7 @@ class HoldReason(enum.Enum):
     OFFLINE = 'offline'  # no feedback within feedback_timeout_s
     OVER_TEMPERATURE = 'over_temperature'
     DEVICE_FAULT = 'device_fault'  # the device reports an error code
+    IMPLAUSIBLE = 'implausible_feedback'  # a frame no motor could send after the last one
     BUS_RECOVERY = 'bus_recovery'  # the bus came back; waiting for a fresh command
     ERROR = 'error'  # an internal exception in this joint's update
     SHUTDOWN = 'shutdown'
@@ -166,6 +174,15 @@ class Unwrapper:
         return self._turns
 
 
+#: A shaft both frames say turns slower than this [rad/s] is still for the angle check.
+_STILL_RAD_S = 5.0
+#: Largest angle step [rad] of a still shaft between two frames (it moves 0.25 rad at most
+#: in the longest gap judged).
+_STILL_STEP_RAD = math.pi / 4.0
+#: Frames further apart than this [ns] are not compared for an angle step.
+_STEP_WINDOW_NS = 50_000_000
+
+
 def _clamp(x: float, limit: float) -> float:
     return limit if x > limit else -limit if x < -limit else x
 
@@ -252,6 +269,8 @@ class Actuator:
         self._feedback_timeout_ns = int(safety.feedback_timeout_s * 1e9)
         self._command_timeout_ns = int(safety.command_timeout_s * 1e9)
         self._temperature_resume = self.temperature_limit - safety.temperature_hysteresis_c
+        self._fault_clear_ns = int(safety.fault_clear_s * 1e9)
+        self._max_temperature_step = safety.max_temperature_step_c
         self._velocity_pid = build_pid(config.velocity_pid)
         self._position_pid = build_pid(config.position_pid)
         # shared state (single assignment each)
@@ -271,12 +290,23 @@ class Actuator:
         self._effort_out = 0.0
         self._online = False
         self._overheated = False
+        # latches (scheduler thread): since when each condition has been gone [ns]
+        self._cool_since: int | None = None
+        self._fault_latched = False
+        self._fault_gone_since: int | None = None
+        self._ever_online = False
+        self._back_since: int | None = None  # online again after having been offline
+        # receive thread: the previous frame's values, plausible or not, and when the
+        # newest implausible frame came (one assignment each)
+        self._last_raw: tuple[int, float, float, float | None] | None = None
+        self._implausible_ns: int | None = None
         # counters
         self.frames_decoded = 0
         self.decode_errors = 0
         self.commands_accepted = 0
         self.commands_rejected = 0
         self.update_errors = 0
+        self.implausible_frames = 0
         self.last_rejection: str | None = None
 
     # --- hooks ---
@@ -351,6 +381,8 @@ class Actuator:
                     err,
                 )
             return True
+        if not self._plausible(now_ns, angle, velocity, temperature):
+            return True
         pending = self._pending_zero
         if pending is not None:
             self._pending_zero = None
@@ -371,6 +403,33 @@ class Actuator:
         )
         self.frames_decoded += 1
         return True
+
+    def _plausible(
+        self, now_ns: int, angle: float, velocity: float, temperature: float | None
+    ) -> bool:
+        """Whether a frame could follow the previous one; count and latch one that cannot."""
+        last = self._last_raw
+        self._last_raw = (now_ns, angle, velocity, temperature)
+        if last is None:
+            return True
+        last_ns, last_angle, last_velocity, last_temperature = last
+        reason = ''
+        if (temperature is not None and last_temperature is not None
+                and abs(temperature - last_temperature) > self._max_temperature_step):
+            reason = f'temperature {last_temperature:g} -> {temperature:g} degC'
+        elif (now_ns - last_ns <= _STEP_WINDOW_NS and abs(velocity) < _STILL_RAD_S
+                and abs(last_velocity) < _STILL_RAD_S
+                and abs(angle - last_angle) > _STILL_STEP_RAD):
+            reason = f'angle step {angle - last_angle:+.3f} rad while still'
+        if not reason:
+            return True
+        self.implausible_frames += 1
+        self._implausible_ns = now_ns
+        if self.implausible_frames == 1 or self.implausible_frames % 100 == 0:
+            _log.warning('%s: implausible feedback (%d so far): %s; output held %g s',
+                         self.name, self.implausible_frames, reason,
+                         self._fault_clear_ns / 1e9)
+        return False
 
     # --- commands (any thread) ---
     def set_command(
@@ -532,6 +591,9 @@ class Actuator:
             self._online = online
             if online:
                 _log.info('%s: online', self.name)
+                # the first time is a start, not a fault: only a return must prove itself
+                self._back_since = now_ns if self._ever_online else None
+                self._ever_online = True
             else:
                 _log.warning(
                     '%s: offline (no feedback for %.0f ms)',
@@ -540,16 +602,44 @@ class Actuator:
                 )
         if fb is None or not online:
             return HoldReason.OFFLINE
-        if self._is_fault(fb.error_code):
-            return HoldReason.DEVICE_FAULT
+        clear_ns = self._fault_clear_ns
         temperature = fb.temperature
         if temperature is not None:
             if temperature >= self.temperature_limit:
                 self._overheated = True
+                self._cool_since = None
             elif temperature < self._temperature_resume:
-                self._overheated = False
+                if self._cool_since is None:
+                    self._cool_since = now_ns
+                if self._overheated and now_ns - self._cool_since >= clear_ns:
+                    self._overheated = False
+                    _log.info('%s: over-temperature cleared (%.0f degC for %g s)',
+                              self.name, temperature, clear_ns / 1e9)
+            else:
+                self._cool_since = None
+        faulted = self._is_fault(fb.error_code)
+        if faulted:
+            self._fault_latched = True
+            self._fault_gone_since = None
+        elif self._fault_latched:
+            if self._fault_gone_since is None:
+                self._fault_gone_since = now_ns
+            if now_ns - self._fault_gone_since >= clear_ns:
+                self._fault_latched = False
+        if faulted:  # what the device says now is the reason shown
+            return HoldReason.DEVICE_FAULT
         if self._overheated:
             return HoldReason.OVER_TEMPERATURE
+        if self._fault_latched:
+            return HoldReason.DEVICE_FAULT
+        implausible = self._implausible_ns
+        if implausible is not None and now_ns - implausible < clear_ns:
+            return HoldReason.IMPLAUSIBLE
+        back = self._back_since
+        if back is not None:
+            if now_ns - back < clear_ns:
+                return HoldReason.OFFLINE
+            self._back_since = None
         if self._bus_down:
             return HoldReason.BUS_RECOVERY
         recovered = self._recovered_ns
@@ -683,6 +773,7 @@ class Actuator:
             'commands_rejected': self.commands_rejected,
             'last_rejection': self.last_rejection,
             'update_errors': self.update_errors,
+            'implausible_frames': self.implausible_frames,
             'details': self.details(),
         }
 
