@@ -16,7 +16,11 @@ never become a stick command).
 
 The frame has no header or checksum: the receiver sends its 18 bytes in one burst every
 14 ms, and a frame is the bytes between two silences (:class:`DbusStream`, as DJI's DMA
-idle-line interrupt does).
+idle-line interrupt does). The mouse buttons are 0 or 1: any other byte there is noise.
+
+Without a checksum about one random 18-byte burst in 400 passes the range checks, so a
+decoded frame is not yet the operator: :class:`DbusTrust` believes the remote only once it
+behaves like a DR16 (docs/PROTOCOLS.md §5.1).
 
 UNVERIFIED: which physical switch is on bits 44–45. rm_control and RoboRTS say the
 right one, DJI's example comment says the left; the fields are therefore named
@@ -126,6 +130,8 @@ def decode(data: bytes | bytearray) -> DbusFrame:
         raw[3] - CHANNEL_OFFSET,
     )
     mx, my, mz, left, right, keys, wheel_raw = _TAIL.unpack_from(data, 6)
+    if left > 1 or right > 1:
+        raise ValueRangeError(f'DBUS mouse buttons must be 0 or 1, got {left}, {right}')
     wheel = wheel_raw - CHANNEL_OFFSET
     for i, c in enumerate((*channels, wheel)):
         if not -CHANNEL_ACCEPT <= c <= CHANNEL_ACCEPT:
@@ -176,6 +182,63 @@ def encode(frame: DbusFrame) -> bytes:
     except struct.error as err:
         raise ValueRangeError(f'DBUS mouse {frame.mouse!r} does not fit int16: {err}') from err
     return bits.to_bytes(6, 'little') + tail
+
+
+#: Frames a remote must send in a row, each in rhythm and consistent, before it is believed.
+TRUST_FRAMES = 3
+#: A channel that moves more than this between two frames 14 ms apart has jumped [counts].
+JUMP_COUNTS = 400
+
+
+def jumped(a: DbusFrame, b: DbusFrame) -> bool:
+    """Whether b jumps every stick and the wheel at once from a (no hand does: noise)."""
+    before, after = (*a.channels, a.wheel), (*b.channels, b.wheel)
+    return all(abs(x - y) > JUMP_COUNTS for x, y in zip(before, after, strict=True))
+
+
+class DbusTrust:
+    """Believes a DR16 only when its frames come as a DR16 sends them.
+
+    A frame is in rhythm when it comes at least half a frame period after the one before
+    (a receiver sends one every 14 ms; bursts closer than that are noise) and within
+    ``timeout_s`` of it; it is consistent when it does not jump every channel at once
+    (:func:`jumped`). The remote is believed after :data:`TRUST_FRAMES` such frames in a
+    row, and stays believed while they keep coming within ``timeout_s``; a frame out of
+    rhythm or jumping is dropped and counted (``noise_frames``), and while the remote is
+    not yet believed it starts the count again.
+
+    Args:
+        timeout_s: longest gap between two frames of one stream [s] (the link's data
+            timeout): after a longer one the remote must earn trust again.
+    """
+
+    def __init__(self, timeout_s: float) -> None:
+        self._timeout_ns = round(timeout_s * 1e9)
+        self._min_gap_ns = round(FRAME_PERIOD_S / 2 * 1e9)
+        self._last: DbusFrame | None = None
+        self._last_ns: int | None = None
+        self._streak = 0
+        self.noise_frames = 0
+
+    @property
+    def believed(self) -> bool:
+        """Whether the last frames earned trust (until a gap longer than the timeout)."""
+        return self._streak >= TRUST_FRAMES
+
+    def accept(self, frame: DbusFrame, now_ns: int) -> bool:
+        """Take a decoded frame received at now_ns; return whether it is the operator's."""
+        last, last_ns = self._last, self._last_ns
+        if last is None or last_ns is None or now_ns - last_ns > self._timeout_ns:
+            self._last, self._last_ns, self._streak = frame, now_ns, 1
+            return False
+        if now_ns - last_ns < self._min_gap_ns or jumped(last, frame):
+            self.noise_frames += 1
+            if not self.believed:
+                self._last, self._last_ns, self._streak = frame, now_ns, 1
+            return False
+        self._last, self._last_ns = frame, now_ns
+        self._streak = min(self._streak + 1, TRUST_FRAMES)
+        return self.believed
 
 
 class DbusStream:
