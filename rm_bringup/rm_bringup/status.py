@@ -78,7 +78,7 @@ def format_status(latest: Mapping[str, Any]) -> str:
         )
     diagnostics = latest.get('diagnostics')
     if diagnostics:
-        loads, overruns = [], None
+        loads, overruns, charge = [], None, {}
         for status in diagnostics.values():
             values = _diag_values(status)
             kind = status.name.split(': ', 1)[-1]  # 'can_bridge: bus can0' -> 'bus can0'
@@ -91,10 +91,18 @@ def format_status(latest: Mapping[str, Any]) -> str:
                     loads.append(f'{name} ?')
             elif kind == 'scheduler':
                 overruns = values.get('overruns')
+            elif kind == 'command sources':
+                charge = {k.removesuffix(' in charge'): v or '-' for k, v in values.items()
+                          if k.endswith(' in charge')}
         if loads:
             parts.append(' '.join(sorted(loads)))
         if overruns is not None:
             parts.append(f'overruns {overruns}')
+        if charge:  # who commands: one name when one source has every topic
+            names = set(charge.values())
+            parts.append('cmd ' + (names.pop() if len(names) == 1 else ' '.join(
+                f'{topic.lstrip("/").removesuffix("_cmd")}:{name}'
+                for topic, name in sorted(charge.items()))))
     actuators = latest.get('actuators')
     if actuators is not None:
         offline = [n for n, ok in zip(actuators.name, actuators.online, strict=False) if not ok]

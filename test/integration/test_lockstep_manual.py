@@ -72,9 +72,11 @@ def test_left_switch_up_fires(robot):
     remote = robot.world.remote
     shots = robot.world.body.launcher.shots
     remote.hold(switch_b=Switch.UP)
-    robot.run(1.0)
+    # 0.6 s: a trigger let go at speed coasts through a few more balls, and the 2026 rules
+    # lock the launcher above the heat limit (the tests after this one need it)
+    robot.run(0.6)
     assert robot.plugin('shooter').state.name == 'PUSH'
-    assert robot.world.body.launcher.shots - shots >= 5  # 10 shots/s, heat allowing
+    assert robot.world.body.launcher.shots - shots >= 5  # 10 shots/s
     remote.hold(switch_b=Switch.DOWN)
     robot.run(0.5)
     assert robot.plugin('shooter').state.name == 'PASSIVE'

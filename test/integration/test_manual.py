@@ -7,6 +7,8 @@ any node would. A smoke test with generous waits: the mapping itself is judged i
 (test_lockstep_manual) and in the unit tests.
 """
 
+import time
+
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray
 from geometry_msgs.msg import Twist
@@ -33,10 +35,10 @@ class Harness(HostedPlugins):
             'manual.dr16.port': dr16,
             'manual.image_link.port': image_link,
         })
-        self.chassis = self.collect(ChassisCmd, '/chassis_cmd')
-        self.vel = self.collect(Twist, '/vel_cmd')
-        self.gimbal = self.collect(GimbalCmd, '/gimbal_cmd')
-        self.shoot = self.collect(ShootCmd, '/shoot_cmd')
+        self.chassis = self.collect(ChassisCmd, '/manual/chassis_cmd')
+        self.vel = self.collect(Twist, '/manual/vel_cmd')
+        self.gimbal = self.collect(GimbalCmd, '/manual/gimbal_cmd')
+        self.shoot = self.collect(ShootCmd, '/manual/shoot_cmd')
         self.states = self.collect(PluginState, '/rm_robot/manual/state', 10)
         self.diagnostics = self.collect(DiagnosticArray, '/diagnostics')
         self.start()
@@ -56,6 +58,13 @@ def rig(ros_context, tmp_path):
     harness.close()
     dr16.close()
     link.close()
+
+
+def silent_for(messages, seconds):
+    """No message came for seconds (real time)."""
+    count = len(messages)
+    time.sleep(seconds)
+    return len(messages) == count
 
 
 def test_the_remote_and_the_image_links_keyboard_become_commands_and_silence_stops_them(rig):
@@ -89,7 +98,7 @@ def test_the_remote_and_the_image_links_keyboard_become_commands_and_silence_sto
     assert wait_until(lambda: h.chassis[-1].mode == ChassisCmd.GYRO, WAIT)
     assert h.chassis[-1].speed_gear == ChassisCmd.GEAR_SLOW
     assert h.vel[-1].linear.x == pytest.approx(2.0)  # unchanged since W
-    # the remote goes silent: everything PASSIVE
+    # the remote goes silent: everything PASSIVE...
     streamer.stop()
     assert wait_until(lambda: (
         h.chassis[-1].mode == ChassisCmd.PASSIVE
@@ -97,6 +106,8 @@ def test_the_remote_and_the_image_links_keyboard_become_commands_and_silence_sto
         and h.gimbal[-1].mode == GimbalCmd.PASSIVE and h.vel[-1].linear.x == 0.0
     ), WAIT), (h.chassis[-1], h.shoot[-1:], h.gimbal[-1], h.vel[-1])
     assert wait_until(lambda: h.state() is LinkState.NO_DATA, WAIT)
+    # ... for its stop_time (0.3 s), then nothing: the arbitration yields to other sources
+    assert wait_until(lambda: silent_for(h.chassis, 0.5), WAIT)
     # each link on /diagnostics every diagnostics_period (1 s)
     assert wait_until(lambda: (s := h.diagnostic('rm_robot: manual dr16', h.diagnostics))
                       and int(s['frames_ok']) > 0, WAIT)

@@ -14,10 +14,13 @@ from rclpy.node import Node
 from std_srvs.srv import SetBool
 
 from rm_base.hardware import CanHardware, Scheduler
+from rm_base.host.command_sources import read_command_sources
 from rm_base.host.plugin_task import PluginTask, TickInputs
 from rm_base.host.process_params import process_settings
 from rm_base.node_main import inbox_node
 from rm_base.plugin import PluginBase, PluginLoader, PluginParams
+from rm_base.plugin.command_mux import CommandMux
+from rm_base.plugin.command_mux_status import command_sources_status
 from rm_base.plugin.errors import ParameterError
 from rm_base.plugin.inbox import STAGE_NAME as INBOX_STAGE
 from rm_base.plugin.inbox import Inbox
@@ -253,6 +256,9 @@ class RobotHost(Node):
             description='executor for subscriptions, services and timers',
         )
         process = process_settings(node_params)
+        sources = read_command_sources(node_params)
+        if sources:
+            self._io.command_mux = CommandMux(sources, on_switch=self._on_source_switch)
         self.edge_priority = process.edge_priority
         self.cpu_index = process.cpu_index
         self.cpu_latency_us = process.cpu_latency_us
@@ -336,14 +342,25 @@ class RobotHost(Node):
             return False, f'{name}: enable failed: {type(err).__name__}: {err}'
         return True, f'{name}: {"enabled" if changed else "already enabled"}'
 
+    def _on_source_switch(self, topic: str, old: str, new: str, why: str) -> None:
+        # the loop's thread, on a message or a report: rare, and said at once
+        self.get_logger().info(
+            f"command source of {topic}: {old or 'none'} -> {new or 'none'}"
+            + (f' ({why})' if why else ''))
+
     def _on_state_timer(self) -> None:
         for task in self._tasks.values():
             task.plugin.publish_state()
-        inbox = self._inbox
-        if inbox is not None and self._diagnostics_pub.heard():
+        inbox, mux = self._inbox, self._io.command_mux
+        if (inbox is not None or mux is not None) and self._diagnostics_pub.heard():
+            now = self.get_clock().now()
             msg = DiagnosticArray()
-            msg.header.stamp = self.get_clock().now().to_msg()
-            msg.status = [self._inbox_report.status(inbox)]
+            msg.header.stamp = now.to_msg()
+            if inbox is not None:
+                msg.status.append(self._inbox_report.status(inbox))
+            if mux is not None:
+                msg.status.append(
+                    command_sources_status(self.get_name(), mux, now.nanoseconds))
             self._diagnostics_pub.publish(msg)
         for topic, count in self._io.foreign_publishers().items():
             if topic not in self._warned_foreign:

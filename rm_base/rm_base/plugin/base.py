@@ -390,7 +390,8 @@ class PluginBase:
                 if listener is not None:
                     listener()
 
-        self.subscribe(topic, msg_type, on_command, qos)
+        qos = qos if qos is not None else qos_profile_sensor_data
+        self._nio.subscribe_command(msg_type, command.topic, on_command, qos)
         self._inputs.append(command)
         return command
 

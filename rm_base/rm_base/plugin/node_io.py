@@ -38,6 +38,7 @@ from rclpy.time import Time
 from rm_base.control import ChassisPowerModel
 from rm_base.geometry.frame_tree import FrameTree
 from rm_base.joints import JointState, JointTarget
+from rm_base.plugin.command_mux import CommandMux, CommandSource
 from rm_base.plugin.errors import JointClaimError, TargetRejectedError
 from rm_base.plugin.inbox import Inbox
 from rm_base.plugin.joints import (
@@ -98,6 +99,8 @@ class NodeIO(abc.ABC):
         self.outbox: Outbox | None = None
         self.inbox: Inbox | None = None
         self.loop: Any = None  # the control loop running the plugins (a Scheduler)
+        # arbitrates the plugins' command topics between commanders (None: none does)
+        self.command_mux: CommandMux | None = None
         self._inputs: list[str] = []  # names of the plugins' input stages in the loop
         self.frames = FrameTree()  # the plugins' transforms (rm_base.plugin.frames)
         self._claims: dict[str, str] = {}
@@ -211,6 +214,25 @@ class NodeIO(abc.ABC):
                 msg_type, topic, lambda msg: callback(msg, clock.now().nanoseconds), qos
             )
         self.add_handler(topic, callback)
+
+    def subscribe_command(
+        self, msg_type: type, topic: str, callback: Callable[[Any, int], Any], qos: Any
+    ) -> None:
+        """Subscribe a command topic (a resolved name), arbitrated if the node has a mux.
+
+        Each command source's topic is subscribed; a message reaches callback only while its
+        source is in charge of the topic (:mod:`rm_base.plugin.command_mux`).
+        """
+        mux = self.command_mux
+        if mux is None:
+            self.subscribe(msg_type, topic, callback, qos)
+            return
+        for source, source_topic in mux.add_topic(topic):
+            def arbitrated(msg: Any, receive_ns: int, source: CommandSource = source) -> None:
+                if mux.offer(topic, source, receive_ns):
+                    callback(msg, receive_ns)
+
+            self.subscribe(msg_type, source_topic, arbitrated, qos)
 
     def add_handler(self, topic: str, handler: Callable[[Any, int], Any]) -> None:
         """Record a plugin's subscription callback for topic (a resolved name).

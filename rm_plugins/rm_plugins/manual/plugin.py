@@ -1,20 +1,27 @@
 """ManualControl: the operator's DR16 remote and keyboard/mouse -> the robot's command topics.
 
-It publishes exactly what any user publishes (``chassis_cmd`` + ``vel_cmd``,
-``gimbal_cmd``, ``shoot_cmd``), at its own rate, from the DR16 receiver (``dr16.port``,
+It publishes the messages any user publishes (``chassis_cmd`` + ``vel_cmd``,
+``gimbal_cmd``, ``shoot_cmd``), under its own namespace (``namespace``, default
+``/manual``: ``/manual/chassis_cmd``...), where rm_robot's command arbitration takes them
+as the ``manual`` source, above ``topic pub`` and planners (docs/ARCHITECTURE.md,
+"Command arbitration"); at its own rate, from the DR16 receiver (``dr16.port``,
 100000 baud 8E1 behind the receiver's inverter) and, optionally, the keyboard and mouse the
 image link forwards (``image_link.port``: 0x0304 frames up to 2026 V1.1, the 2025+ ``A9 53``
 remote frame). What each switch, stick, key and mouse button does is the mapping file's
 (``mapping_file``; the default is ``rm_plugins/manual/default_mapping.yaml``).
 
 States are the DR16 link's (``LinkState``); each link is reported on /diagnostics at its
-``diagnostics_period``. Until the remote is first heard it publishes
-nothing, so a robot driven by other nodes (or `ros2 topic pub`) is not disturbed by a
-receiver nobody transmits to. Once heard, it streams the operator's commands; without a
-good DR16 frame for ``dr16.data_timeout`` (100 ms) every command it publishes is PASSIVE,
-so every mechanism stops at once and stays stopped until the remote is heard again (the
-keyboard's toggles are reset). Disabling the plugin silences it. The image link is
-optional: lost, it just adds nothing.
+``diagnostics_period``. The remote is heard only once it behaves like a DR16
+(:class:`~rm_base.hardware.protocols.dbus.DbusTrust`: three frames in the 14 ms rhythm
+without a jump of every channel); noise on a silent port is counted and never commands.
+Until the remote is heard it publishes nothing, so a robot driven by other nodes (or
+`ros2 topic pub`) is not disturbed by a receiver nobody transmits to. Once heard, it
+streams the operator's commands; without a good DR16 frame for ``dr16.data_timeout``
+(100 ms) it publishes PASSIVE for ``stop_time`` (0.3 s), so every mechanism stops at once,
+and then falls silent (the keyboard's toggles reset) until the remote is heard again:
+the arbitration then yields to the next source. The operator's own PASSIVE (right switch
+down) is streamed like any command, and wins over every lower source. Disabling the
+plugin silences it. The image link is optional: lost, it just adds nothing.
 """
 
 from __future__ import annotations
@@ -82,8 +89,20 @@ class ManualControl(PluginBase):
                 name='image link',
             )
         self._keyboard_decoder = ref.StatusDecoder(ref.ProtocolVersion.V2025)
+        namespace = p.string(
+            'namespace', '/manual',
+            description='namespace of the command topics it publishes (the manual command '
+                        "source of rm_robot's arbitration); '' publishes the plain topics",
+        ).rstrip('/')
+        self._stop_ns = round(p.double(
+            'stop_time', 0.3, unit='s', ge=0.0, le=5.0,
+            description='after the remote is lost, publish PASSIVE this long, then nothing',
+        ) * _NS_PER_S)
+        self._trust = dbus.DbusTrust(dr16.data_timeout)
+        self._lost_ns: int | None = None  # when the link was found lost, while stopping
         self._publishers = {
-            topic: self.create_publisher(msg_type, topic, _QOS_DEPTH, hand_over=True)
+            topic: self.create_publisher(msg_type, f'{namespace}/{topic}', _QOS_DEPTH,
+                                         hand_over=True)
             for topic, msg_type in (('chassis_cmd', ChassisCmd), ('vel_cmd', Twist),
                                     ('gimbal_cmd', GimbalCmd), ('shoot_cmd', ShootCmd))
         }
@@ -107,14 +126,19 @@ class ManualControl(PluginBase):
             self._image_link.stop()
         with self._lock:
             self._remote = self._keyboard = None
+            self._trust = dbus.DbusTrust(self._dr16.settings.data_timeout)
+        self._lost_ns = None
 
     # -- input (reader threads, or a harness stepping the robot) ------------------------------
 
     def on_remote_frame(self, frame: dbus.DbusFrame, receive_ns: int) -> None:
-        """A DR16 frame arrived at receive_ns (node clock)."""
+        """A DR16 frame arrived at receive_ns (node clock); believed as DbusTrust says."""
         with self._lock:
-            self._remote = frame
-        self._dr16.received(receive_ns)
+            believed = self._trust.accept(frame, receive_ns)
+            if believed:
+                self._remote = frame
+        if believed:
+            self._dr16.received(receive_ns)
 
     def on_keyboard(self, keyboard: Keyboard, receive_ns: int) -> None:
         """The image link's keyboard and mouse arrived at receive_ns (node clock)."""
@@ -147,10 +171,21 @@ class ManualControl(PluginBase):
         with self._lock:
             remote, keyboard = self._remote, self._keyboard
         if remote is None:
-            return  # never heard: someone else may be driving
+            return  # not heard: someone else may be driving
         if state is not LinkState.STREAMING:
-            self._publish(self._driver.lost(), now)
+            if self._lost_ns is None:
+                self._lost_ns = now_ns
+                self.logger.warning(
+                    f'remote lost: PASSIVE for {self._stop_ns / _NS_PER_S:g} s, then silent')
+            if now_ns - self._lost_ns <= self._stop_ns:
+                self._publish(self._driver.lost(), now)
+                return
+            with self._lock:  # stopped: yield until the remote is heard again
+                if self._remote is remote:
+                    self._remote = None
+            self._lost_ns = None
             return
+        self._lost_ns = None
         operator = OperatorInput.from_dbus(remote, self._driver.mapping)
         timeout_ns = self._image_link.settings.data_timeout * _NS_PER_S if self._image_link else 0
         if keyboard is not None and now_ns - keyboard[1] <= timeout_ns:
@@ -176,9 +211,10 @@ class ManualControl(PluginBase):
             bad = link_stats.bad_frames
             new_bad = bad - self._reported_bad.get(label, 0)
             self._reported_bad[label] = bad
+            values = {'noise_frames': self._trust.noise_frames} if link is self._dr16 else {}
             msg.status.append(link_status(
                 f'{self.node.get_name()}: {self.name} {label}', link.settings, link_state,
-                link_stats, reason=link_reason, new_bad=new_bad, values={},
+                link_stats, reason=link_reason, new_bad=new_bad, values=values,
             ))
         if msg.status:
             self._diagnostics.publish(msg)

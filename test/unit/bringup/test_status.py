@@ -51,3 +51,19 @@ def test_when_every_source_reports_expect_one_line_with_all_of_them():
 def test_when_a_shooter_faults_expect_fault_shown():
     line = format_status({'shooter': ShooterState(state=0, fault=True), 'diagnostics': {}})
     assert line == 'shooter PASSIVE 0 shots FAULT'
+
+
+def test_when_one_source_commands_everything_expect_its_name():
+    status = _status('rm_robot: command sources', {
+        '/chassis_cmd in charge': 'manual', '/gimbal_cmd in charge': 'manual',
+        '/chassis_cmd manual taken': 5})
+    line = format_status({'diagnostics': {status.name: status}})
+    assert line == 'cmd manual'
+
+
+def test_when_sources_share_the_topics_expect_each_topics_source():
+    status = _status('rm_robot: command sources', {
+        '/chassis_cmd in charge': 'external', '/gimbal_cmd in charge': 'manual',
+        '/shoot_cmd in charge': ''})
+    line = format_status({'diagnostics': {status.name: status}})
+    assert line == 'cmd chassis:external gimbal:manual shoot:-'
