@@ -18,6 +18,7 @@ No rclpy import here (PyYAML only, to check parameter files before rcl reads the
 
 from __future__ import annotations
 
+import ctypes
 import os
 import signal
 from collections.abc import MutableMapping, Sequence
@@ -47,6 +48,34 @@ def prepare_ros_process(environ: MutableMapping[str, str] | None = None) -> None
     use_localhost_discovery(environ)
     signal.signal(signal.SIGINT, signal.default_int_handler)
     signal.signal(signal.SIGTERM, _raise_keyboard_interrupt)
+
+
+_PR_SET_PDEATHSIG = 1  # linux/prctl.h
+
+
+def die_with_parent(parent_pid: int, signum: int = signal.SIGTERM) -> bool:
+    """Have the kernel send this process signum when its parent dies, however it dies.
+
+    A child of a process killed with SIGKILL would otherwise run on, orphaned (a second
+    rm_sim beside the next robot's). Exits at once if the parent is already gone.
+
+    Args:
+        parent_pid: the pid of the parent that started this process.
+        signum: the signal (SIGTERM: the clean shutdown path, see the module docstring).
+
+    Returns:
+        False where the kernel offers no such request (not Linux); True otherwise.
+    """
+    try:
+        libc = ctypes.CDLL(None, use_errno=True)
+        prctl = libc.prctl
+    except (OSError, AttributeError):
+        return False
+    if prctl(_PR_SET_PDEATHSIG, int(signum), 0, 0, 0) != 0:
+        return False
+    if os.getppid() != parent_pid:  # it died before the request was in place
+        os._exit(1)
+    return True
 
 
 def init_error_line(err: BaseException) -> str:

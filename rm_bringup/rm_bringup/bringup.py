@@ -26,6 +26,7 @@ import pathlib
 import sys
 import tempfile
 import time
+from typing import Any
 
 import rclpy
 import yaml
@@ -167,6 +168,40 @@ def main(argv: list[str] | None = None) -> int:
                 sim.stop()  # after the bridge's zero frames
 
 
+def duplicated(names: list[str], ours: list[str]) -> list[str]:
+    """Our node names that the graph holds more than once (another robot's), sorted."""
+    return sorted(n for n in set(ours) if names.count(n) > 1)
+
+
+class _SecondRobotGuard:
+    """Says, once per change, that another robot runs in the same ROS domain.
+
+    Its topics and services mix with ours (a fault service may land on its rm_sim). It is
+    checked every few seconds, discovery being what it is, and said as an error.
+    """
+
+    PERIOD_S = 3.0
+
+    def __init__(self, node: Any, ours: list[str]) -> None:
+        self._node, self._ours = node, ours
+        self._next = time.monotonic() + self.PERIOD_S
+        self._said: list[str] = []
+
+    def check(self) -> None:
+        now = time.monotonic()
+        if now < self._next:
+            return
+        self._next = now + self.PERIOD_S
+        twice = duplicated(self._node.get_node_names(), self._ours)
+        if twice and twice != self._said:
+            domain = os.environ.get('ROS_DOMAIN_ID', '0')
+            self._node.get_logger().error(
+                f'another robot runs in ROS domain {domain}: {", ".join(twice)} twice; its '
+                "topics and services mix with this one's. Stop it, or give each robot its "
+                'own ROS_DOMAIN_ID')
+        self._said = twice
+
+
 def has_section(files: list[pathlib.Path], node: str) -> bool:
     """Whether a parameter file has a section for node (``rm_manual:``)."""
     for path in files:
@@ -209,9 +244,13 @@ def _run(args: argparse.Namespace, files: list[pathlib.Path]) -> int:
     mode = 'on rm_sim' if args.sim else 'on its CAN buses'
     print(f'[bringup] {", ".join(p.name for p in files)}: robot running {mode}; Ctrl-C stops')
 
+    ours = [n.get_name() for n in (bridge, host, manual) if n is not None]
+    guard = _SecondRobotGuard(bridge, ours + (['rm_sim'] if args.sim else []))
+
     def tick() -> bool:
         if printer is not None:
             printer.maybe_print()
+        guard.check()
         return deadline is None or time.monotonic() < deadline
 
     try:

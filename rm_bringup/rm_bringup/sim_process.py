@@ -66,7 +66,8 @@ class SimProcess:
                 }
             )
         )
-        args = [sys.executable, '-m', 'rm_base.bridge.sim_process', '--socket', self.socket]
+        args = [sys.executable, '-m', 'rm_base.bridge.sim_process', '--socket', self.socket,
+                '--parent-pid', str(os.getpid())]
         for path in files:
             args += ['--params-file', str(path)]
         self._log = open(self.log_path, 'wb')

@@ -118,3 +118,72 @@ def test_when_a_motor_is_taken_offline_in_rm_sim_expect_the_robot_to_see_it(
             proc.kill()
             proc.wait()
     assert proc.returncode == 0, log.read_text()
+
+
+def _children(pid, marker):
+    """Pids of the live processes whose parent is pid and whose command line has marker."""
+    found = []
+    for entry in pathlib.Path('/proc').iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            stat = (entry / 'stat').read_text()
+            cmdline = (entry / 'cmdline').read_bytes().replace(b'\0', b' ').decode()
+        except OSError:
+            continue
+        fields = stat.rsplit(')', 1)[1].split()
+        if int(fields[1]) == pid and marker in cmdline:
+            found.append(int(entry.name))
+    return found
+
+
+def _alive(pid):
+    try:
+        state = pathlib.Path(f'/proc/{pid}/stat').read_text().rsplit(')', 1)[1].split()[0]
+    except OSError:
+        return False
+    return state not in ('Z', 'X')
+
+
+def test_when_bringup_is_killed_expect_its_rm_sim_to_stop_too(tmp_path):
+    # The finding: kill -9 of bringup left rm_sim running; the next bringup had two
+    # /rm_sim nodes and a fault service call could land on the orphan.
+    proc = start_bringup(['--robot', 'standard', '--sim'], tmp_path / 'stderr.log')
+    sims = []
+    try:
+        assert wait_until(
+            lambda: sims.extend(_children(proc.pid, 'rm_base.bridge.sim_process')) or sims,
+            60.0,
+        ), (tmp_path / 'stderr.log').read_text()
+        proc.kill()  # SIGKILL: no handler of bringup's runs
+        proc.wait(timeout=30)
+        assert wait_until(lambda: not _alive(sims[0]), 20.0), 'rm_sim outlived bringup'
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+        for pid in sims:
+            if _alive(pid):
+                os.kill(pid, signal.SIGKILL)
+
+
+def test_when_another_robot_runs_in_the_domain_expect_an_error_naming_it(tmp_path, ros_context):
+    import rclpy
+
+    log = tmp_path / 'stderr.log'
+    other = rclpy.create_node('can_bridge', context=ros_context)  # another robot's bridge
+    proc = start_bringup(['--robot', 'standard', '--sim', '--no-status'], log)
+    try:
+        assert wait_until(lambda: 'another robot runs in ROS domain' in log.read_text()
+                          or proc.poll() is not None, 60.0), log.read_text()
+        assert 'can_bridge twice' in log.read_text()
+        assert proc.poll() is None  # said, not refused: the operator decides
+    finally:
+        other.destroy_node()
+        proc.send_signal(signal.SIGINT)
+        try:
+            proc.wait(timeout=30)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.wait()

@@ -32,6 +32,7 @@ from rm_base.errors import ConfigError
 from rm_base.hardware.config import SAFETY_SCHEMA
 from rm_base.node_main import init_ros, spin_until_shutdown
 from rm_base.param_files import load_parameters
+from rm_base.ros_env import die_with_parent
 from rm_base.sim import SimWorld
 from rm_base.sim.server import SimServer
 from rm_base.sim.socket_bus import default_socket_path
@@ -84,12 +85,16 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
         help='socket path (default $RM_SIM_SOCKET, else /tmp/rm_sim_<domain>/can.sock)',
     )
     parser.add_argument('--duration', type=float, default=None, help='stop after seconds [s]')
+    parser.add_argument('--parent-pid', type=int, default=None,
+                        help='stop when this process (the one that started rm_sim) dies')
     return parser.parse_args(argv)
 
 
 def main(argv: list[str] | None = None) -> int:
     """Run the simulator until SIGINT/SIGTERM; return the exit status (1 on a config error)."""
     args = parse_args(sys.argv[1:] if argv is None else argv)
+    if args.parent_pid is not None:
+        die_with_parent(args.parent_pid)
     try:
         world, settings = build_world(bridge_parameters(args.params_file))
     except ConfigError as err:
