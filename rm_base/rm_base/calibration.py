@@ -63,6 +63,10 @@ class CalibrationFile:
             return {}
         except OSError as err:
             raise CalibrationError(f'calibration file {self.path}: {err.strerror}') from err
+        except UnicodeDecodeError as err:
+            raise CalibrationError(
+                f'calibration file {self.path} is not a text file (byte {err.start} is not '
+                'UTF-8)') from None
         try:
             data = yaml.safe_load(text)
         except yaml.YAMLError as err:
@@ -75,17 +79,26 @@ class CalibrationFile:
             )
         return data
 
-    def entries(self, section: str) -> dict[str, dict[str, Any]]:
+    def entries(self, section: str, keys: Sequence[str]) -> dict[str, dict[str, Any]]:
         """The entries of one section (``joints``, ``imu``) by name; {} if none.
 
+        keys: the keys an entry may have (a typo is an error, not a value ignored).
+
         Raises:
-            CalibrationError: the file is invalid or the section is not a mapping of mappings.
+            CalibrationError: the file is invalid, the section is not a mapping of mappings,
+                or an entry has another key (the message names it).
         """
         found = self.read().get(section, {})
         if not isinstance(found, dict) or not all(isinstance(v, dict) for v in found.values()):
             raise CalibrationError(
                 f'calibration file {self.path}: {section} must map names to their values'
             )
+        for name, values in found.items():
+            unknown = sorted(str(k) for k in values if k not in keys)
+            if unknown:
+                raise CalibrationError(
+                    f'calibration file {self.path}: {section}.{name}.{unknown[0]} is not a '
+                    f'calibration key (known: {", ".join(keys)})')
         return {str(name): dict(values) for name, values in found.items()}
 
     def write(self, section: str, name: str, values: dict[str, Any]) -> None:
@@ -128,11 +141,16 @@ class CalibrationFile:
                 fcntl.flock(lock, fcntl.LOCK_UN)
 
 
-def finite_values(where: str, value: Any, length: int | None = None) -> tuple[float, ...]:
+def finite_values(
+    where: str, value: Any, length: int | None = None, *, limit: float | None = None
+) -> tuple[float, ...]:
     """A number (length None) or a list of length numbers from a calibration entry, finite.
 
+    limit: largest magnitude a measured value can have; beyond it the file is wrong.
+
     Raises:
-        CalibrationError: not numbers, the wrong length, or not finite; where names it.
+        CalibrationError: not numbers, the wrong length, not finite or beyond limit; where
+            names it.
     """
     items: Sequence[Any] = [value] if length is None else value
     if length is not None and (not isinstance(value, list) or len(value) != length):
@@ -142,6 +160,9 @@ def finite_values(where: str, value: Any, length: int | None = None) -> tuple[fl
     numbers = tuple(float(v) for v in items)
     if not all(math.isfinite(v) for v in numbers):
         raise CalibrationError(f'{where} must be finite, got {value!r}')
+    if limit is not None and any(abs(v) > limit for v in numbers):
+        raise CalibrationError(
+            f'{where} is {value!r}: beyond {limit:g}, no calibration measures that')
     return numbers
 
 
@@ -152,9 +173,10 @@ def joint_zero_offsets(file: CalibrationFile) -> dict[str, float]:
         CalibrationError: the file or a value is invalid (the message names the key).
     """
     zeros = {}
-    for joint, values in file.entries('joints').items():
-        if 'zero_offset' in values:
+    for joint, values in file.entries('joints', ('zero_offset',)).items():
+        if 'zero_offset' in values:  # set_zero writes an angle in [0, 2 pi)
             (zeros[joint],) = finite_values(
-                f'{file.path}: joints.{joint}.zero_offset', values['zero_offset']
+                f'{file.path}: joints.{joint}.zero_offset', values['zero_offset'],
+                limit=2.0 * math.pi,
             )
     return zeros

@@ -246,3 +246,26 @@ def test_a_params_file_that_is_not_yaml_is_one_line_and_exit_1(tmp_path, tool):
     code, lines, err = run_tool(args)
     assert code == 1
     assert 'Traceback' not in err and len(lines) == 1, err
+
+
+@pytest.mark.ros
+@pytest.mark.slow
+@pytest.mark.parametrize(('content', 'message'), [
+    (bytes(range(256)), 'is not a text file'),
+    (b'imu:\n  imu: {gyro_bias: [5.0, 0.0, 0.0]}\n',
+     'imu.imu.gyro_bias is [5.0, 0.0, 0.0]: beyond'),
+], ids=['binary', 'gyro-bias-5-rad-s'])
+def test_a_bad_calibration_file_is_one_line_naming_it_and_exit_1(tmp_path, content, message):
+    # The findings: a binary file crashed bringup (UnicodeDecodeError); a 5 rad/s gyro bias
+    # loaded with an INFO line and the gimbal held a 0.24 rad offset.
+    calibration = tmp_path / 'calibration.yaml'
+    calibration.write_bytes(content)
+    overlay = tmp_path / 'overlay.yaml'
+    overlay.write_text(
+        f'can_bridge:\n  ros__parameters:\n    calibration.file: {calibration}\n'
+        f'rm_robot:\n  ros__parameters:\n    imu.calibration.file: {calibration}\n')
+    code, lines, err = run_tool([console_script('rm_bringup', 'bringup'), '--sim', '--no-status',
+                                 '--params-file', str(overlay)], timeout=60.0)
+    assert code == 1 and 'Traceback' not in err, err
+    errors = [line for line in lines if 'configuration error' in line]
+    assert len(errors) == 1 and message in errors[0] and str(calibration) in errors[0], err

@@ -176,11 +176,11 @@ class Hi220(PluginBase):
         self._calibration = CalibrationFile(path) if path else None
         self.gyro_bias: tuple[float, float, float] | None = None
         if self._calibration is not None:
-            entry = self._calibration.entries('imu').get(self.name, {})
-            if 'gyro_bias' in entry:
+            entry = self._calibration.entries('imu', ('gyro_bias',)).get(self.name, {})
+            if 'gyro_bias' in entry:  # calibrate_gyro refuses a bias beyond max_rate
                 x, y, z = finite_values(
                     f'{self._calibration.path}: imu.{self.name}.gyro_bias',
-                    entry['gyro_bias'], 3,
+                    entry['gyro_bias'], 3, limit=self._rest.max_rate,
                 )
                 self.gyro_bias = (x, y, z)
                 self.logger.info(
