@@ -168,6 +168,7 @@ class DiagnosticsReporter:
             'handler_errors': stats.handler_errors,
             'reopen_count': stats.reopen_count,
             'open_failures': stats.open_failures,
+            'log_dropped': stats.log_dropped,
             'last_error': stats.last_error or '',
         }
         return diagnostic_status(

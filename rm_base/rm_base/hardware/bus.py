@@ -90,6 +90,7 @@ class BusStats:
         frames_unmatched: received frames no handler claimed.
         frames_late: received frames that had waited more than 1 ms before the receive
             thread got them (stamped at their arrival; see ``frame_clock``).
+        log_dropped: frames the ``log_file`` writer had no room for (it fell behind).
         send_errors: failed sends (driver error, buffer full, bus down).
         receive_errors: errors raised by the driver while receiving.
         error_frames: CAN error frames reported by the driver.
@@ -118,6 +119,7 @@ class BusStats:
     load_fraction: float | None
     last_error: str | None
     frames_late: int = 0
+    log_dropped: int = 0
 
 
 #: Largest believable age of a received frame [s]: a timestamp older than this (or in the
@@ -566,4 +568,5 @@ class ManagedBus:
             load_fraction=load / bitrate if bitrate else None,
             last_error=self._last_error,
             frames_late=self._late,
+            log_dropped=self._log_sink.dropped if self._log_sink is not None else 0,
         )
