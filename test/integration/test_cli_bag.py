@@ -13,6 +13,7 @@ wait tens of ms for a core.
 
 import itertools
 import signal
+import subprocess
 import sys
 import time
 from pathlib import Path
@@ -51,6 +52,12 @@ TYPES = {CMD_TOPIC: ChassisCmd, TEXT_TOPIC: String}
 
 def rmcli(*args):
     return start_process([sys.executable, '-m', 'rm_bringup.cli', *args])
+
+
+def rmcli_run(*args):
+    """rmcli run to its end: its exit code and output."""
+    return subprocess.run([sys.executable, '-m', 'rm_bringup.cli', *args], check=False,
+                          capture_output=True, text=True, timeout=TIMEOUT_S)
 
 
 def schedule_message(index, topic):
@@ -336,3 +343,41 @@ def test_play_rebuilds_a_topic_recorded_with_an_older_definition(tmp_path):
     ]
     assert 'new fields at their defaults: speed_gear' in err
     assert 'not played: legacy_gain' in err
+
+
+def test_a_recording_killed_mid_write_is_made_readable_by_reindex(tmp_path):
+    # The finding: a bag being recorded when `rmcli bag record` was killed (-9) could not
+    # be read at all (5.4 MB on disk, no metadata.yaml).
+    bag = tmp_path / 'bag'
+    payload = 'x' * 1000
+    with rclpy_context() as context:
+        graph = Graph(context)
+        try:
+            publisher = graph.node.create_publisher(String, TEXT_TOPIC, 100)
+            recorder = rmcli('bag', 'record', TEXT_TOPIC, '-o', str(bag))
+            try:
+                assert graph.wait(lambda: publisher.get_subscription_count() > 0)
+                for index in range(3000):  # ~3 MB: whole 1 MiB chunks, and one being filled
+                    publisher.publish(String(data=f'{index} {payload}'))
+                    time.sleep(0.0005)
+                time.sleep(1.0)  # the recorder takes what is on its way
+            finally:
+                recorder.kill()
+                recorder.communicate(timeout=TIMEOUT_S)
+        finally:
+            graph.close()
+    assert not (bag / 'metadata.yaml').exists()
+    info = rmcli_run('bag', 'info', str(bag))
+    assert info.returncode == 1 and f'rmcli bag reindex {bag}' in info.stderr, info.stderr
+    fixed = rmcli_run('bag', 'reindex', str(bag))
+    assert fixed.returncode == 0, fixed.stderr
+    assert 'closed after its last whole record' in fixed.stdout, fixed.stdout
+    with AnyReader([bag]) as reader:
+        got = [reader.deserialize(raw, conn.msgtype).data
+               for conn, _, raw in reader.messages()]
+    assert len(got) >= 1000  # at least the chunks written before the kill
+    indices = [int(text.split()[0]) for text in got]
+    assert indices == sorted(indices)  # in order
+    assert got == [f'{i} {payload}' for i in indices]  # each message whole
+    again = rmcli_run('bag', 'info', str(bag))
+    assert again.returncode == 0 and f'Count: {len(got)}' in again.stdout, again.stderr

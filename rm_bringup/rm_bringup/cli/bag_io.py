@@ -63,6 +63,9 @@ def open_bag(
     if not path.exists():
         raise BagError(f"bag '{path}' does not exist")
     if path.is_dir() and not (path / 'metadata.yaml').is_file():
+        if storage_files(path):
+            raise BagError(f"'{path}' has no metadata.yaml (its recording did not stop "
+                           f'cleanly?): rmcli bag reindex {path}')
         raise BagError(f"'{path}' is not a bag: it has no metadata.yaml")
     try:
         reader = AnyReader([path], default_typestore=default_typestore) if typed else Reader(path)

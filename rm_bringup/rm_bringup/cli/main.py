@@ -18,6 +18,7 @@ from . import (
     bag_play,
     bag_plot,
     bag_record,
+    bag_reindex,
     service_call,
     topic_echo,
     topic_hz,
@@ -44,6 +45,7 @@ VERBS: dict[str, dict[str, tuple[ModuleType, str]]] = {
         'play': (bag_play, 'Play back ROS data from a bag'),
         'plot': (bag_plot, 'Plot chassis, gimbal and shooter data of a bag to PNG files'),
         'record': (bag_record, 'Record ROS data to a bag'),
+        'reindex': (bag_reindex, "Rebuild a killed recording's end and metadata.yaml"),
     },
 }
 GROUP_HELP = {
