@@ -285,3 +285,22 @@ def test_when_plugin_commands_are_huge_expect_outputs_within_every_limit(robot):
     for name, limit in limits.items():
         assert robot.wire.checker.stats(name).max_effort_seen <= limit * 1.01 + 1e-3, name
     assert robot.latest('/shooter_state').shots_fired <= shots_before + 2  # num=2
+
+
+def test_when_a_target_or_move_is_absurd_expect_it_refused_once_at_the_entry(robot):
+    # The finding: a TRACK target or a POSITION move of 1e308 raised on every tick
+    # (OverflowError in the ballistics, a rejection deep in the motion code), a traceback
+    # each time. Now the command is refused where it enters, the field named.
+    gimbal, chassis = robot.plugin('gimbal'), robot.plugin('chassis')
+    errors = (gimbal.error_count, chassis.error_count)
+    track = GimbalCmd(mode=GimbalCmd.TRACK, bullet_speed=15.0)
+    track.target.header.frame_id = 'base_link'
+    track.target.point.x = 1e308
+    robot.publish('/gimbal_cmd', track, rate_hz=100.0)
+    move = ChassisCmd(mode=ChassisCmd.POSITION, move_x=1e308, move_id=9)
+    robot.publish('/chassis_cmd', move, rate_hz=100.0)
+    robot.run(0.5)
+    assert (gimbal.error_count, chassis.error_count) == errors
+    state = robot.latest('/gimbal_state')
+    assert state.state == GimbalCmd.PASSIVE and 'beyond 1000 m' in state.reason, state.reason
+    assert state_of(robot, '/chassis_state') == ChassisCmd.PASSIVE  # never moved

@@ -68,6 +68,9 @@ class ChassisRequest:
 
 
 _SOURCES = {source.value: source for source in FollowSource}
+#: Largest POSITION move per axis (x [m], y [m], yaw [rad]): an arena is 28 m by 15 m and a
+#: move of more than ten turns is a mistake; beyond them a command is refused at the entry.
+MAX_MOVE = (100.0, 100.0, 20.0 * math.pi)
 _E = TypeVar('_E', bound=IntEnum)
 
 
@@ -84,7 +87,8 @@ def parse_chassis_cmd(msg: Any) -> ChassisRequest:
     """Check an rm_msgs/ChassisCmd and return it as a ChassisRequest.
 
     Raises:
-        InputRejectedError: unknown mode, follow_source or speed_gear, or a NaN/inf number.
+        InputRejectedError: unknown mode, follow_source or speed_gear, a NaN/inf number, or
+            a move beyond ``MAX_MOVE``.
     """
     mode = _constant(ChassisMode, msg.mode, 'mode')
     source = _SOURCES.get(msg.follow_source)
@@ -104,6 +108,9 @@ def parse_chassis_cmd(msg: Any) -> ChassisRequest:
     move = (float(msg.move_x), float(msg.move_y), float(msg.move_yaw))
     if not all(map(math.isfinite, move)):
         raise InputRejectedError(f'move_x, move_y and move_yaw must be finite, got {move}')
+    for field, value, limit in zip(('move_x', 'move_y', 'move_yaw'), move, MAX_MOVE, strict=True):
+        if abs(value) > limit:
+            raise InputRejectedError(f'{field} {value:g} is beyond +-{limit:g}: no move on a field')
     accel = tuple(float(a) if a > 0.0 else None for a in raw_accel)
     power_limit = float(msg.power_limit) if msg.power_limit > 0.0 else None
     return ChassisRequest(

@@ -65,6 +65,11 @@ from rm_plugins.gimbal.control import AxisLoop, PlanarPose, Smoother, clamp, sig
 from rm_plugins.gimbal.frames import joint_links, mount_links
 
 _NS_PER_S = 1_000_000_000
+#: A TRACK target further than this on any axis [m], or a bullet speed beyond this [m/s],
+#: is refused at the entry (no arena is that big; no launcher that fast): the ballistics
+#: would overflow on it every tick.
+MAX_TARGET_DISTANCE = 1000.0
+MAX_BULLET_SPEED = 100.0
 
 
 class GimbalMode(IntEnum):
@@ -260,6 +265,12 @@ class StandGimbal(PluginBase):
         frame = cmd.target.header.frame_id
         if not all(map(math.isfinite, (point.x, point.y, point.z, cmd.bullet_speed))):
             return GimbalMode.PASSIVE, 'rejected command: target or bullet speed not finite', None
+        far = max(abs(point.x), abs(point.y), abs(point.z))
+        if far > MAX_TARGET_DISTANCE or abs(cmd.bullet_speed) > MAX_BULLET_SPEED:
+            return GimbalMode.PASSIVE, (
+                f'rejected command: target ({point.x:g}, {point.y:g}, {point.z:g}) m or bullet '
+                f'speed {cmd.bullet_speed:g} m/s beyond {MAX_TARGET_DISTANCE:g} m / '
+                f'{MAX_BULLET_SPEED:g} m/s'), None
         px, py, pz = cfg.pivot
         target = (point.x, point.y, point.z)
         if frame not in cfg.base_frames and frame not in cfg.world_frames:

@@ -88,3 +88,15 @@ def test_when_twist_has_nan_expect_rejected():
     msg.linear.y = math.nan
     with pytest.raises(InputRejectedError, match='must be finite'):
         parse_vel_cmd(msg)
+
+
+@pytest.mark.parametrize(('field', 'value', 'match'), [
+    ('move_x', 1e308, r'move_x 1e\+308 is beyond \+-100'),
+    ('move_y', -101.0, r'move_y -101 is beyond \+-100'),
+    ('move_yaw', 1e6, r'move_yaw 1e\+06 is beyond'),
+])
+def test_when_a_move_is_absurd_expect_it_refused_naming_the_field(field, value, match):
+    msg = cmd(ChassisCmd.POSITION)
+    setattr(msg, field, value)
+    with pytest.raises(InputRejectedError, match=match):
+        parse_chassis_cmd(msg)
