@@ -15,6 +15,7 @@ Messages are decoded with the types the bag embeds (rosbags AnyReader).
 from __future__ import annotations
 
 import argparse
+import sys
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -101,6 +102,7 @@ class PlotData:
 
     tracks: list[Track]
     state_names: dict[str, dict[int, str]]  # msgtype -> value -> constant name
+    skipped: dict[str, str] = field(default_factory=dict)  # topic -> why it is not plotted
 
     def of_type(self, msgtype: str) -> list[Track]:
         """Tracks of one message type, in topic order."""
@@ -126,6 +128,7 @@ def read_plot_data(path: Path) -> PlotData:
     with open_bag(path, typed=True, default_typestore=local.typestore) as reader:
         connections = [c for c in reader.connections if _wanted(c.topic, c.msgtype)]
         tracks: dict[str, Track] = {}
+        skipped: dict[str, str] = {}
         if connections:
             start_ns = reader.start_time
             for connection, stamp_ns, raw in read_messages(reader, path, connections):
@@ -135,16 +138,26 @@ def read_plot_data(path: Path) -> PlotData:
                     raise BagError(
                         f'cannot decode a {connection.msgtype} in {path}: {err}'
                     ) from None
-                track = tracks.setdefault(
-                    connection.topic, Track(connection.topic, connection.msgtype)
-                )
-                track.add((stamp_ns - start_ns) * 1e-9, EXTRACTORS[connection.msgtype](msg))
+                topic = connection.topic
+                if topic in skipped:
+                    continue
+                values = EXTRACTORS[connection.msgtype](msg)
+                odd = next(((k, v) for k, v in values.items()
+                            if not isinstance(v, int | float)), None)
+                if odd is not None:  # recorded in another definition of the type
+                    skipped[topic] = (f'its {odd[0]} is {type(odd[1]).__name__} '
+                                      f'{odd[1]!r}, not a number (recorded in another '
+                                      f'definition of {connection.msgtype})')
+                    tracks.pop(topic, None)
+                    continue
+                track = tracks.setdefault(topic, Track(topic, connection.msgtype))
+                track.add((stamp_ns - start_ns) * 1e-9, values)
         bag_types = BagTypes(reader.typestore)
         names = {}
         for source in set(STATE_NAMES_FROM.values()):
             constants = bag_types.constants(source) or local.constants(source)
             names[source] = {int(v): k for k, v in constants.items() if isinstance(v, int)}
-    return PlotData(sorted(tracks.values(), key=lambda t: t.topic), names)
+    return PlotData(sorted(tracks.values(), key=lambda t: t.topic), names, skipped)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -299,6 +312,8 @@ def run(args: argparse.Namespace) -> int:
 
     path = Path(args.bag_path)
     data = read_plot_data(path)
+    for topic, why in sorted(data.skipped.items()):
+        print(f'skipped {topic}: {why}', file=sys.stderr)
     if not data.tracks:
         wanted = '; '.join(needs for _, _, needs in PLOTS)
         raise CliError(f'nothing to plot in {path}: it has none of {wanted}')

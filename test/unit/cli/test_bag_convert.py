@@ -7,39 +7,15 @@ from rclpy.serialization import deserialize_message
 from rm_bringup.cli.bag_convert import conversions
 from rm_bringup.cli.bag_io import open_bag
 from rm_bringup.cli.bag_play import PlayOptions, play
-from rm_bringup.cli.bag_types import msg_file
 from rm_bringup.cli.errors import BagError
-from rosbags.rosbag2 import StoragePlugin, Writer
-from rosbags.typesys import Stores, get_types_from_msg, get_typestore
+from support.old_bags import CMD, S, older_store, write_old_bag
 
 from rm_msgs.msg import ChassisCmd
-
-S = 1_000_000_000
-CMD = 'rm_msgs/msg/ChassisCmd'
-
-
-def older_store(edit):
-    """Jazzy's types plus a ChassisCmd whose .msg text went through edit(text)."""
-    store = get_typestore(Stores.ROS2_JAZZY)
-    text = edit(msg_file(CMD).read_text(encoding='utf-8'))
-    store.register(get_types_from_msg(text, CMD))
-    return store
 
 
 def drop_follow_source_add_legacy_gain(text):
     assert 'string follow_source' in text
     return text.replace('string follow_source', 'float64 legacy_gain')
-
-
-def write_old_bag(path, store, **fields):
-    from rm_bringup.cli.bag_convert import message_with_defaults
-
-    msg = message_with_defaults(store, CMD, **fields)
-    with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
-        connection = writer.add_connection('/chassis_cmd', CMD, typestore=store)
-        for i in range(3):
-            writer.write(connection, S + i * S // 100, store.serialize_cdr(msg, CMD))
-    return path
 
 
 def test_a_field_added_since_recording_gets_its_default_and_a_dropped_one_is_named(tmp_path):

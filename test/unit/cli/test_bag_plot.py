@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 from rm_bringup.cli.bag_plot import read_plot_data
 from rm_bringup.cli.main import main
+from support.old_bags import older_store, write_old_bag
 
 S = 1_000_000_000
 T0 = 100 * S  # bag start [ns]
@@ -166,3 +167,18 @@ def test_nothing_plottable_is_one_clear_error(write_bag, make, tmp_path, capsys)
     err = capsys.readouterr().err.strip()
     assert err.startswith('rmcli: error: nothing to plot in') and 'GimbalState' in err
     assert '\n' not in err
+
+
+def test_a_topic_recorded_with_a_string_mode_is_skipped_with_a_line_not_a_crash(
+    write_bag, make, tmp_path, capsys
+):
+    # The finding: `bag plot` raised ValueError on a bag whose ChassisCmd.mode was recorded
+    # as a string (which `bag play` refuses cleanly).
+    store = older_store(lambda t: t.replace('uint8 mode', 'string mode'))
+    old = write_old_bag(tmp_path / 'old', store, mode='GYRO')
+    data = read_plot_data(old)
+    assert data.tracks == []
+    assert "its mode is str 'GYRO', not a number" in data.skipped['/chassis_cmd']
+    assert main(['bag', 'plot', str(old), '-o', str(tmp_path / 'plots')]) == 1
+    err = capsys.readouterr().err
+    assert 'skipped /chassis_cmd: its mode is str' in err and 'Traceback' not in err
