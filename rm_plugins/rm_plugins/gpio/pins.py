@@ -17,6 +17,16 @@ from enum import Enum, IntEnum
 from rm_msgs.msg import GpioState
 from rm_plugins.gpio.errors import GpioCommandError, GpioConfigError
 
+#: A rejection names at most this many bad entries, and a pin name at most this long.
+_MAX_PROBLEMS = 3
+_MAX_NAME = 40
+
+
+def _short(name: str) -> str:
+    if len(name) <= _MAX_NAME:
+        return repr(name)
+    return f'{name[:_MAX_NAME]!r}... ({len(name)} characters)'
+
 
 class PinKind(IntEnum):
     """What a pin does; the values are rm_msgs/GpioState's INPUT/OUTPUT/PWM."""
@@ -205,7 +215,7 @@ def check_command(
     for name, value in zip(names, values, strict=True):
         spec = pins.get(name)
         if spec is None:
-            problems.append(f'unknown pin {name!r} (known: {", ".join(sorted(pins))})')
+            problems.append(f'unknown pin {_short(name)} (known: {", ".join(sorted(pins))})')
             continue
         if name in writes:
             problems.append(f'pin {name!r} listed twice')
@@ -216,5 +226,8 @@ def check_command(
             continue
         writes[name] = float(value)
     if problems:
-        raise GpioCommandError('rejected /gpio_cmd: ' + '; '.join(problems))
+        # the first few, and a count: a flood of bad entries must not make a log line of MBs
+        more = len(problems) - _MAX_PROBLEMS
+        said = '; '.join(problems[:_MAX_PROBLEMS]) + (f'; and {more} more' if more > 0 else '')
+        raise GpioCommandError(f'rejected /gpio_cmd ({len(names)} entries): {said}')
     return writes

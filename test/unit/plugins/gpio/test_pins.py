@@ -99,3 +99,13 @@ def test_when_one_entry_is_bad_expect_nothing_of_the_command_applied():
 def test_when_the_duty_cycle_is_at_its_limits_expect_it_accepted():
     assert value_problem(PinKind.PWM, 0.0) is None
     assert value_problem(PinKind.PWM, 1.0) is None
+
+
+def test_when_a_command_floods_bad_entries_expect_a_short_rejection_with_a_count():
+    # The finding: GPIO warnings repeated the whole bad input (log lines of 6-10 MB).
+    names = ['x' * 1_000_000] + [f'pin{i}' for i in range(100_000)]
+    with pytest.raises(GpioCommandError) as info:
+        check_command(PINS, names, [1.0] * len(names))
+    text = str(info.value)
+    assert len(text) < 1000
+    assert '(100001 entries)' in text and 'and 99998 more' in text
