@@ -20,6 +20,7 @@ Example:
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import math
 from collections.abc import Callable, Collection, Mapping, Sequence
 from typing import Any, NamedTuple
@@ -401,8 +402,19 @@ def check_table(
     if allowed is not None:
         unknown = set(data) - set(allowed)
         if unknown:
-            raise error(f'{where}: unknown key(s) {sorted(unknown)}; allowed: {sorted(allowed)}')
+            raise error(unknown_keys_message(where, unknown, allowed))
     return data
+
+
+def unknown_keys_message(where: str, unknown: Collection[str], allowed: Collection[str]) -> str:
+    """``<where>: unknown key(s) [...] (did you mean ...?); allowed: [...]``."""
+    hints = []
+    for key in sorted(map(str, unknown)):
+        close = difflib.get_close_matches(key, list(allowed), n=1)
+        if close:
+            hints.append(f'{close[0]!r} for {key!r}')
+    hint = f' (did you mean {", ".join(hints)}?)' if hints else ''
+    return f'{where}: unknown key(s) {sorted(map(str, unknown))}{hint}; allowed: {sorted(allowed)}'
 
 
 def read_value(

@@ -237,6 +237,15 @@ def test_mode_change_resets_the_integrators():
 
 
 # --- config errors ---
+def test_a_typo_of_a_joint_key_names_the_key_it_meant_and_every_key_a_joint_has():
+    # The finding: max_efort was answered with the family's options only (raw_limit...)
+    with pytest.raises(HardwareConfigError) as err:
+        make(max_efort=2.0)
+    text = str(err.value)
+    assert "unknown key(s) ['max_efort'] (did you mean 'max_effort' for 'max_efort'?)" in text
+    assert "'max_effort'" in text.split('allowed:')[1] and "'raw_limit'" in text
+
+
 def test_unknown_option_and_bad_id_are_config_errors():
     with pytest.raises(HardwareConfigError, match=r"unknown key\(s\) \['model'\]"):
         make(model='DM4310')

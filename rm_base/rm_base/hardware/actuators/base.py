@@ -47,9 +47,9 @@ from typing import Any, ClassVar, NamedTuple
 import can
 from mypy_extensions import mypyc_attr
 
-from rm_base.config_schema import Schema
+from rm_base.config_schema import Schema, unknown_keys_message
 from rm_base.control import build_pid
-from rm_base.hardware.config import JointConfig, SafetyConfig
+from rm_base.hardware.config import JOINT_SCHEMA, JointConfig, SafetyConfig
 from rm_base.hardware.errors import CommandRejectedError, HardwareConfigError, ProtocolError
 from rm_base.joints import InvalidTargetError, JointState, JointTarget, Mode, check_target
 
@@ -219,8 +219,12 @@ class Actuator:
         Raises:
             HardwareConfigError: an unknown, missing or invalid option, named by its key.
         """
-        return cls.options_schema.read(f'joints.{config.name}', config.options,
-                                       HardwareConfigError)
+        where = f'joints.{config.name}'
+        unknown = set(config.options) - cls.options_schema.names
+        if unknown:  # a typo of a common key lands here: name every key a joint may have
+            raise HardwareConfigError(unknown_keys_message(
+                where, unknown, JOINT_SCHEMA.names | cls.options_schema.names))
+        return cls.options_schema.read(where, config.options, HardwareConfigError)
 
     def __init__(self, config: JointConfig, safety: SafetyConfig | None = None) -> None:
         """Build the actuator from its config.
