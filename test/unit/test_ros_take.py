@@ -102,3 +102,49 @@ def test_an_error_from_rcl_is_a_take_error_naming_the_topic_and_the_buffer_still
     assert _take_one(buffer, subscription).data == 'next'
     buffer.close()
     node.destroy_node()
+
+
+def test_messages_dds_dropped_before_the_take_are_counted_from_the_sequence_numbers(ros_context):
+    # The finding: messages dropped by a subscription's keep-last queue during a flood
+    # were counted nowhere. A depth-3 reader given 20 messages keeps the last 3.
+    from rm_base.ros_take import MessageInfo, SequenceGaps
+
+    node = Node('ros_take_gaps', context=ros_context)
+    subscription = node.create_subscription(String, '/ros_take_gaps', lambda msg: None, 3)
+    publisher = node.create_publisher(String, '/ros_take_gaps', 3)
+    assert wait_until(lambda: publisher.get_subscription_count() == 1, 5.0)
+    buffer, info, gaps = TakeBuffer(), MessageInfo(), SequenceGaps()
+    publisher.publish(String(data='first'))
+    assert _first(lambda: buffer.take_serialized(subscription, info)) is not None
+    assert gaps.note(info) == 0 and info.publication_sequence_number > 0
+    for index in range(20):
+        publisher.publish(String(data=str(index)))
+    taken = []
+
+    def take_all():
+        while (data := buffer.take_serialized(subscription, info)) is not None:
+            gaps.note(info)
+            taken.append(deserialize_message(data, String).data)
+        return taken[-1:] == ['19']
+
+    assert wait_until(take_all, 5.0)
+    assert taken == ['17', '18', '19']
+    assert gaps.lost == 17
+    buffer.close()
+    node.destroy_node()
+
+
+def test_sequence_gaps_count_per_publisher_and_ignore_rmws_without_numbers():
+    from rm_base.ros_take import MessageInfo, SequenceGaps
+
+    def info(number, gid):
+        i = MessageInfo()
+        i.publication_sequence_number = number
+        i.publisher_gid.data[0] = gid
+        return i
+
+    gaps = SequenceGaps()
+    assert [gaps.note(info(n, g)) for n, g in ((1, 1), (1, 2), (4, 1), (2, 2), (0, 3), (0, 3))] \
+        == [0, 0, 2, 0, 0, 0]
+    assert gaps.note(info(1, 1)) == 0  # a publisher that started over
+    assert gaps.lost == 2

@@ -18,7 +18,10 @@ then only this thread waits. Its priority is below the loop's and it runs on the
 CPU (``rm_base.realtime``), so it takes in the loop's sleep, never mid-tick.
 
 A queue holds as many messages as the subscription's QoS depth, as DDS would: if the loop
-falls behind, the oldest are dropped, counted per topic and logged.
+falls behind, the oldest are dropped, counted per topic and logged. Messages DDS itself
+dropped before this thread took them (its keep-last history overwritten in a flood) show
+as gaps in each publisher's sequence numbers: counted per topic (``lost_by_topic``) and
+logged too.
 """
 
 from __future__ import annotations
@@ -38,7 +41,7 @@ from rclpy.qos import HistoryPolicy, QoSProfile
 from rclpy.serialization import deserialize_message
 
 from rm_base.plugin.commands import LogThrottle
-from rm_base.ros_take import TakeBuffer
+from rm_base.ros_take import MessageInfo, SequenceGaps, TakeBuffer
 
 _log = logging.getLogger(__name__)
 
@@ -80,6 +83,7 @@ class _Subscription(NamedTuple):
     topic: str
     # serialised messages, appended by the inbox thread, handed out by the loop
     queue: collections.deque[bytes]
+    gaps: SequenceGaps  # messages lost before the inbox thread took them
 
 
 class Inbox:
@@ -100,6 +104,10 @@ class Inbox:
         self._subscriptions: tuple[_Subscription, ...] = ()
         self.taken_by_topic: dict[str, int] = {}
         self.dropped_by_topic: dict[str, int] = {}
+        # lost before the inbox thread could take them (publishers' sequence numbers)
+        self.lost_by_topic: dict[str, int] = {}
+        self._info = MessageInfo()  # the inbox thread's, filled by each take
+        self._lost_log = LogThrottle(_LOG_PERIOD_NS)
         self._by_topic: dict[str, list[Any]] = {}
         self._local: set[str] = set()
         self.errors = 0
@@ -148,7 +156,8 @@ class Inbox:
             return
         depth = queue_depth(qos)
         sub = self._node.create_subscription(msg_type, topic, _never_called, qos)
-        entry = _Subscription(sub, msg_type, callback, topic, collections.deque(maxlen=depth))
+        entry = _Subscription(sub, msg_type, callback, topic, collections.deque(maxlen=depth),
+                              SequenceGaps())
         # swapped whole: the loop and the thread may be iterating the old tuple
         self._subscriptions += (entry,)
         self._by_topic.setdefault(topic, []).append(sub)
@@ -236,8 +245,15 @@ class Inbox:
                         self._take_all(buffer, entry)
 
     def _take_all(self, buffer: TakeBuffer, entry: _Subscription) -> None:
-        queue = entry.queue
-        while (data := buffer.take_serialized(entry.subscription)) is not None:
+        queue, info, gaps = entry.queue, self._info, entry.gaps
+        while (data := buffer.take_serialized(entry.subscription, info)) is not None:
+            if gaps.note(info):
+                self.lost_by_topic[entry.topic] = gaps.lost
+                more = self._lost_log.due(time.monotonic_ns())
+                if more is not None:
+                    _log.warning('%s: %d message(s) lost before they could be taken so far '
+                                 "(DDS's keep-last history overwritten: a flood?)%s",
+                                 entry.topic, gaps.lost, more)
             if len(queue) == queue.maxlen:
                 self._dropped(entry.topic, queue.maxlen)
             queue.append(data)

@@ -25,6 +25,7 @@ class InboxReport:
     def __init__(self, node_name: str) -> None:
         self._name = f'{node_name}: inbox'
         self._last_dropped: dict[str, int] = {}
+        self._last_lost: dict[str, int] = {}
         self._last_errors = 0
         self._last_receive_errors = 0
 
@@ -32,12 +33,19 @@ class InboxReport:
         """The status of inbox now (an Inbox; read from any thread)."""
         taken = dict(inbox.taken_by_topic)
         dropped = dict(inbox.dropped_by_topic)
+        lost = dict(inbox.lost_by_topic)
         errors, receive_errors = inbox.errors, inbox.receive_errors
         problems = [
             f'{n} on {topic} dropped'
             for topic, count in sorted(dropped.items())
             if (n := count - self._last_dropped.get(topic, 0)) > 0
         ]
+        problems += [
+            f'{n} on {topic} lost before taken'
+            for topic, count in sorted(lost.items())
+            if (n := count - self._last_lost.get(topic, 0)) > 0
+        ]
+        self._last_lost = lost
         if receive_errors > self._last_receive_errors:
             problems.append(f'{receive_errors - self._last_receive_errors} take(s) failed')
         if errors > self._last_errors:
@@ -53,6 +61,7 @@ class InboxReport:
         for topic in sorted(taken):
             values[f'{topic} taken'] = taken[topic]
             values[f'{topic} dropped'] = dropped.get(topic, 0)
+            values[f'{topic} lost'] = lost.get(topic, 0)
         values['pending'] = inbox.pending
         values['take errors'] = receive_errors
         values['callback errors'] = errors

@@ -150,9 +150,9 @@ def test_the_loop_never_takes_from_dds_and_runs_on_while_a_take_blocks(ros_conte
     gave_up = threading.Event()
     real_take = ros_take.TakeBuffer.take_serialized
 
-    def take(buffer, subscription):
+    def take(buffer, subscription, info=None):
         takers.add(threading.get_ident())
-        data = real_take(buffer, subscription)
+        data = real_take(buffer, subscription, info)
         if data is not None:
             blocked.set()
             if not release.wait(10.0):  # a stage that waited for the take would end here

@@ -6,9 +6,10 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from rm_base.plugin.inbox_status import InboxReport
 
 
-def inbox(taken, dropped, errors=0, receive_errors=0, pending=0):
+def inbox(taken, dropped, errors=0, receive_errors=0, pending=0, lost=None):
     return SimpleNamespace(taken_by_topic=taken, dropped_by_topic=dropped, errors=errors,
-                           receive_errors=receive_errors, pending=pending)
+                           receive_errors=receive_errors, pending=pending,
+                           lost_by_topic=lost or {})
 
 
 def values(status):
@@ -22,8 +23,8 @@ def test_when_nothing_was_lost_expect_ok_with_the_counts_per_topic():
     assert (status.name, status.level, status.message, status.hardware_id) == (
         'rm_robot: inbox', DiagnosticStatus.OK, 'ok', 'inbox')
     assert values(status) == {
-        '/chassis_cmd taken': '3', '/chassis_cmd dropped': '0',
-        '/vel_cmd taken': '12', '/vel_cmd dropped': '0',
+        '/chassis_cmd taken': '3', '/chassis_cmd dropped': '0', '/chassis_cmd lost': '0',
+        '/vel_cmd taken': '12', '/vel_cmd dropped': '0', '/vel_cmd lost': '0',
         'pending': '1', 'take errors': '0', 'callback errors': '0',
     }
 
@@ -45,3 +46,12 @@ def test_when_takes_or_callbacks_failed_expect_warn_with_each_count():
     assert status.level == DiagnosticStatus.WARN
     assert status.message == (
         'since the last report: 1 take(s) failed, 2 not handed out (callback failed)')
+
+
+def test_when_dds_lost_messages_before_the_take_expect_warn_with_the_count():
+    report = InboxReport('rm_robot')
+    report.status(inbox({'/vel_cmd': 10}, {'/vel_cmd': 0}))
+    status = report.status(inbox({'/vel_cmd': 20}, {'/vel_cmd': 0}, lost={'/vel_cmd': 7}))
+    assert status.level == DiagnosticStatus.WARN
+    assert status.message == 'since the last report: 7 on /vel_cmd lost before taken'
+    assert values(status)['/vel_cmd lost'] == '7'
