@@ -180,7 +180,9 @@ class CommandInput(Generic[M]):
             return False
         with self._lock:
             self._msg = msg
-            self._stamp_ns = stamp_ns
+            # a stamp ahead of this clock (within the timeout: clocks a little apart) counts
+            # from its receipt, so no command outlives its timeout after its last message
+            self._stamp_ns = min(stamp_ns, receive_ns)
         return True
 
     def status(self, now_ns: int) -> tuple[CommandStatus, str]:

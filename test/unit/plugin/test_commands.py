@@ -88,6 +88,15 @@ def test_when_stamp_is_in_the_future_beyond_timeout_expect_rejected(command, log
     assert 'in the future' in log.lines[0][1]
 
 
+def test_a_stamp_a_little_in_the_future_lives_one_timeout_from_its_receipt(command):
+    # The finding: a stamp up to one timeout ahead kept a command alive ~0.43 s after the
+    # last message (0.25 s timeout + the stamp's lead).
+    msg = chassis_cmd(T0 + 90 * MS)
+    assert command.handle(msg, receive_ns=T0)
+    assert command.latest(T0 + 100 * MS) is msg
+    assert command.latest(T0 + 101 * MS) is None
+
+
 def test_stale_rejections_are_logged_at_most_once_a_second(command, log):
     for i in range(10):  # ten stale messages within 90 ms
         command.handle(chassis_cmd(T0), receive_ns=T0 + S + i * 10 * MS)
