@@ -97,15 +97,21 @@ def load_mapping(path: str | Path | None = None) -> ManualMapping:
     Raises:
         MappingError: the file cannot be read, or a key is missing, unknown or invalid.
     """
+    where = f'manual mapping {path or DEFAULT_MAPPING}'
     try:
         if path:
-            text = Path(path).expanduser().read_text()
+            text = Path(path).expanduser().read_text(encoding='utf-8')
         else:
-            text = resources.files(__package__).joinpath(DEFAULT_MAPPING).read_text()
+            text = resources.files(__package__).joinpath(DEFAULT_MAPPING).read_text('utf-8')
         data = yaml.safe_load(text)
     except (OSError, yaml.YAMLError) as err:
-        raise MappingError(f'manual mapping {path or DEFAULT_MAPPING}: {err}') from err
-    return parse_mapping(data)
+        raise MappingError(f'{where}: {err}') from err
+    except UnicodeDecodeError as err:
+        raise MappingError(f'{where} is not a text file (byte {err.start} is not UTF-8)') from None
+    try:
+        return parse_mapping(data)
+    except MappingError as err:  # say which file: a robot may name its own
+        raise MappingError(f'{where}: {err}') from None
 
 
 def parse_mapping(data: Any) -> ManualMapping:

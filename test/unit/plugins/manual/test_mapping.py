@@ -79,3 +79,17 @@ def test_a_missing_key_is_named(default_data):
     del data['keyboard']['mouse_yaw']
     with pytest.raises(MappingError, match=r'keyboard\.mouse_yaw'):
         parse_mapping(data)
+
+
+def test_a_binary_file_is_a_clear_error_naming_it(tmp_path):
+    path = tmp_path / 'mapping.yaml'
+    path.write_bytes(bytes(range(128, 256)))
+    with pytest.raises(MappingError, match=r'mapping\.yaml is not a text file'):
+        load_mapping(path)
+
+
+def test_a_bad_key_in_ones_own_file_names_the_file(tmp_path, default_data):
+    path = tmp_path / 'mapping.yaml'
+    path.write_text(yaml.safe_dump({**default_data, 'right_switch': 'switch_q'}))
+    with pytest.raises(MappingError, match=r'mapping\.yaml: right_switch must be'):
+        load_mapping(path)
