@@ -577,9 +577,14 @@ class WireChecker:
         last = joint.last_feedback()
         if t - last > self.feedback_timeout_s:
             reasons.append((last + self.feedback_timeout_s, 'offline'))
-        if joint.overheated_since is not None:
+        # a fault's end is judged at t, with the grace: the bridge's clock and the wire's
+        # may differ by a few ms about when the clear time ran out
+        clear = self.fault_clear_s - self.grace_s
+        if joint.overheated_since is not None and not (
+                joint.cool_since is not None and t >= joint.cool_since + clear):
             reasons.append((joint.overheated_since, 'over_temperature'))
-        if joint.fault_since is not None:
+        if joint.fault_since is not None and not (
+                joint.fault_gone_since is not None and t >= joint.fault_gone_since + clear):
             reasons.append((joint.fault_since, 'device_fault'))
         for kind, (since, cleared) in joint.injected.items():
             # offline: the bridge may drive until its feedback timeout; after either fault

@@ -9,14 +9,18 @@ as one timed schedule.
 Processes: this one runs can_bridge (CanBridgeNode on rm_sim, standard.yaml and
 standard_sim.yaml), the unsafe-frame checker on both simulated buses
 (test/reliability/wire.py, fed in a thread) and the commander; rm_robot runs as its own
-process (console script, the same two files), so it can be killed and restarted.
+process (console script, the same two files), so it can be killed and restarted, and so
+does rm_manual (rm_robot's executable as the operator's node, its DR16 on rm_sim's pty).
 
 Every few seconds the commander picks a new mix (chassis RAW/FOLLOW/TWIST/GYRO/PASSIVE
 with a random twist, gimbal RATE or TRACK, shooter READY and PUSH bursts, now and then
 silence) and the injector a random fault: a motor offline, jammed, over temperature or
-sending garbage on its feedback id, a bus in bus-off, or rm_robot killed (SIGKILL) and
-restarted. Each fault has a detection rule (what the robot must show within a deadline,
-see ``FaultInjector``); the report counts faults injected and detected, unsafe frames
+sending garbage on its feedback id, garbage on the feedback id of a motor held for
+over-temperature, noise bursts into the silent DR16 port, a bus in bus-off, or rm_robot
+killed (SIGKILL) and restarted. Each fault has a detection rule (what the robot must show
+within a deadline, see ``FaultInjector``); the checker keeps its own record of each
+motor's injected faults (``WireChecker.note_fault``), so no frame on the wire can talk it
+out of a fault. The report counts faults injected and detected, unsafe frames
 on the wire (the checker, by rule; must be 0), crashes (must be 0: the bridge's threads,
 scheduler errors, rm_robot exits not caused here), the scheduler's timing, the
 resident memory of both processes at the start (after warm-up) and the end, and what the
@@ -173,6 +177,11 @@ class Robot:
         self._listener.start()
         self.host: subprocess.Popen | None = None
         self.host_log = open(workdir / 'rm_robot.log', 'ab')
+        self.manual: subprocess.Popen | None = None
+        # what the operator's node publishes: with the remote silent, nothing at all
+        self.manual_messages = 0
+        self.node.create_subscription(ChassisCmd, '/manual/chassis_cmd',
+                                      self._count_manual, qos_profile_sensor_data)
         self.host_exits: list[int] = []  # exits not caused by the soak (crashes)
 
     def _spin(self, executor: EventsExecutor) -> None:
@@ -183,6 +192,10 @@ class Robot:
         with outside_robot():
             self._spin(self.soak_executor)
 
+    def _count_manual(self, msg: ChassisCmd) -> None:
+        with self._lock:
+            self.manual_messages += 1
+
     def _store(self, topic: str, msg: Any) -> None:
         with self._lock:
             self.latest[topic] = msg
@@ -191,26 +204,33 @@ class Robot:
         with self._lock:
             return self.latest.get(topic)
 
-    def start_host(self) -> None:
+    def _start_robot_exe(self, *remap: str) -> subprocess.Popen:
         from ament_index_python.packages import get_package_prefix
 
         exe = pathlib.Path(get_package_prefix('rm_base')) / 'lib' / 'rm_base' / 'rm_robot'
-        args = [str(exe), '--ros-args']
+        args = [str(exe), '--ros-args', *remap]
         for path in CONFIG_FILES:
             args += ['--params-file', str(path)]
         env = dict(os.environ)
         isolate_ros_environment(env)
         with children_start_normal():  # not at this thread's real-time priority
-            self.host = subprocess.Popen(
+            process = subprocess.Popen(
                 args, env=env, stdout=self.host_log, stderr=self.host_log,
                 pass_fds=domain_claim_fds(),  # an rm_robot left over keeps its domain
             )
         # It inherited this thread's CPU; it picks its own for its Python threads, and its
         # middleware's threads run anywhere, as when started from a shell.
         try:
-            os.sched_setaffinity(self.host.pid, self._cpus)
+            os.sched_setaffinity(process.pid, self._cpus)
         except ProcessLookupError:  # it died at once: the soak counts its exit
             pass
+        return process
+
+    def start_host(self) -> None:
+        self.host = self._start_robot_exe()
+
+    def start_manual(self) -> None:
+        self.manual = self._start_robot_exe('-r', '__node:=rm_manual')
 
     def kill_host(self) -> None:
         if self.host is not None and self.host.poll() is None:
@@ -224,12 +244,13 @@ class Robot:
             self.start_host()
 
     def close(self) -> None:
-        if self.host is not None and self.host.poll() is None:
-            self.host.send_signal(signal.SIGINT)
-            try:
-                self.host.wait(timeout=15)
-            except subprocess.TimeoutExpired:
-                self.host.kill()
+        for process in (self.manual, self.host):
+            if process is not None and process.poll() is None:
+                process.send_signal(signal.SIGINT)
+                try:
+                    process.wait(timeout=15)
+                except subprocess.TimeoutExpired:
+                    process.kill()
         self._stop.set()
         self._spinner.join(timeout=5.0)
         self._listener.join(timeout=5.0)
@@ -399,8 +420,9 @@ class FaultInjector:
         self.trigger_jam_s = (
             float(shooter['shooter.jam.time']) + 2.0 / float(shooter['shooter.state_rate'])
         )
-        kinds = ['offline', 'jam', 'over_temperature', 'garbage', 'bus_off']
-        weights = [3, 2, 2, 2, 1]
+        kinds = ['offline', 'jam', 'over_temperature', 'garbage', 'garbage_hot', 'dr16_noise',
+                 'bus_off']
+        weights = [3, 2, 2, 2, 2, 1, 1]
         if host_restarts:
             kinds.append('host_restart')
             weights.append(1)
@@ -409,6 +431,17 @@ class FaultInjector:
     def inject_one(self) -> FaultRecord:
         kind = self.rng.choices(self.kinds, self.weights)[0]
         return getattr(self, f'_{kind}')()
+
+    def _inject(self, joint: str, fault: Fault) -> None:
+        """Inject into rm_sim, and tell the checker (its own record, not the wire's)."""
+        self.robot.world.inject(joint, fault)
+        temperature = fault.temperature if fault.kind is FaultKind.OVER_TEMPERATURE else None
+        self.robot.watch.checker.note_fault(joint, fault.kind.value, time.time(),
+                                            temperature=temperature)
+
+    def _clear(self, joint: str, kind: FaultKind) -> None:
+        self.robot.world.clear_faults(joint, kind)
+        self.robot.watch.checker.note_fault(joint, kind.value, time.time(), active=False)
 
     def _record(self, kind: str, target: str) -> FaultRecord:
         rec = FaultRecord(kind, target, time.time())
@@ -419,12 +452,11 @@ class FaultInjector:
         """Detected: the bridge reports the joint offline within DETECT_S."""
         joint = self.rng.choice(MOTORS)
         rec = self._record('offline', joint)
-        world = self.robot.world
-        world.inject(joint, Fault.offline())
+        self._inject(joint, Fault.offline())
         lat = wait_for(lambda: not self.robot.joint(joint).state().online, DETECT_S)
         rec.detected, rec.latency_ms = lat is not None, None if lat is None else 1e3 * lat
         time.sleep(self.rng.uniform(0.2, 1.5))
-        world.clear_faults(joint, FaultKind.OFFLINE)
+        self._clear(joint, FaultKind.OFFLINE)
         rec.end = time.time()
         return rec
 
@@ -432,8 +464,7 @@ class FaultInjector:
         """Detected: the joint held OVER_TEMPERATURE within DETECT_S (at 130 °C)."""
         joint = self.rng.choice(MOTORS)
         rec = self._record('over_temperature', joint)
-        world = self.robot.world
-        world.inject(joint, Fault.over_temperature(130.0))
+        self._inject(joint, Fault.over_temperature(130.0))
         lat = wait_for(
             lambda: self.robot.joint(joint).hold_reason.value == 'over_temperature', DETECT_S
         )
@@ -445,9 +476,49 @@ class FaultInjector:
             rec.note = 'its ESC reports no temperature (C610): invisible to the bridge'
 
         time.sleep(self.rng.uniform(0.3, 1.5))
-        world.inject(joint, Fault.over_temperature(50.0))  # cooled down
+        self._inject(joint, Fault.over_temperature(50.0))  # cooled down
         time.sleep(0.2)
-        world.clear_faults(joint, FaultKind.OVER_TEMPERATURE)
+        self._clear(joint, FaultKind.OVER_TEMPERATURE)
+        rec.end = time.time()
+        return rec
+
+    def _garbage_hot(self) -> FaultRecord:
+        """Detected: a motor held for over-temperature stays held while random frames
+        (some of them cool and plausible) come on its feedback id: its hold never lifts."""
+        joint = self.rng.choice([m for m in MOTORS if m != 'trigger'])  # the C610 has no °C
+        rec = self._record('garbage_hot', joint)
+        actuator = self.robot.joint(joint)
+        self._inject(joint, Fault.over_temperature(123.0))
+        held = wait_for(lambda: actuator.hold_reason.value == 'over_temperature', DETECT_S)
+        self._inject(joint, Fault.garbage(rate_hz=1000.0))
+        lifted = wait_for(lambda: actuator.hold_reason.value == 'none',
+                          self.rng.uniform(1.0, 2.5))
+        rec.detected = held is not None and lifted is None
+        rec.latency_ms = None if held is None else 1e3 * held
+        if lifted is not None:
+            rec.note = f'the hold lifted {1e3 * lifted:.0f} ms into the garbage'
+        self._clear(joint, FaultKind.GARBAGE)
+        self._inject(joint, Fault.over_temperature(50.0))
+        time.sleep(0.2)
+        self._clear(joint, FaultKind.OVER_TEMPERATURE)
+        rec.end = time.time()
+        return rec
+
+    def _dr16_noise(self) -> FaultRecord:
+        """Detected: random 18-byte bursts into the silent DR16 port, 7 ms apart for 1-3 s,
+        make rm_manual publish nothing (no /manual/chassis_cmd)."""
+        rec = self._record('dr16_noise', 'rm_manual')
+        remote = self.robot.world.remote
+        before = self.robot.manual_messages
+        deadline = time.monotonic() + self.rng.uniform(1.0, 3.0)
+        while time.monotonic() < deadline:
+            remote.write(self.rng.randbytes(18))
+            time.sleep(0.007)
+        time.sleep(0.3)  # what a believed frame would have made it publish
+        published = self.robot.manual_messages - before
+        rec.detected = published == 0
+        if published:
+            rec.note = f'rm_manual published {published} command(s) on noise'
         rec.end = time.time()
         return rec
 
@@ -462,7 +533,7 @@ class FaultInjector:
         rec = self._record('jam', joint)
         before = self.robot.state('shooter_state')
         jams = before.jam_count if before is not None else 0
-        self.robot.world.inject(joint, Fault.jam())
+        self._inject(joint, Fault.jam())
         fed = FeedSpan(self.trigger_jam_effort)  # trigger: how long it pushed while jammed
         trigger = self.robot.joint('trigger')
         watch = JamWatch(self.robot.joint(joint), power_scale(self.robot.hardware, joint))
@@ -495,22 +566,23 @@ class FaultInjector:
                     f'{gimbal.state if gimbal is not None else None}'
                 )
         time.sleep(self.rng.uniform(0.2, 1.0))
-        self.robot.world.clear_faults(joint, FaultKind.JAM)
+        self._clear(joint, FaultKind.JAM)
         rec.end = time.time()
         return rec
 
     def _garbage(self) -> FaultRecord:
-        """Detected: the joint's decode errors rise (random bytes on a DJI feedback id:
-        about half have an angle above 8191)."""
+        """Detected: the joint's refused frames rise (random bytes on a DJI feedback id:
+        about half have an angle above 8191, and most others are implausible)."""
         joint = self.rng.choice(MOTORS)
         rec = self._record('garbage', joint)
         actuator = self.robot.joint(joint)
-        before = actuator.decode_errors
-        self.robot.world.inject(joint, Fault.garbage(rate_hz=self.rng.choice([100.0, 1000.0])))
-        lat = wait_for(lambda: actuator.decode_errors > before, 3.0)
+        before = actuator.decode_errors + actuator.implausible_frames
+        self._inject(joint, Fault.garbage(rate_hz=self.rng.choice([100.0, 1000.0])))
+        lat = wait_for(lambda: actuator.decode_errors + actuator.implausible_frames > before,
+                       3.0)
         rec.detected, rec.latency_ms = lat is not None, None if lat is None else 1e3 * lat
         time.sleep(self.rng.uniform(0.3, 1.0))
-        self.robot.world.clear_faults(joint, FaultKind.GARBAGE)
+        self._clear(joint, FaultKind.GARBAGE)
         rec.end = time.time()
         return rec
 
@@ -603,6 +675,7 @@ def main(argv: list[str] | None = None) -> int:
     injector = FaultInjector(robot, rng, host_restarts=not args.no_host_restart)
     rss: dict[str, Any] = {'bridge': [], 'rm_robot': []}
     robot.start_host()
+    robot.start_manual()
     commander.start()
     t0 = time.monotonic()
     end = t0 + 60.0 * args.minutes
