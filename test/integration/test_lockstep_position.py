@@ -3,7 +3,8 @@
 Each move is given relative to where the robot stands when its move_id arrives (dx, dy
 along base_link's axes then, dyaw from its heading then); the simulated body must end
 within a few centimetres (odometry against ground truth) and the plugin say it arrived.
-The same command repeated at 50 Hz is one move; a new move_id starts the next one.
+The same command repeated at 50 Hz is one move, and so is the same move_id after a PASSIVE
+or a silence (it holds where it stands); a new move_id starts the next one.
 """
 
 from __future__ import annotations
@@ -55,3 +56,29 @@ def test_a_move_with_a_nan_is_rejected_and_never_moves_the_robot():
         robot.run(0.5)
         assert robot.plugin('chassis').state.name == 'PASSIVE'
         assert math.hypot(robot.world.body.x, robot.world.body.y) < 1e-3
+
+
+def test_a_move_that_ran_does_not_run_again_after_a_passive_blip_or_a_silence():
+    # The finding: after any PASSIVE blip the robot drove the same move_id again from
+    # where it stood (another 1 m and a quarter turn about every 10 s).
+    with LockstepRobot(plugins=('imu', 'gpio', 'chassis', 'gimbal')) as robot:
+        chassis, body = robot.plugin('chassis'), robot.world.body
+        robot.publish('/chassis_cmd', move(1.0, 0.0, 0.0, 7), rate_hz=50)
+        robot.run(3.0)
+        assert chassis.reason == 'commanded POSITION: arrived, holding'
+        assert body.x == pytest.approx(1.0, abs=0.05)
+        robot.publish('/chassis_cmd', ChassisCmd(mode=ChassisCmd.PASSIVE), rate_hz=50)
+        robot.run(0.3)
+        assert chassis.state.name == 'PASSIVE'
+        robot.publish('/chassis_cmd', move(1.0, 0.0, 0.0, 7), rate_hz=50)  # the same move
+        robot.run(3.0)
+        assert chassis.state.name == 'POSITION'
+        assert body.x == pytest.approx(1.0, abs=0.05)  # held where it stood
+        robot.stop_publishing('/chassis_cmd')  # the commander falls silent, then resumes
+        robot.run(1.0)
+        robot.publish('/chassis_cmd', move(1.0, 0.0, 0.0, 7), rate_hz=50)
+        robot.run(3.0)
+        assert body.x == pytest.approx(1.0, abs=0.05)
+        robot.publish('/chassis_cmd', move(1.0, 0.0, 0.0, 8), rate_hz=50)  # a new one runs
+        robot.run(3.0)
+        assert body.x == pytest.approx(2.0, abs=0.05)

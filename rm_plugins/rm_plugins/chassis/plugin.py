@@ -29,8 +29,9 @@ States (values = ChassisCmd mode constants), all decided in ``_decide``:
         Wheels (and steering joints) get MODE_OFF.
     RAW, FOLLOW, TWIST, GYRO: as commanded, see ``rm_base.control.chassis_modes``.
     POSITION: move by ChassisCmd's (move_x, move_y, move_yaw) from the odometry pose where
-        a new move_id (or the mode) began, then hold there (``rm_plugins.chassis.position``);
-        /vel_cmd is not used, the reason says whether it has arrived.
+        a new move_id began, then hold there (``rm_plugins.chassis.position``); a move_id
+        runs once: after a PASSIVE or a silence the same one holds where the chassis
+        stands. /vel_cmd is not used, the reason says whether it has arrived.
 
 An invalid /chassis_cmd (unknown mode, follow source or speed gear, NaN) is rejected with a log line
 and changes nothing: the chassis keeps acting on the last valid command until that one is
@@ -198,6 +199,8 @@ class StandChassis(PluginBase):
             kind: LogThrottle(_LOG_PERIOD_NS) for kind in ('chassis_cmd', 'vel_cmd', 'imu')
         }
         self._report = _Report(len(cfg.wheel_joints))
+        # the last POSITION move started: kept across resets, so a move runs once
+        self._started_move_id: int | None = None
         self.on_reset()
 
     def on_reset(self) -> None:
@@ -547,8 +550,12 @@ class StandChassis(PluginBase):
         """POSITION: the odom velocity toward this move's goal, and whether it arrived."""
         pose = self._odometry.pose
         if self._goal is None or request.move_id != self._move_id:
-            self._goal = goal_of(pose.x, pose.y, pose.yaw, request.move)
-            self._move_id = request.move_id
+            # A move_id that already ran (a PASSIVE blip, a timeout, another mode between)
+            # is that move, over: hold where the chassis stands instead of driving it again.
+            again = request.move_id == self._started_move_id
+            self._goal = goal_of(pose.x, pose.y, pose.yaw, (0.0, 0.0, 0.0) if again
+                                 else request.move)
+            self._move_id = self._started_move_id = request.move_id
         cfg = self.config
         linear = request.accel[0] or cfg.linear_limits.brake_acceleration
         angular = request.accel[2] or cfg.angular_limits.brake_acceleration
