@@ -30,6 +30,7 @@ _CHASSIS_NAMES = {
     ChassisCmd.FOLLOW: 'FOLLOW',
     ChassisCmd.TWIST: 'TWIST',
     ChassisCmd.GYRO: 'GYRO',
+    ChassisCmd.POSITION: 'POSITION',
 }
 _GIMBAL_NAMES = {GimbalCmd.PASSIVE: 'PASSIVE', GimbalCmd.RATE: 'RATE', GimbalCmd.TRACK: 'TRACK'}
 _SHOOTER_NAMES = {

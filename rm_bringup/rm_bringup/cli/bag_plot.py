@@ -70,6 +70,9 @@ EXTRACTORS: dict[str, Callable[[Any], dict[str, float]]] = {
     SHOOT_CMD: lambda m: {'mode': m.mode, 'burst_id': m.burst_id},
 }
 
+# Constants of those messages that name another field's values (ChassisCmd.speed_gear's
+# GEAR_NORMAL = 0 would otherwise name mode 0).
+NOT_STATES = ('GEAR_',)
 # Which message's constants name the values of a state/mode column.
 STATE_NAMES_FROM = {
     (CHASSIS_CMD, 'mode'): CHASSIS_CMD,
@@ -156,7 +159,8 @@ def read_plot_data(path: Path) -> PlotData:
         names = {}
         for source in set(STATE_NAMES_FROM.values()):
             constants = bag_types.constants(source) or local.constants(source)
-            names[source] = {int(v): k for k, v in constants.items() if isinstance(v, int)}
+            names[source] = {int(v): k for k, v in constants.items()
+                             if isinstance(v, int) and not k.startswith(NOT_STATES)}
     return PlotData(sorted(tracks.values(), key=lambda t: t.topic), names, skipped)
 
 

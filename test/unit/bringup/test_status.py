@@ -67,3 +67,8 @@ def test_when_sources_share_the_topics_expect_each_topics_source():
         '/shoot_cmd in charge': ''})
     line = format_status({'diagnostics': {status.name: status}})
     assert line == 'cmd chassis:external gimbal:manual shoot:-'
+
+
+def test_when_the_chassis_moves_to_a_position_expect_its_name_not_a_number():
+    line = format_status({'chassis': ChassisState(state=ChassisCmd.POSITION), 'diagnostics': {}})
+    assert line.startswith('chassis POSITION ')

@@ -111,7 +111,9 @@ def test_values_and_times_are_read_from_the_messages(robot_bag):
     assert shooter.columns['shots_fired'][-1] == 14  # max(0, 19 - 5)
     (odom,) = data.of_type('nav_msgs/msg/Odometry')
     assert odom.columns['wz'] == [pytest.approx(0.18)]
-    assert data.state_names['rm_msgs/msg/ChassisCmd'][4] == 'GYRO'
+    modes = data.state_names['rm_msgs/msg/ChassisCmd']
+    assert [modes[v] for v in range(6)] == ['PASSIVE', 'RAW', 'FOLLOW', 'TWIST', 'GYRO',
+                                            'POSITION']  # not the speed gears' names
     assert data.state_names['rm_msgs/msg/ShooterState'][3] == 'PUSH'
 
 
