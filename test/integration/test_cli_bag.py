@@ -381,3 +381,16 @@ def test_a_recording_killed_mid_write_is_made_readable_by_reindex(tmp_path):
     assert got == [f'{i} {payload}' for i in indices]  # each message whole
     again = rmcli_run('bag', 'info', str(bag))
     assert again.returncode == 0 and f'Count: {len(got)}' in again.stdout, again.stderr
+
+
+def test_play_with_restamp_stamps_each_command_with_the_time_it_is_sent(recording):
+    # The finding: replayed commands kept their recorded stamps, and the robot refused them
+    # as stale ("stamp is 168.650 s old").
+    received = play(recording['bag'], '--restamp')
+    assert [(topic, type(msg)) for _, topic, msg in received] == [
+        (topic, type(msg)) for topic, msg in recording['sent']]
+    for sent_at, topic, msg in received:
+        if topic == CMD_TOPIC:
+            stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+            assert abs(stamp - sent_at) < 0.5, (stamp, sent_at)  # was 1000 + index s
+            assert msg.follow_source.startswith('cmd')  # the rest as recorded

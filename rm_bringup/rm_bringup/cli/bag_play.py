@@ -23,6 +23,11 @@ see the time the messages were recorded at: a stamped command replayed stays fre
 wait for subscribers then includes /clock's, so such a node has the bag's time from the
 first message on.
 
+``--restamp`` sets the ``header.stamp`` of every message that has one to the time it is
+replayed at (this node's clock), so a robot that refuses commands older than their timeout
+takes a recorded command stream as if it were sent now: the way to drive a live robot
+from a bag. ``--clock`` is the other way, for nodes that run on the bag's time.
+
 Not implemented from ros2 bag play: keyboard controls, node-name remapping, services, QoS
 override files, --playback-duration/until.
 """
@@ -108,6 +113,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         'for nodes with use_sim_time',
     )
     parser.add_argument(
+        '--restamp',
+        action='store_true',
+        help='stamp each message that has a header with the time it is replayed at (drive a '
+        'live robot, whose commands time out, from a recorded command stream)',
+    )
+    parser.add_argument(
         '--wait-for-subscribers',
         type=nonnegative_float,
         metavar='SECONDS',
@@ -146,6 +157,10 @@ def run(args: argparse.Namespace) -> int:
             by_topic = {c.topic: converted[c.id] for c in playable if c.id in converted}
             for topic, conversion in by_topic.items():
                 print(f'rmcli: {conversion.describe(topic)}', file=sys.stderr)
+            restamp = None
+            if args.restamp:
+                restamp = {c.topic: Restamper(get_message_class(c.msgtype), node.get_clock())
+                           for c in playable if has_header(get_message_class(c.msgtype))}
             clock = None
             if args.clock is not None:
                 clock = ClockPublisher(node, args.clock)
@@ -155,7 +170,7 @@ def run(args: argparse.Namespace) -> int:
             options = PlayOptions(args.rate, args.loop, args.start_offset, args.delay)
             played = play(
                 reader, path, playable, publishers, options=options, stop=stop, clock=clock,
-                converted=converted,
+                converted=converted, restamp=restamp,
             )
             for publisher in publishers.values():
                 _flush(publisher)
@@ -267,9 +282,29 @@ class PlayOptions:
     delay_s: float = 0.0  # wait before each pass [s]
 
 
+def has_header(msg_class: type) -> bool:
+    """Whether a message class has a std_msgs/Header named header."""
+    return msg_class.get_fields_and_field_types().get('header') == 'std_msgs/Header'
+
+
+class Restamper:
+    """Serialised message -> the same message stamped with clock's time now."""
+
+    def __init__(self, msg_class: type, clock) -> None:
+        self._class, self._clock = msg_class, clock
+
+    def __call__(self, raw: bytes) -> bytes:
+        """raw, its header stamped now."""
+        from rclpy.serialization import deserialize_message, serialize_message
+
+        msg = deserialize_message(raw, self._class)
+        msg.header.stamp = self._clock.now().to_msg()
+        return serialize_message(msg)
+
+
 def play(
     reader, path: Path, connections, publishers, *, options: PlayOptions, stop, clock=None,
-    converted: dict[int, Conversion] | None = None,
+    converted: dict[int, Conversion] | None = None, restamp: dict | None = None,
 ) -> int:
     """Publish the bag's messages with their relative timing; return how many were sent.
 
@@ -282,6 +317,7 @@ def play(
         stop: threading.Event that ends playback at once when set.
         clock: a ClockPublisher to give the bag time to (``--clock``), or None.
         converted: by connection id, how to rebuild its messages in the installed type.
+        restamp: by topic, what stamps its messages with the replay time (``--restamp``).
 
     Raises:
         BagError: the bag is damaged part-way.
@@ -301,6 +337,7 @@ def play(
             stop=stop,
             clock=clock,
             converted=converted or {},
+            restamp=restamp or {},
         )
         if not options.loop:
             break
@@ -309,7 +346,7 @@ def play(
 
 def _play_once(
     reader, path, connections, *, publishers, start_ns: int, rate: float, stop, clock=None,
-    converted: dict[int, Conversion],
+    converted: dict[int, Conversion], restamp: dict,
 ) -> int:
     """Publish every message from start_ns on at its relative time; return how many.
 
@@ -343,9 +380,9 @@ def _play_once(
         if clock is not None:
             tick(time.monotonic_ns())
         conversion = converted.get(connection.id)
-        publishers[connection.topic].publish(
-            bytes(raw) if conversion is None else conversion(raw)
-        )
+        data = bytes(raw) if conversion is None else conversion(raw)
+        stamp = restamp.get(connection.topic)
+        publishers[connection.topic].publish(data if stamp is None else stamp(data))
         count += 1
     return count
 
