@@ -29,10 +29,20 @@ def world_yaw(robot: LockstepRobot) -> float:
     return robot.world.body.yaw + robot.world.body.gimbal_yaw
 
 
-@pytest.fixture(scope='module')
+@pytest.fixture
 def robot():
+    # a robot of its own per test: each passes alone as in its file (the toggles, the
+    # shooter's heat and the remote's switches are state)
     with LockstepRobot() as r:
         yield r
+
+
+def operator(robot: LockstepRobot, **held) -> None:
+    """The remote on, holding these, and heard (DR16 frames in rhythm)."""
+    remote = robot.world.remote
+    remote.hold(**held)
+    remote.switch_on()
+    assert robot.wait_until(lambda: robot.plugin('manual').state.name == 'STREAMING', 0.5)
 
 
 def test_until_the_remote_is_heard_nothing_is_commanded(robot):
@@ -54,7 +64,7 @@ def test_right_switch_down_keeps_everything_passive(robot):
 def test_sticks_drive_the_chassis_and_aim_the_gimbal_left_switch_middle_spins_up(robot):
     remote = robot.world.remote
     # left stick up half: 1 m/s forward
-    remote.hold(switch_a=Switch.MID, switch_b=Switch.MID, channels=(0, 0, 0, FULL // 2))
+    operator(robot, switch_a=Switch.MID, switch_b=Switch.MID, channels=(0, 0, 0, FULL // 2))
     x0 = robot.world.body.x
     robot.run(2.0)
     assert states(robot) == ('FOLLOW', 'RATE', 'READY')
@@ -70,6 +80,8 @@ def test_sticks_drive_the_chassis_and_aim_the_gimbal_left_switch_middle_spins_up
 
 def test_left_switch_up_fires(robot):
     remote = robot.world.remote
+    operator(robot, switch_a=Switch.MID, switch_b=Switch.MID)  # READY: the wheels spin up
+    robot.run(1.0)
     shots = robot.world.body.launcher.shots
     remote.hold(switch_b=Switch.UP)
     # 0.6 s: a trigger let go at speed coasts through a few more balls, and the 2026 rules
@@ -84,11 +96,12 @@ def test_left_switch_up_fires(robot):
 
 def test_keyboard_w_drives_the_mouse_aims_r_and_a_click_fire_f_spins(robot):
     remote = robot.world.remote
-    remote.hold(switch_a=Switch.UP, switch_b=Switch.MID, keys=Key.W, mouse=(-50, 0, 0))
-    x0, yaw0 = robot.world.body.x, world_yaw(robot)
+    operator(robot, switch_a=Switch.UP, switch_b=Switch.MID, keys=Key.W, mouse=(-50, 0, 0))
+    yaw0 = world_yaw(robot)
     robot.run(1.5)
-    assert robot.world.body.x - x0 > 1.5  # keyboard speed 2 m/s
-    assert world_yaw(robot) - yaw0 > 1.0  # mouse left: 1 rad/s left
+    # keyboard speed 2 m/s along the gimbal, which the mouse turns left at 1 rad/s: an arc
+    assert math.hypot(*robot.world.body.twist[:2]) == pytest.approx(2.0, abs=0.1)
+    assert world_yaw(robot) - yaw0 > 1.0
     assert robot.plugin('shooter').state.name == 'PASSIVE'  # friction off until R
     remote.hold(keys=Key.R, mouse=(0, 0, 0))  # R: friction on
     robot.run(0.1)
@@ -111,9 +124,7 @@ def test_ctrl_held_drives_in_the_chassis_slow_gear(robot):
     # W with CTRL: /vel_cmd stays at the keyboard's 2 m/s, ChassisCmd asks for the SLOW
     # gear and the chassis' gears.slow.linear (0.5) makes it 1 m/s on the ground.
     remote = robot.world.remote
-    remote.hold(switch_a=Switch.UP, switch_b=Switch.MID, keys=Key.F)  # GYRO (test before) off
-    robot.run(0.1)
-    remote.hold(keys=Key.W | Key.CTRL)
+    operator(robot, switch_a=Switch.UP, switch_b=Switch.MID, keys=Key.W | Key.CTRL)
     robot.run(1.5)
     assert states(robot)[0] == 'FOLLOW'
     assert math.hypot(*robot.world.body.twist[:2]) == pytest.approx(1.0, abs=0.05)
@@ -124,7 +135,7 @@ def test_ctrl_held_drives_in_the_chassis_slow_gear(robot):
 
 def test_the_remote_going_silent_stops_everything_within_one_command_timeout(robot):
     remote = robot.world.remote
-    remote.hold(switch_a=Switch.MID, keys=0, channels=(0, 0, 0, FULL))
+    operator(robot, switch_a=Switch.MID, switch_b=Switch.MID, keys=0, channels=(0, 0, 0, FULL))
     robot.run(1.0)
     assert states(robot) == ('FOLLOW', 'RATE', 'READY')
     remote.switch_off()
