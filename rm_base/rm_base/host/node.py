@@ -358,7 +358,7 @@ class RobotHost(Node):
             msg.header.stamp = now.to_msg()
             if inbox is not None:
                 msg.status.append(self._inbox_report.status(inbox))
-            if mux is not None:
+            if mux is not None and mux.topics:  # rm_manual takes no command: nothing to say
                 msg.status.append(
                     command_sources_status(self.get_name(), mux, now.nanoseconds))
             self._diagnostics_pub.publish(msg)

@@ -114,6 +114,12 @@ class CommandMux:
         self._topics: dict[str, _Topic] = {}
         self.switches = 0
 
+    @property
+    def topics(self) -> tuple[str, ...]:
+        """The topics arbitrated, sorted (none on a node whose plugins take no command)."""
+        with self._lock:
+            return tuple(sorted(self._topics))
+
     def add_topic(self, topic: str) -> list[tuple[CommandSource, str]]:
         """Arbitrate an absolute topic; return each source with the topic it publishes on."""
         with self._lock:

@@ -99,3 +99,11 @@ def test_the_diagnostics_status_names_who_is_in_charge_and_the_counts():
     assert values['/chassis_cmd external yielded'] == '1'
     assert values['/chassis_cmd external taken'] == '1'
     assert values['switches'] == '2'
+
+
+def test_a_mux_knows_the_topics_it_arbitrates():
+    mux = CommandMux((MANUAL, EXTERNAL))
+    assert mux.topics == ()
+    mux.add_topic('/shoot_cmd')
+    mux.add_topic(TOPIC)
+    assert mux.topics == (TOPIC, '/shoot_cmd')
