@@ -120,6 +120,7 @@ def run_node(
     make_executor: Callable[[Any], Executor],
     *,
     config_errors: tuple[type[BaseException], ...] = (ConfigError,),
+    usage: str = '',
 ) -> int:
     """Run one node until SIGINT/SIGTERM; return the exit status (1 on a config error).
 
@@ -136,7 +137,13 @@ def run_node(
         make_node: builds the node once rclpy is initialised.
         make_executor: the executor for the node's ROS callbacks.
         config_errors: exceptions of ``make_node`` that are configuration errors.
+        usage: what ``-h``/``--help`` before ``--ros-args`` prints (then exit 0).
     """
+    argv = list(sys.argv[1:] if args is None else args)
+    own = argv[:argv.index('--ros-args')] if '--ros-args' in argv else argv
+    if '-h' in own or '--help' in own:
+        print(usage or f'usage: {name} --ros-args --params-file ROBOT.yaml [-p NAME:=VALUE]')
+        return 0
     if not init_ros(name, args):
         return 1
     try:

@@ -35,3 +35,16 @@ def test_console_script_is_installed_in_lib_package(package, entry_point):
 @pytest.mark.parametrize(('package', 'entry_point'), SCRIPTS, ids=[ep.name for _, ep in SCRIPTS])
 def test_console_script_target_imports(package, entry_point):
     assert callable(entry_point.load())
+
+
+@pytest.mark.parametrize('name', ['can_bridge', 'rm_robot'])
+def test_help_prints_the_usage_not_a_configuration_error(name):
+    # The finding: `can_bridge --help` printed "configuration error: buses must be a mapping".
+    import subprocess
+
+    exe = pathlib.Path(get_package_prefix('rm_base')) / 'lib' / 'rm_base' / name
+    done = subprocess.run([str(exe), '--help'], capture_output=True, text=True, timeout=60,
+                          check=False)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.startswith(f'usage: {name} --ros-args --params-file ROBOT.yaml')
+    assert 'configuration error' not in done.stdout + done.stderr

@@ -14,6 +14,13 @@ from rm_base.hardware import BusError
 from rm_base.node_main import run_node
 from rm_base.ros_logging import forward_package_logging
 
+USAGE = """usage: can_bridge --ros-args --params-file ROBOT.yaml
+                  [--params-file MORE.yaml] [-p NAME:=VALUE]
+
+Runs the CAN hardware of the can_bridge section of the files (buses, joints, the 1 kHz
+loop, safety) as the node can_bridge; -p sim:=true runs every bus on the simulator. Every
+parameter: docs/PARAMETERS.md."""
+
 
 def _executor(node: CanBridgeNode) -> Executor:
     # Only the ROS callbacks (/actuator_cmd, the sim services, parameter services): the
@@ -28,7 +35,8 @@ def main(args: list[str] | None = None) -> int:
     handler = forward_package_logging(NODE_NAME)
     try:
         return run_node(
-            NODE_NAME, args, CanBridgeNode, _executor, config_errors=(ConfigError, BusError)
+            NODE_NAME, args, CanBridgeNode, _executor, config_errors=(ConfigError, BusError),
+            usage=USAGE,
         )
     finally:
         logging.getLogger('rm_base').removeHandler(handler)

@@ -10,6 +10,13 @@ from rclpy.experimental import EventsExecutor
 from rm_base.host.node import NODE_NAME, ExecutorKind, RobotHost
 from rm_base.node_main import run_node
 
+USAGE = """usage: rm_robot --ros-args --params-file ROBOT.yaml
+                [--params-file MORE.yaml] [-p NAME:=VALUE]
+
+Runs the robot's plugins (the rm_robot section of the files: plugins, their parameters,
+command sources) as the node rm_robot, fed by can_bridge's joint states over DDS. Every
+parameter: docs/PARAMETERS.md."""
+
 
 def make_executor(node: RobotHost) -> Executor:
     """Return the executor for node's ROS callbacks, as its ``executor`` parameter says.
@@ -26,7 +33,7 @@ def make_executor(node: RobotHost) -> Executor:
 
 def main(args: list[str] | None = None) -> int:
     """Run rm_robot until SIGINT/SIGTERM; return the exit status (1 on a config error)."""
-    return run_node(NODE_NAME, args, RobotHost, make_executor)
+    return run_node(NODE_NAME, args, RobotHost, make_executor, usage=USAGE)
 
 
 if __name__ == '__main__':
