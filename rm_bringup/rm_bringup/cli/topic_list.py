@@ -1,4 +1,10 @@
-"""``rmcli topic list``: the topics on the graph, like ``ros2 topic list`` (no daemon)."""
+"""``rmcli topic list``: the topics on the graph, like ``ros2 topic list`` (no daemon).
+
+Without ros2cli's daemon, which has watched the graph for long, a new node sees the others
+only as discovery reaches it. So the list is taken once it has settled: at least
+``--spin-time``, then until no topic was added for a second (five seconds at most), instead
+of after a fixed half second that, on a busy machine, silently misses topics.
+"""
 
 from __future__ import annotations
 
@@ -8,7 +14,10 @@ import time
 from .options import nonnegative_float
 from .ros_node import cli_node
 
-DEFAULT_SPIN_TIME_S = 0.5  # ros2cli's DirectNode default
+DEFAULT_SPIN_TIME_S = 0.5  # ros2cli's DirectNode default: the shortest wait
+QUIET_S = 1.0  # no topic added this long: discovery has settled [s]
+LONGEST_S = 5.0  # the longest wait [s]
+_POLL_S = 0.05
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -26,7 +35,8 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         '--spin-time',
         type=nonnegative_float,
         default=DEFAULT_SPIN_TIME_S,
-        help=f'Spin time in seconds to wait for discovery (default: {DEFAULT_SPIN_TIME_S})',
+        help=f'Shortest wait for discovery in seconds (default: {DEFAULT_SPIN_TIME_S}); the '
+        f'list is taken once no topic was added for {QUIET_S:g} s ({LONGEST_S:g} s at most)',
     )
 
 
@@ -52,12 +62,27 @@ def format_topics(
     return [name for name, _ in topics]
 
 
+def settled(read, shortest_s: float, quiet_s: float = QUIET_S, longest_s: float = LONGEST_S):
+    """read()'s topics once no new one came for quiet_s (after shortest_s, by longest_s)."""
+    start = time.monotonic()
+    seen, changed = read(), start
+    while True:
+        now = time.monotonic()
+        if now - start >= longest_s or (now - start >= shortest_s and now - changed >= quiet_s):
+            return seen
+        time.sleep(_POLL_S)
+        current = read()
+        if {name for name, _ in current} - {name for name, _ in seen}:
+            changed = time.monotonic()
+        seen = current
+
+
 def run(args: argparse.Namespace) -> int:
     """Wait --spin-time for discovery, then print the topics."""
     with cli_node('topic_list') as node:
-        time.sleep(args.spin_time)
+        names = settled(node.get_topic_names_and_types, args.spin_time)
         lines = format_topics(
-            node.get_topic_names_and_types(),
+            names,
             show_types=args.show_types,
             count_only=args.count_topics,
             include_hidden=args.include_hidden_topics,

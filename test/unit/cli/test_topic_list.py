@@ -1,5 +1,7 @@
 """topic list output (ros2's format: names, -t types, -c count, hidden topics)."""
 
+import time
+
 from rm_bringup.cli.topic_list import format_topics
 
 GRAPH = [
@@ -29,3 +31,17 @@ def test_show_types_appends_every_type_in_brackets():
 def test_count_and_hidden_topics():
     assert fmt(count_only=True) == ['3']
     assert fmt(include_hidden=True)[0] == '/_hidden/x'
+
+
+def test_the_list_is_taken_once_discovery_has_settled():
+    # The finding: at the default 0.5 s, topics discovered later were silently missed.
+    from rm_bringup.cli.topic_list import settled
+
+    start = time.monotonic()
+    graph = [[('/a', ['T'])], [('/a', ['T']), ('/b', ['T'])]]
+
+    def read():  # a second topic is discovered 0.3 s in
+        return graph[1] if time.monotonic() - start > 0.3 else graph[0]
+
+    assert [n for n, _ in settled(read, 0.0, quiet_s=0.5, longest_s=3.0)] == ['/a', '/b']
+    assert [n for n, _ in settled(lambda: graph[0], 0.0, quiet_s=0.2, longest_s=3.0)] == ['/a']
