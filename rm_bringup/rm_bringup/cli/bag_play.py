@@ -39,6 +39,7 @@ import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from .bag_convert import Conversion, conversions
 from .bag_io import open_bag, read_messages
@@ -282,7 +283,7 @@ class PlayOptions:
     delay_s: float = 0.0  # wait before each pass [s]
 
 
-def has_header(msg_class: type) -> bool:
+def has_header(msg_class: Any) -> bool:
     """Whether a message class has a std_msgs/Header named header."""
     return msg_class.get_fields_and_field_types().get('header') == 'std_msgs/Header'
 
