@@ -41,7 +41,7 @@ from rm_base.realtime import prepare_loop_process
 from rm_base.ros_logging import forward_package_logging
 
 from rm_bringup.sim_process import SimProcess
-from rm_bringup.status import StatusView
+from rm_bringup.status import StatusView, fit_status
 
 #: The node of the operator's commander, when the robot config has a section for it.
 MANUAL_NODE_NAME = 'rm_manual'
@@ -121,7 +121,7 @@ class _StatusPrinter:
         line = self._view.line()
         if self._tty:
             width = os.get_terminal_size(self._stream.fileno()).columns
-            self._stream.write('\r\x1b[K' + line[: max(width - 1, 20)])
+            self._stream.write('\r\x1b[K' + fit_status(line, max(width - 1, 20)))
         else:
             self._stream.write(line + '\n')
         self._stream.flush()

@@ -97,7 +97,10 @@ def format_status(latest: Mapping[str, Any]) -> str:
                           if k.endswith(' in charge')}
         if loads:
             parts.append(' '.join(sorted(loads)))
-        if overruns is not None:
+        rate = latest.get('overrun_rate')
+        if rate is not None:  # a rate tells now; a running total only that it once was
+            parts.append(f'overruns {rate:.0f}/s')
+        elif overruns is not None:
             parts.append(f'overruns {overruns}')
         if charge:  # who commands: one name when one source has every topic
             names = set(charge.values())
@@ -118,6 +121,27 @@ def format_status(latest: Mapping[str, Any]) -> str:
     return ' | '.join(parts) if parts else 'waiting for the robot...'
 
 
+#: What a narrow terminal leaves out first: the wheels' speeds, news of nothing (no
+#: overrun, nothing offline), the bus loads, then who commands.
+_DROP_FIRST = (
+    lambda p: p.startswith('wheels '),
+    lambda p: p in ('overruns 0/s', 'offline -'),
+    lambda p: p.startswith('can'),
+    lambda p: p.startswith('cmd '),
+)
+
+
+def fit_status(line: str, width: int) -> str:
+    """Line in width columns: the parts of least use dropped first, then cut."""
+    parts = line.split(' | ')
+    for unneeded in _DROP_FIRST:
+        if len(' | '.join(parts)) <= width:
+            break
+        parts = [p for p in parts if not unneeded(p)]
+    fitted = ' | '.join(parts)
+    return fitted if len(fitted) <= width else fitted[: max(width - 1, 0)] + '>'
+
+
 class StatusView:
     """Keeps the latest robot states from topics, for :func:`format_status`.
 
@@ -128,6 +152,7 @@ class StatusView:
     def __init__(self, node: Node) -> None:
         self._lock = threading.Lock()
         self._latest: dict[str, Any] = {'diagnostics': {}}
+        self._last_overruns: tuple[int, float] | None = None  # (total, stamp [s])
         qos = qos_profile_sensor_data
         node.create_subscription(ChassisState, '/chassis_state', self._keep('chassis'), qos)
         node.create_subscription(GimbalState, '/gimbal_state', self._keep('gimbal'), qos)
@@ -143,9 +168,22 @@ class StatusView:
         return store
 
     def _on_diagnostics(self, msg: DiagnosticArray) -> None:
+        stamp = msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
         with self._lock:
             for status in msg.status:
                 self._latest['diagnostics'][status.name] = status
+                if status.name.endswith(': scheduler'):
+                    self._note_overruns(status, stamp)
+
+    def _note_overruns(self, status: Any, stamp: float) -> None:
+        try:
+            total = int(_diag_values(status)['overruns'])
+        except (KeyError, ValueError):
+            return
+        last = self._last_overruns
+        if last is not None and stamp > last[1]:
+            self._latest['overrun_rate'] = max(0, total - last[0]) / (stamp - last[1])
+        self._last_overruns = (total, stamp)
 
     def line(self) -> str:
         """The current status line."""

@@ -72,3 +72,23 @@ def test_when_sources_share_the_topics_expect_each_topics_source():
 def test_when_the_chassis_moves_to_a_position_expect_its_name_not_a_number():
     line = format_status({'chassis': ChassisState(state=ChassisCmd.POSITION), 'diagnostics': {}})
     assert line.startswith('chassis POSITION ')
+
+
+def test_a_narrow_terminal_drops_the_wheels_then_the_loads_before_cutting():
+    # The finding: at 80 columns the line ended at `gimbal PASSI`.
+    from rm_bringup.status import fit_status
+
+    line = ('chassis GYRO v(0.61,-0.77,4.60) | wheels 19.1 -3.2 3.2 -19.1 | gimbal RATE y 0.12 '
+            'p -0.05 | shooter READY 5 shots | can0 31% can1 18% | overruns 0/s | cmd external'
+            ' | offline -')
+    fitted = fit_status(line, 84)
+    assert len(fitted) <= 84 and 'wheels' not in fitted
+    assert 'gimbal RATE' in fitted and 'shooter READY 5 shots' in fitted
+    assert fit_status(line, len(line)) == line
+    assert fit_status(line, 30) == line[:29] + '>'
+
+
+def test_overruns_are_a_rate_once_two_reports_came():
+    line = format_status({'overrun_rate': 12.4, 'diagnostics': {
+        'can_bridge: scheduler': _status('can_bridge: scheduler', {'overruns': 241558})}})
+    assert line == 'overruns 12/s'
