@@ -324,3 +324,31 @@ def test_every_output_is_clamped_to_max_effort_in_every_mode():
         a.set_command(now_ns=now, **c)
         assert abs(step(a, now)) == 4096, c
         assert abs(a.state().command) <= 1.5
+
+
+def test_a_flapping_link_is_said_once_a_second_with_a_count():
+    # The finding: offline/online storms of 27 lines every few seconds.
+    import logging
+
+    said = []
+    handler = logging.Handler()
+    handler.emit = lambda record: said.append(record.getMessage())
+    logger = logging.getLogger('rm_base.hardware.actuators.base')
+    logger.addHandler(handler)
+    level, logger.level = logger.level, logging.INFO
+    try:
+        a = running()
+        now = T0
+        for _ in range(10):  # silent 101 ms, then a frame: offline, online, ten times
+            now += 101 * MS
+            step(a, now)
+            feed(a, now + MS)
+            now += MS
+            step(a, now)
+    finally:
+        logger.removeHandler(handler)
+        logger.level = level
+    link = [m for m in said if 'offline' in m or 'online' in m]
+    assert len(link) == 1, link  # the first change; the others counted for the next line
+    assert a._link_unsaid >= 19
+    assert a.hold_reason is HoldReason.OFFLINE  # held all along: back, but not yet trusted

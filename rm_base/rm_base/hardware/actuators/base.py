@@ -42,6 +42,7 @@ import abc
 import enum
 import logging
 import math
+import time
 from typing import Any, ClassVar, NamedTuple
 
 import can
@@ -174,6 +175,8 @@ class Unwrapper:
         return self._turns
 
 
+#: At most one line a second about a joint's link going and coming [ns].
+_LINK_LOG_PERIOD_NS = 1_000_000_000
 #: A shaft both frames say turns slower than this [rad/s] is still for the angle check.
 _STILL_RAD_S = 5.0
 #: Largest angle step [rad] of a still shaft between two frames (it moves 0.25 rad at most
@@ -312,6 +315,9 @@ class Actuator:
         self.update_errors = 0
         self.implausible_frames = 0
         self.last_rejection: str | None = None
+        # the link's lines (online, offline and their holds): at most one a period
+        self._link_quiet_until_ns = 0
+        self._link_unsaid = 0
 
     # --- hooks ---
     @abc.abstractmethod
@@ -594,16 +600,13 @@ class Actuator:
         if online != self._online:
             self._online = online
             if online:
-                _log.info('%s: online', self.name)
+                self._say_link(logging.INFO, f'{self.name}: online')
                 # the first time is a start, not a fault: only a return must prove itself
                 self._back_since = now_ns if self._ever_online else None
                 self._ever_online = True
             else:
-                _log.warning(
-                    '%s: offline (no feedback for %.0f ms)',
-                    self.name,
-                    self._feedback_timeout_ns / 1e6,
-                )
+                self._say_link(logging.WARNING, f'{self.name}: offline (no feedback for '
+                               f'{self._feedback_timeout_ns / 1e6:.0f} ms)')
         if fb is None or not online:
             return HoldReason.OFFLINE
         clear_ns = self._fault_clear_ns
@@ -674,9 +677,11 @@ class Actuator:
             self._position_pid.reset()
             self._last_mode = mode
         if self._hold is not HoldReason.NONE:
-            _log.info(
-                '%s: output resumed in %s (was held: %s)', self.name, mode.name, self._hold.value
-            )
+            text = f'{self.name}: output resumed in {mode.name} (was held: {self._hold.value})'
+            if self._hold is HoldReason.OFFLINE:
+                self._say_link(logging.INFO, text)
+            else:
+                _log.info(text)
             self._hold = HoldReason.NONE
         if mode is Mode.EFFORT:
             effort = cmd.effort
@@ -700,7 +705,11 @@ class Actuator:
     def _hold_zero(self, reason: HoldReason) -> None:
         if reason is not self._hold:
             level = logging.INFO if reason in _QUIET_HOLDS else logging.WARNING
-            _log.log(level, '%s: output held at zero (%s)', self.name, reason.value)
+            text = f'{self.name}: output held at zero ({reason.value})'
+            if reason is HoldReason.OFFLINE:
+                self._say_link(level, text)
+            else:
+                _log.log(level, text)
             self._hold = reason
             self._velocity_pid.reset()
             self._position_pid.reset()
@@ -708,6 +717,19 @@ class Actuator:
         self._set_zero_output()
         self._effort_out = 0.0
         self._applied_mode = Mode.OFF
+
+    def _say_link(self, level: int, text: str) -> None:
+        # A joint whose link flaps (a loose connector) says so once a second with a count,
+        # not a line per change: the lines of the other joints stay readable.
+        now = time.monotonic_ns()
+        if now < self._link_quiet_until_ns:
+            self._link_unsaid += 1
+            return
+        if self._link_unsaid:
+            text += f' ({self._link_unsaid} more link changes since the last line)'
+        self._link_unsaid = 0
+        self._link_quiet_until_ns = now + _LINK_LOG_PERIOD_NS
+        _log.log(level, text)
 
     def pack_command(self) -> can.Message | None:
         """This actuator's frame for this tick, or None if a command group packs it."""
