@@ -16,8 +16,9 @@ serialising a state message costs the loop about as much as a plugin's control s
 (docs/PERFORMANCE.md, "Reports built by the edge"); this way it costs a tuple. Where the
 loopback is immediate (``loopback_at_put``: lockstep; a hand-over publisher) or the topic
 latched, the message is built at once instead.
-The queue is bounded: if the edge falls behind, the oldest messages are dropped and
-counted (a state message is superseded by the next one anyway).
+The queue is bounded: if the edge falls behind, the oldest messages are dropped, counted
+and said in a warning at most once a second (a state message is superseded by the next
+one anyway).
 
 A message nobody would get is not serialised at all: no plugin of this process listens
 to its topic, no other node subscribes (the publisher's matched subscriptions) and the
@@ -141,6 +142,7 @@ class Outbox:
         self.errors = 0
         self.build_errors = 0
         self._build_log = LogThrottle(_BUILD_LOG_PERIOD_NS)
+        self._drop_log = LogThrottle(_BUILD_LOG_PERIOD_NS)
         self.loopback_errors = 0
         self._paced = False
         # Also hands each message to the in-process subscribers of its topic
@@ -229,6 +231,10 @@ class Outbox:
         queue = self._queue
         if len(queue) == queue.maxlen:
             self.dropped += 1
+            more = self._drop_log.due(time.monotonic_ns())
+            if more is not None:
+                _log.warning('the ROS edge is %d messages behind: the oldest dropped (%d so '
+                             'far)%s', queue.maxlen, self.dropped, more)
         queue.append((edge, data, msg_type, local, outside))
         if self._stop:  # no thread any more: a late message (zero output) still goes out
             self.flush()

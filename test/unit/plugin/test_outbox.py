@@ -1,5 +1,6 @@
 """Outbox: messages from the loop published by the edge's thread, in order, never blocking."""
 
+import logging
 import threading
 
 import pytest
@@ -75,15 +76,18 @@ def test_a_message_put_after_stop_is_published_at_once_in_the_putting_thread():
     assert pub.threads == {threading.current_thread().name}
 
 
-def test_when_the_edge_falls_behind_expect_the_oldest_dropped_and_counted():
+def test_when_the_edge_falls_behind_expect_the_oldest_dropped_counted_and_said_once(caplog):
     box = Outbox(max_queued=3)
     pub = FakePublisher()
     wrapped = box.wrap(pub)
-    for i in range(5):
-        wrapped.publish(UInt32(data=i))
+    with caplog.at_level(logging.WARNING, logger='rm_base.plugin.outbox'):
+        for i in range(5):
+            wrapped.publish(UInt32(data=i))
     box.stop()
     assert pub.published == [2, 3, 4]
     assert box.dropped == 2
+    said = [r.getMessage() for r in caplog.records if 'behind' in r.getMessage()]
+    assert len(said) == 1 and '3 messages behind' in said[0]
 
 
 def test_loopback_gets_the_snapshot_at_once_with_the_topic():
