@@ -335,7 +335,8 @@ def test_a_flapping_link_is_said_once_a_second_with_a_count():
     handler.emit = lambda record: said.append(record.getMessage())
     logger = logging.getLogger('rm_base.hardware.actuators.base')
     logger.addHandler(handler)
-    level, logger.level = logger.level, logging.INFO
+    level = logger.level
+    logger.setLevel(logging.INFO)  # setLevel, not .level: it clears the enabled-for cache
     try:
         a = running()
         now = T0
@@ -347,7 +348,7 @@ def test_a_flapping_link_is_said_once_a_second_with_a_count():
             step(a, now)
     finally:
         logger.removeHandler(handler)
-        logger.level = level
+        logger.setLevel(level)
     link = [m for m in said if 'offline' in m or 'online' in m]
     assert len(link) == 1, link  # the first change; the others counted for the next line
     assert a._link_unsaid >= 19
