@@ -26,6 +26,17 @@ def start_bringup(args, stderr_path):
         )
 
 
+def stop_bringup(proc):
+    """SIGINT, as Ctrl-C; SIGKILL if it has not stopped in 30 s."""
+    proc.send_signal(signal.SIGINT)
+    try:
+        proc.wait(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+
+
 def test_when_started_on_the_sim_expect_status_lines_and_a_clean_stop_on_sigint(tmp_path):
     log = tmp_path / 'stderr.log'
     proc = start_bringup(['--robot', 'standard', '--sim'], log)
@@ -181,13 +192,7 @@ def test_when_another_robot_runs_in_the_domain_expect_an_error_naming_it(tmp_pat
         assert proc.poll() is None  # said, not refused: the operator decides
     finally:
         other.destroy_node()
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(timeout=30)
-        finally:
-            if proc.poll() is None:
-                proc.kill()
-                proc.wait()
+        stop_bringup(proc)
 
 
 def test_a_recorded_command_bag_replayed_with_restamp_drives_a_live_robot(tmp_path, ros_context):
@@ -234,10 +239,4 @@ def test_a_recorded_command_bag_replayed_with_restamp_drives_a_live_robot(tmp_pa
         node.destroy_node()
         if player is not None and player.poll() is None:
             player.kill()
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(timeout=30)
-        finally:
-            if proc.poll() is None:
-                proc.kill()
-                proc.wait()
+        stop_bringup(proc)
