@@ -111,10 +111,10 @@ def metadata(files: list[Path], readers: list[Any]) -> dict[str, Any]:
     entries = []
     start, end, total = 2**63 - 1, 0, 0
     for path, reader in zip(files, readers, strict=True):
-        meta = reader.metadata if hasattr(reader, 'metadata') else None
+        meta = reader.metadata
         count = sum(c.msgcount for c in reader.connections)
-        first = meta.start_time if meta is not None and count else 0
-        last = meta.end_time - 1 if meta is not None and count else 0
+        first = meta.start_time if count else 0
+        last = meta.end_time - 1 if count else 0
         for c in reader.connections:
             key = (c.topic, c.msgtype)
             entry = topics.setdefault(key, {

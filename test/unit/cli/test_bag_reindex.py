@@ -51,3 +51,23 @@ def test_what_cannot_be_repaired_is_one_error_naming_the_file(tmp_path, content,
     with pytest.raises(BagError, match=match) as err:
         repair_mcap_tail(path)
     assert str(path) in str(err.value)
+
+
+@pytest.mark.parametrize('storage', ['mcap', 'sqlite3'])
+def test_a_bag_without_its_metadata_reads_back_whole_after_reindex(write_bag, make, storage):
+    from rm_bringup.cli.bag_info import describe
+    from rm_bringup.cli.bag_io import open_bag, read_messages
+    from rm_bringup.cli.bag_reindex import reindex
+
+    twist = 'geometry_msgs/msg/Twist'
+    samples = [('/vel_cmd', twist, 10**9 + i * 10**7, make(twist)) for i in range(30)]
+    samples += [('/other', twist, 10**9 + i * 10**7 + 1, make(twist)) for i in range(5)]
+    bag = write_bag(samples, storage=storage)
+    (bag / 'metadata.yaml').unlink()  # as a killed recorder leaves it
+    said = reindex(bag)
+    assert said[-1].endswith('35 messages on 2 topics')
+    with open_bag(bag) as reader:
+        assert reader.message_count == 35
+        assert len(list(read_messages(reader, bag, reader.connections))) == 35
+    lines = describe(bag)
+    assert any('Count: 30' in line for line in lines), lines
