@@ -303,10 +303,13 @@ class Actuator:
         self._fault_gone_since: int | None = None
         self._ever_online = False
         self._back_since: int | None = None  # online again after having been offline
-        # receive thread: the previous frame's values, plausible or not, and when the
-        # newest implausible frame came (one assignment each)
-        self._last_raw: tuple[int, float, float, float | None] | None = None
-        self._implausible_ns: int | None = None
+        # the thread that decodes (one per joint): the previous frame's values, plausible
+        # or not; fields, not a tuple, so a frame allocates nothing for them
+        self._raw_ns: int | None = None
+        self._raw_angle = 0.0
+        self._raw_velocity = 0.0
+        self._raw_temperature: float | None = None
+        self._implausible_ns: int | None = None  # the newest implausible frame (one assignment)
         # counters
         self.frames_decoded = 0
         self.decode_errors = 0
@@ -418,11 +421,12 @@ class Actuator:
         self, now_ns: int, angle: float, velocity: float, temperature: float | None
     ) -> bool:
         """Whether a frame could follow the previous one; count and latch one that cannot."""
-        last = self._last_raw
-        self._last_raw = (now_ns, angle, velocity, temperature)
-        if last is None:
+        last_ns, last_angle = self._raw_ns, self._raw_angle
+        last_velocity, last_temperature = self._raw_velocity, self._raw_temperature
+        self._raw_ns, self._raw_angle = now_ns, angle
+        self._raw_velocity, self._raw_temperature = velocity, temperature
+        if last_ns is None:
             return True
-        last_ns, last_angle, last_velocity, last_temperature = last
         reason = ''
         if (temperature is not None and last_temperature is not None
                 and abs(temperature - last_temperature) > self._max_temperature_step):
