@@ -153,7 +153,7 @@ class CommandMux:
     def report(self, now_ns: int) -> dict[str, Any]:
         """Per topic: the source in charge and each source's taken / yielded counts."""
         out: dict[str, Any] = {}
-        for topic in sorted(self._topics):
+        for topic in self.topics:
             chosen = self.in_charge(topic, now_ns)
             with self._lock:
                 t = self._topics[topic]

@@ -1,8 +1,8 @@
 """The ``<node>: command sources`` status on /diagnostics: who is in charge of each topic.
 
-Level: OK while every arbitrated topic has a source in charge or none was ever heard;
-values name the source in charge of each topic ('' when all are silent) and what each
-source had taken and yielded.
+Level: always OK (who commands is news, not a fault; a silent robot is the commands'
+timeouts' business). Values name the source in charge of each topic ('' when all are
+silent) and what each source had taken and yielded.
 """
 
 from __future__ import annotations
