@@ -292,15 +292,16 @@ class Restamper:
     """Serialised message -> the same message stamped with clock's time now."""
 
     def __init__(self, msg_class: type, clock) -> None:
+        from rclpy.serialization import deserialize_message, serialize_message
+
         self._class, self._clock = msg_class, clock
+        self._deserialize, self._serialize = deserialize_message, serialize_message
 
     def __call__(self, raw: bytes) -> bytes:
         """raw, its header stamped now."""
-        from rclpy.serialization import deserialize_message, serialize_message
-
-        msg = deserialize_message(raw, self._class)
+        msg = self._deserialize(raw, self._class)
         msg.header.stamp = self._clock.now().to_msg()
-        return serialize_message(msg)
+        return self._serialize(msg)
 
 
 def play(
