@@ -1,10 +1,12 @@
 """A compact live status line of the robot, built from its ROS topics.
 
-``StatusView`` subscribes to the mechanism states, /actuator_states and /diagnostics and
-keeps the latest of each; ``format_status`` turns them into one line such as::
+``StatusView`` subscribes to the mechanism states, /odom, the referee's robot status,
+/actuator_states and /diagnostics and keeps the latest of each; ``format_status`` turns
+them into one line such as::
 
-    chassis GYRO v(0.98,0.00,5.97) | wheels 19.1 -3.2 3.2 -19.1 | gimbal RATE y 0.12 p -0.05
-    | shooter READY 5 shots | can0 31% can1 18% | overruns 0 | offline -
+    chassis GYRO v(0.98,0.00,5.97) | pose 1.20 -0.31 87deg | wheels 19.1 -3.2 3.2 -19.1
+    | gimbal RATE y 0.12 p -0.05 | shooter READY 5 shots | hp 200/200 | can0 31% can1 18%
+    | overruns 0/s | cmd external | offline -
 
 It reads topics only, so the same view works whether the nodes run in this process (the
 bringup runner) or elsewhere.
@@ -18,10 +20,18 @@ from collections.abc import Mapping
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray
+from nav_msgs.msg import Odometry
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 
-from rm_msgs.msg import ActuatorState, ChassisCmd, ChassisState, GimbalCmd, GimbalState
+from rm_msgs.msg import (
+    ActuatorState,
+    ChassisCmd,
+    ChassisState,
+    GimbalCmd,
+    GimbalState,
+    RefereeRobotStatus,
+)
 from rm_msgs.msg import ShooterState as ShooterStateMsg
 
 _CHASSIS_NAMES = {
@@ -51,7 +61,8 @@ def format_status(latest: Mapping[str, Any]) -> str:
 
     Args:
         latest: the latest message per source: ``chassis`` (ChassisState), ``gimbal``,
-            ``shooter``, ``actuators`` (ActuatorState) and ``diagnostics`` (status name ->
+            ``odom`` (Odometry), ``shooter``, ``referee`` (RefereeRobotStatus),
+            ``actuators`` (ActuatorState) and ``diagnostics`` (status name ->
             DiagnosticStatus).
     """
     parts = []
@@ -62,6 +73,9 @@ def format_status(latest: Mapping[str, Any]) -> str:
             f'chassis {_CHASSIS_NAMES.get(chassis.state, chassis.state)} '
             f'v({v.linear.x:.2f},{v.linear.y:.2f},{v.angular.z:.2f})'
         )
+        odom = latest.get('odom')
+        if odom is not None:
+            parts.append(_pose_part(odom.pose.pose))
         if len(chassis.wheel_speed):
             parts.append('wheels ' + ' '.join(f'{w:.1f}' for w in chassis.wheel_speed))
     gimbal = latest.get('gimbal')
@@ -77,6 +91,9 @@ def format_status(latest: Mapping[str, Any]) -> str:
             f'shooter {_SHOOTER_NAMES.get(shooter.state, shooter.state)} '
             f'{shooter.shots_fired} shots{fault}'
         )
+    referee = latest.get('referee')
+    if referee is not None:
+        parts.append(_referee_part(referee))
     diagnostics = latest.get('diagnostics')
     if diagnostics:
         loads, overruns, charge = [], None, {}
@@ -121,10 +138,28 @@ def format_status(latest: Mapping[str, Any]) -> str:
     return ' | '.join(parts) if parts else 'waiting for the robot...'
 
 
+def _pose_part(pose: Any) -> str:
+    """``pose 1.00 0.50 90deg``: odom -> base_link, x and y [m] and the heading."""
+    q = pose.orientation
+    yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+    return f'pose {pose.position.x:.2f} {pose.position.y:.2f} {math.degrees(yaw):.0f}deg'
+
+
+def _referee_part(status: Any) -> str:
+    """``hp 300/300``, and what the referee switched off: ``DESTROYED``, ``power off chassis``."""
+    text = f'hp {status.hp}/{status.max_hp}'
+    if status.hp == 0:
+        return text + ' DESTROYED'
+    off = [name for name, on in (('gimbal', status.gimbal_power), ('chassis', status.chassis_power),
+                                 ('shooter', status.shooter_power)) if not on]
+    return text + (' power off ' + ','.join(off) if off else '')
+
+
 #: What a narrow terminal leaves out first: the wheels' speeds, news of nothing (no
 #: overrun, nothing offline), the bus loads, then who commands.
 _DROP_FIRST = (
     lambda p: p.startswith('wheels '),
+    lambda p: p.startswith('pose '),
     lambda p: p in ('overruns 0/s', 'offline -'),
     lambda p: p.startswith('can'),
     lambda p: p.startswith('cmd '),
@@ -158,6 +193,10 @@ class StatusView:
         node.create_subscription(GimbalState, '/gimbal_state', self._keep('gimbal'), qos)
         node.create_subscription(ShooterStateMsg, '/shooter_state', self._keep('shooter'), qos)
         node.create_subscription(ActuatorState, 'actuator_states', self._keep('actuators'), qos)
+        node.create_subscription(Odometry, '/odom', self._keep('odom'), qos)
+        node.create_subscription(
+            RefereeRobotStatus, '/referee/robot_status', self._keep('referee'), 10
+        )
         node.create_subscription(DiagnosticArray, '/diagnostics', self._on_diagnostics, 10)
 
     def _keep(self, key: str):

@@ -2,7 +2,9 @@
 
 ``<prefix><joint>/offline``, ``.../jam``, ``.../over_temperature``, ``.../garbage`` per
 joint and ``<prefix><bus>/bus_off`` per bus: a locked rotor, 130 °C, 100 random frames/s
-on the feedback id, a bus in bus-off. Served by can_bridge when it runs rm_sim in-process
+on the feedback id, a bus in bus-off. ``<prefix>referee/reset`` (std_srvs/Trigger, when the
+world has a referee) revives the robot as a referee's revival does: full HP, a cold barrel,
+a full buffer, every output on. Served by can_bridge when it runs rm_sim in-process
 (prefix ``~/sim/``) and by the rm_sim process (prefix ``~/``).
 """
 
@@ -14,7 +16,7 @@ from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
 import can
-from std_srvs.srv import SetBool
+from std_srvs.srv import SetBool, Trigger
 
 from rm_base.sim import Fault, FaultKind, SimError, SimWorld
 
@@ -74,6 +76,10 @@ class SimFaultServices:
                         functools.partial(self._on_bus_off, bus, channel),
                     )
                 )
+        if world.referee is not None:
+            self.services.append(
+                node.create_service(Trigger, f'{prefix}referee/reset', self._on_referee_reset)
+            )
 
     def _on_fault(
         self, joint: str, kind: str, request: SetBool.Request, response: SetBool.Response
@@ -102,5 +108,19 @@ class SimFaultServices:
             return response
         response.success = True
         response.message = f'{bus}: {"bus-off injected" if request.data else "bus-off cleared"}'
+        self._node.get_logger().info(f'sim: {response.message}')
+        return response
+
+    def _on_referee_reset(
+        self, _request: Trigger.Request, response: Trigger.Response
+    ) -> Trigger.Response:
+        referee = self._world.referee
+        with self._world.lock:  # the physics thread switches the outputs too
+            hp_before = referee.rules.hp
+            referee.revive()
+        response.success = True
+        response.message = (
+            f'referee: robot revived (HP {hp_before} -> {referee.rules.hp}, every output on)'
+        )
         self._node.get_logger().info(f'sim: {response.message}')
         return response

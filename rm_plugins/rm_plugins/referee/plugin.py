@@ -26,10 +26,17 @@ from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.time import Time
-from rm_base.hardware.protocols.referee import FrameParser, ProtocolVersion, RawFrame, StatusDecoder
+from rm_base.hardware.protocols.referee import (
+    FrameParser,
+    ProtocolVersion,
+    RawFrame,
+    RobotStatus,
+    StatusDecoder,
+)
 from rm_base.plugin import PluginBase
 
 from rm_plugins.referee.messages import TOPICS
+from rm_plugins.referee.power_watch import PowerWatch
 from rm_plugins.serial.device import DeviceLink, LinkState, link_status, read_serial_settings
 
 _NS_PER_S = 1_000_000_000
@@ -71,6 +78,7 @@ class Referee(PluginBase):
         self._published = 0
         self._next_diagnostics_ns: int | None = None
         self._report_bad = 0
+        self._power_watch = PowerWatch()
         image_link = p.boolean(
             'image_link', False,
             description="the port is the image link's: also read its A9 53 remote frames",
@@ -106,6 +114,10 @@ class Referee(PluginBase):
         with self._lock:  # the decoder's counters are read by the diagnostics (tick)
             record = self._decoder.decode(frame)
         self._link.received(now.nanoseconds)
+        if isinstance(record, RobotStatus):
+            said = self._power_watch.note(record)
+            if said is not None:
+                self.logger.warning(said)
         entry = self._publishers.get(type(record))
         if entry is None:
             return  # counted by the decoder (ignored, wrong length or rejected)

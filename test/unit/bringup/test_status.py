@@ -92,3 +92,25 @@ def test_overruns_are_a_rate_once_two_reports_came():
     line = format_status({'overrun_rate': 12.4, 'diagnostics': {
         'can_bridge: scheduler': _status('can_bridge: scheduler', {'overruns': 241558})}})
     assert line == 'overruns 12/s'
+
+
+def test_the_pose_follows_the_chassis_and_the_referee_part_says_hp_and_cuts():
+    from nav_msgs.msg import Odometry
+
+    from rm_msgs.msg import RefereeRobotStatus
+
+    odom = Odometry()
+    odom.pose.pose.position.x, odom.pose.pose.position.y = 1.0, 0.5
+    odom.pose.pose.orientation.z = math.sin(math.pi / 4)  # a quarter turn left
+    odom.pose.pose.orientation.w = math.cos(math.pi / 4)
+    alive = RefereeRobotStatus(hp=150, max_hp=200, gimbal_power=True, chassis_power=False,
+                               shooter_power=True)
+    line = format_status({'chassis': ChassisState(state=ChassisCmd.POSITION), 'odom': odom,
+                          'referee': alive, 'diagnostics': {}})
+    assert line == ('chassis POSITION v(0.00,0.00,0.00) | pose 1.00 0.50 90deg | '
+                    'hp 150/200 power off chassis')
+    dead = RefereeRobotStatus(hp=0, max_hp=200)
+    assert format_status({'referee': dead, 'diagnostics': {}}) == 'hp 0/200 DESTROYED'
+    whole = RefereeRobotStatus(hp=200, max_hp=200, gimbal_power=True, chassis_power=True,
+                               shooter_power=True)
+    assert format_status({'referee': whole, 'diagnostics': {}}) == 'hp 200/200'
