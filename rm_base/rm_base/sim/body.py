@@ -11,7 +11,9 @@ about the axis (positive pitch noses down).
 * Gimbal: yaw and pitch joint angles are ``direction * (motor angle - zero)``. The yaw
   motor's stator turns with the chassis while its load keeps its inertia in the world, so
   the chassis' yaw acceleration is fed to that motor (``world_frame_inertia``). The pitch
-  joint can carry a gravity torque ``gravity_torque * cos(pitch)`` (nose-heavy > 0).
+  joint can carry a gravity torque ``gravity_torque * cos(pitch)`` (nose-heavy > 0) and
+  rests on its mechanical end stops (``end_stops``): a joint pushed past one is put back on
+  it with no speed outward, an inelastic stop.
 * Orientation of a body: chassis ``Rz(yaw)``; gimbal ``Rz(yaw + yaw_joint) Ry(pitch_joint)``.
 """
 
@@ -109,6 +111,7 @@ class RobotBody:
         yaw_acceleration: chassis angular acceleration [rad/s²] over the last step.
         linear_acceleration: chassis acceleration in the world (ax, ay) [m/s²].
         pitch_gravity_torque: gravity torque on the pitch joint at 0 pitch [N·m].
+        pitch_end_stops: the pitch joint's mechanical stops (low, high) [rad], or None.
         yaw_world_frame_inertia: feed the chassis' yaw acceleration to the yaw motor.
         launcher: the shooter's mechanics (which trigger pushes are shots), or None.
     """
@@ -121,6 +124,7 @@ class RobotBody:
         pitch: Joint | None = None,
         initial_pose: Sequence[float] = (0.0, 0.0, 0.0),
         pitch_gravity_torque: float = 0.0,
+        pitch_end_stops: Sequence[float] | None = None,
         yaw_world_frame_inertia: bool = True,
         launcher: Launcher | None = None,
     ):
@@ -136,6 +140,8 @@ class RobotBody:
         self.pitch_joint = pitch
         self.x, self.y, self.yaw = (float(v) for v in initial_pose)
         self.pitch_gravity_torque = float(pitch_gravity_torque)
+        self.pitch_end_stops = None if pitch_end_stops is None else (
+            float(pitch_end_stops[0]), float(pitch_end_stops[1]))
         self.yaw_world_frame_inertia = yaw_world_frame_inertia
         self.launcher = launcher
         self.twist = self._chassis_twist()
@@ -163,6 +169,23 @@ class RobotBody:
         if joint is not None and self.pitch_gravity_torque:
             torque = self.pitch_gravity_torque * math.cos(joint.angle)
             joint.device.model.external_torque = joint.direction * torque
+
+    def apply_end_stops(self) -> None:
+        """Put a pitch joint that passed a mechanical stop back on it (after a step)."""
+        joint, stops = self.pitch_joint, self.pitch_end_stops
+        if joint is None or stops is None:
+            return
+        angle, velocity = joint.angle, joint.velocity
+        if stops[0] <= angle <= stops[1]:
+            return
+        stop = stops[0] if angle < stops[0] else stops[1]
+        outward = velocity < 0.0 if angle < stops[0] else velocity > 0.0
+        model = joint.device.model
+        g = model.params.gear_ratio
+        # joint angle = direction * (output angle - zero); the rotor turns g times the output
+        model.rotor_angle = (joint.zero + stop / joint.direction) * g
+        if outward:
+            model.rotor_velocity = 0.0
 
     def update_chassis(self, dt: float) -> None:
         """Integrate the chassis pose over dt [s] from the wheels' current speeds."""

@@ -72,6 +72,9 @@ PITCH_SCHEMA = Schema((
     _MOTOR, _DIRECTION, _ZERO,
     number('gravity_torque', 0.0, unit='N·m',
            description='gravity torque at 0 pitch, times cos(pitch) (nose-heavy > 0)'),
+    numbers('end_stops', None, unit='rad', length=2,
+            description='the mechanical stops [low, high] of the joint: a limp barrel rests '
+            'there (none if unset)'),
 ))
 
 _CHASSIS_TYPES = ('mecanum', 'omni', 'swerve', 'wheels')
@@ -317,7 +320,7 @@ def body_from_config(data: object, devices: Mapping[str, SimDevice]) -> RobotBod
     try:
         chassis = None if values['chassis'] is None else _chassis(values['chassis'], devices)
         gimbal = _read(GIMBAL_SCHEMA, 'body.gimbal', values['gimbal'] or {})
-        yaw = pitch = None
+        yaw = pitch = stops = None
         world_frame, gravity = True, 0.0
         if gimbal['yaw'] is not None:
             settings = _read(YAW_SCHEMA, 'body.gimbal.yaw', gimbal['yaw'])
@@ -327,6 +330,11 @@ def body_from_config(data: object, devices: Mapping[str, SimDevice]) -> RobotBod
             settings = _read(PITCH_SCHEMA, 'body.gimbal.pitch', gimbal['pitch'])
             pitch = _joint(settings, devices, 'body.gimbal.pitch')
             gravity = settings['gravity_torque']
+            stops = settings['end_stops']
+            if stops is not None and not stops[0] < stops[1]:
+                raise SimConfigError(
+                    f'body.gimbal.pitch.end_stops must be [low, high], low < high, got {stops}'
+                )
         shooter = values['shooter']
         return RobotBody(
             chassis=chassis,
@@ -334,6 +342,7 @@ def body_from_config(data: object, devices: Mapping[str, SimDevice]) -> RobotBod
             pitch=pitch,
             initial_pose=values['initial_pose'],
             pitch_gravity_torque=gravity,
+            pitch_end_stops=stops,
             yaw_world_frame_inertia=world_frame,
             launcher=None if shooter is None else launcher_from_config(shooter, devices),
         )

@@ -467,6 +467,7 @@ class SimWorld:
         body.update_chassis(dt)
         for device in late:
             device.step(dt, body.yaw_acceleration)
+        body.apply_end_stops()
         self.time_ns = now = now + self.period_ns
         for channel in self._channels.values():
             channel._emit(now)

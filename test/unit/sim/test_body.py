@@ -169,9 +169,26 @@ def test_when_pitch_carries_gravity_torque_expect_it_noses_down(make_world):
     assert world.motor('pitch').model.velocity == pytest.approx(-15.0, rel=0.01)
 
 
+@pytest.mark.parametrize('direction', [1, -1])
+def test_a_limp_barrel_rests_on_its_end_stop(make_world, direction):
+    # The finding: a limp barrel fell to 1.47 rad, far past pitch_max 0.30.
+    gimbal = {'pitch': {'motor': 'pitch', 'direction': direction, 'gravity_torque': 0.3,
+                        'end_stops': [-0.5, 0.35]}}
+    world = make_world(robot_config(gimbal=gimbal))
+    world.step(2000)
+    assert world.body.gimbal_pitch == pytest.approx(0.35, abs=1e-9)
+    assert world.body.pitch_joint.velocity == 0.0
+    world.motor('pitch').model.external_torque = 0.0
+    world.body.pitch_gravity_torque = -0.3  # now tail-heavy: off the stop, to the other
+    world.step(2000)
+    assert world.body.gimbal_pitch == pytest.approx(-0.5, abs=1e-9)
+
+
 @pytest.mark.parametrize(
     ('change', 'message'),
     [
+        ({'gimbal': {'pitch': {'motor': 'pitch', 'end_stops': [0.3, -0.3]}}},
+         r'body\.gimbal\.pitch\.end_stops must be \[low, high\], low < high'),
         ({'chassis': {'type': 'tank'}},
          r"body\.chassis\.type must be one of mecanum, omni, swerve, wheels, got 'tank'"),
         ({'chassis': {'type': 'mecanum'}}, r'body\.chassis\.motors is required'),
