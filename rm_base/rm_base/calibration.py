@@ -37,7 +37,13 @@ class CalibrationError(ConfigError):
 
 
 def expand_path(path: str) -> Path:
-    """``~`` and ``${VAR}`` expanded (a config names the file portably)."""
+    """``~`` and ``${VAR}`` expanded (a config names the file portably).
+
+    ``${ROS_HOME}`` is ROS's own folder for a node's files: the variable if set, else
+    ``~/.ros``, as rcl takes it for its logs.
+    """
+    ros_home = os.environ.get('ROS_HOME') or os.path.join(os.path.expanduser('~'), '.ros')
+    path = path.replace('${ROS_HOME}', ros_home).replace('$ROS_HOME', ros_home)
     return Path(os.path.expandvars(os.path.expanduser(path)))
 
 

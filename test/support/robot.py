@@ -87,6 +87,10 @@ def robot_parameters(
     for device in ('remote', 'image_link'):
         if f'sim.{device}.path' in bridge:
             bridge[f'sim.{device}.path'] = os.path.join(tmp, device)
+    # zeros and biases kept in the test's folder: never read from another test or a user's
+    for values, key in ((bridge, 'calibration.file'), (host, 'imu.calibration.file')):
+        if values.get(key):
+            values[key] = os.path.join(tmp, 'calibration.yaml')
     if plugins is not None:
         host['plugins'] = list(plugins)
         if 'manual' in plugins:

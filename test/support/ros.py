@@ -70,7 +70,9 @@ def domain_claim_fds() -> list[int]:
 
 
 def isolate_ros_environment(environ: dict[str, str] | os._Environ) -> int:
-    """Force localhost-only discovery and a private domain id into environ; return the id.
+    """Force localhost-only discovery, a private domain id and ROS_HOME into environ.
+
+    Returns the domain id. ROS_HOME is one temporary folder per test session.
 
     A domain already chosen through RM_TEST_DOMAIN_ID is kept, so a test process and the
     processes it starts agree; but a pytest-xdist worker (``PYTEST_XDIST_WORKER``) claims
@@ -79,6 +81,11 @@ def isolate_ros_environment(environ: dict[str, str] | os._Environ) -> int:
     workers), so the processes a worker starts keep the worker's domain.
     """
     environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    # ROS's folder for a node's files (logs, the configs' calibration files): the test
+    # process's own, never the user's ~/.ros
+    if not environ.get('RM_TEST_ROS_HOME'):
+        environ['RM_TEST_ROS_HOME'] = tempfile.mkdtemp(prefix='rm_test_ros_home_')
+    environ['ROS_HOME'] = environ['RM_TEST_ROS_HOME']
     worker = environ.get('PYTEST_XDIST_WORKER', '')
     chosen = environ.get('RM_TEST_DOMAIN_ID')
     if environ.get('RM_TEST_DOMAIN_OWNER', '') != worker:
