@@ -4,6 +4,7 @@
     bringup --robot hero                  # the hero on its real buses (socketcan)
     bringup --config my_robot.yaml --sim  # any robot config file
     bringup --sim --params-file extra.yaml  # and overrides, loaded last
+    bringup --sim --sim-time              # every node on /clock (`rmcli bag play --clock`)
 
 The robot config is a ROS parameter file with a ``can_bridge`` and an ``rm_robot``
 section (rm_bringup/config/<robot>.yaml). ``--sim`` starts rm_sim, the simulated motors
@@ -96,6 +97,10 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
         '--params-file', action='append', default=[], type=pathlib.Path,
         help='another parameter file, loaded last (repeatable), e.g. can_bridge: log_file',
     )
+    parser.add_argument(
+        '--sim-time', action='store_true',
+        help='every node runs on /clock (use_sim_time), e.g. replayed by `rmcli bag play --clock`',
+    )
     parser.add_argument('--no-status', action='store_true', help='no live status line')
     parser.add_argument(
         '--duration', type=float, default=None, help='stop after this many seconds [s]'
@@ -154,6 +159,8 @@ def main(argv: list[str] | None = None) -> int:
             ros_args = ['--ros-args']
             for path in node_files:
                 ros_args += ['--params-file', str(path)]
+            if args.sim_time:  # after the files: it wins over a config's own use_sim_time
+                ros_args += ['-p', 'use_sim_time:=true']
             if not init_ros('bringup', ['bringup', *ros_args]):
                 return 1
             # the hardware layer's log lines (offline joints, bus errors) under the

@@ -252,14 +252,19 @@ class PluginBase:
         Args:
             now: current time on the node's clock (rclpy Time).
             dt: time since the previous tick [s]; default from the previous ``now``, or the
-                nominal period on the first tick after enable/reset.
+                nominal period on the first tick after enable/reset or after the clock went
+                back. With the default, a ``now`` equal to the previous one runs nothing.
         """
         if not self._enabled:
             return
         now_ns = now.nanoseconds
         if dt is None:
             last = self._last_run_ns
-            dt = (now_ns - last) / _NS_PER_S if last is not None else 1.0 / self.rate
+            if last == now_ns:
+                return  # the clock stood still (a node on /clock between two of its ticks)
+            # a clock that went back (a replay started over) restarts the timing
+            dt = (now_ns - last) / _NS_PER_S if last is not None and now_ns > last else (
+                1.0 / self.rate)
         self._last_run_ns = now_ns
         self._tick_now = now
         # what this run's targets are computed from (a split bridge checks their stamp)

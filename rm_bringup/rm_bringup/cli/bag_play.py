@@ -28,6 +28,10 @@ replayed at (this node's clock), so a robot that refuses commands older than the
 takes a recorded command stream as if it were sent now: the way to drive a live robot
 from a bag. ``--clock`` is the other way, for nodes that run on the bag's time.
 
+Without ``--topics``, a topic some other node publishes now (a live robot's states) is not
+played, and that is said: replaying a recorded /chassis_state next to the live one would
+mix the two. Name it in ``--topics`` to play it anyway.
+
 Not implemented from ros2 bag play: keyboard controls, node-name remapping, services, QoS
 override files, --playback-duration/until.
 """
@@ -49,6 +53,7 @@ from .options import nonnegative_float, positive_float
 
 DEFAULT_WAIT_FOR_SUBSCRIBERS_S = 5.0
 DEFAULT_CLOCK_HZ = 40.0
+DISCOVERY_S = 0.5  # shortest wait for the graph before judging what is published live [s]
 CLOCK_TOPIC = '/clock'
 _ACK_TIMEOUT_S = 2.0
 _POLL_S = 0.02
@@ -140,6 +145,8 @@ def run(args: argparse.Namespace) -> int:
         connections = _select(reader.connections, args.topics, path)
         _check_remaps(remaps, _by_topic(connections))
         with cli_node('bag_play') as node, stop_on_signals() as stop:
+            if not args.topics:  # named topics play whoever else publishes them
+                connections = _not_live(node, connections, remaps, path)
             publishers = {}
             for topic, conns in _by_topic(connections).items():
                 try:
@@ -234,6 +241,28 @@ def _select(connections, topics: list[str], path: Path) -> list:
             f'{", ".join(sorted({c.topic for c in connections})) or "no topics"}'
         )
     return selected
+
+
+def _not_live(node, connections, remaps: dict[str, str], path: Path) -> list:
+    """The connections whose topic no node of the graph publishes now.
+
+    A recorded /chassis_state played into a running robot would mix with the live one (the
+    status line, a recorder, a planner would all see both): without ``--topics``, what is
+    published live is left out, and said.
+    """
+    from .topic_list import settled
+
+    settled(node.get_topic_names_and_types, DISCOVERY_S)
+    live = sorted({c.topic for c in connections
+                   if node.get_publishers_info_by_topic(remaps.get(c.topic, c.topic))})
+    if live:
+        print(f'rmcli: not playing {", ".join(live)}: published live by another node (name '
+              'them in --topics to play them too)', file=sys.stderr)
+    kept = [c for c in connections if c.topic not in live]
+    if not kept:
+        raise CliError(f'nothing to play from {path}: every topic of it is published live; '
+                       'name the ones to play in --topics')
+    return kept
 
 
 def _by_topic(connections) -> dict[str, list]:

@@ -55,7 +55,9 @@ def cli_node(verb: str, *, name: str | None = None) -> Iterator[Node]:
     context = Context()
     # rclpy's own SIGINT handler would shut the context down under our feet (see
     # rm_base.ros_env); Python's KeyboardInterrupt lets each verb finish cleanly instead.
-    rclpy.init(context=context, signal_handler_options=SignalHandlerOptions.NO)
+    # args: not sys.argv, in which rcl would take `--remap /a:=/b` for its own (deprecated)
+    # remap syntax and warn; rmcli has no ROS arguments of its own.
+    rclpy.init(args=['rmcli'], context=context, signal_handler_options=SignalHandlerOptions.NO)
     try:
         # Hidden name (leading underscore), like ros2cli's '_ros2cli_<pid>' nodes.
         node = rclpy.create_node(node_name, context=context, start_parameter_services=False)

@@ -199,6 +199,20 @@ def test_dt_defaults_to_the_clock_difference_and_to_the_period_first(plugin):
     assert [e for e in plugin.events if e != 'reset'] == [('update', 0.01), ('update', 0.004)]
 
 
+def test_on_a_clock_that_stands_still_or_goes_back_the_timing_stays_sane(plugin):
+    # The finding: on /clock (40 Hz from a replay) the 200 Hz chassis ran with dt 0 and
+    # failed every tick; a replay that starts over sends the clock back.
+    plugin.enable()
+    command(plugin, 1.0, T0)
+    plugin.run(at(T0))
+    plugin.run(at(T0))  # the clock stood still: nothing to do
+    plugin.run(at(T0 + 25 * MS))
+    command(plugin, 1.0, T0 - 500 * MS)
+    plugin.run(at(T0 - 500 * MS))  # went back: the nominal period again
+    updates = [e for e in plugin.events if e != 'reset']
+    assert updates == [('update', 0.01), ('update', 0.025), ('update', 0.01)]
+
+
 def test_when_command_times_out_expect_safe_state_reason_reset_and_zero_output(plugin, sent):
     plugin.enable()
     command(plugin, 1.0, T0)
