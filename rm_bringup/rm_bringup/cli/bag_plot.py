@@ -168,6 +168,24 @@ def read_plot_data(path: Path) -> PlotData:
 # Drawing
 
 
+def modes_seen(data: PlotData) -> list[str]:
+    """Per state or mode column, the names of the values it took, in order of first use.
+
+    ``/chassis_cmd mode: GYRO, POSITION``: what the plots' mode lanes show, said in words.
+    """
+    lines = []
+    for track in data.tracks:
+        for column, column_values in track.columns.items():
+            source = STATE_NAMES_FROM.get((track.msgtype, column))
+            if source is None:
+                continue
+            names = data.state_names.get(source, {})
+            seen = list(dict.fromkeys(int(v) for v in column_values))
+            lines.append(f'{track.topic} {column}: '
+                         + ', '.join(names.get(v, str(v)) for v in seen))
+    return lines
+
+
 def _state_axis(ax, data: PlotData, sources: list[tuple[Track, str]], title: str) -> None:
     ticks: dict[int, str] = {}
     for track, column in sources:
@@ -332,4 +350,6 @@ def run(args: argparse.Namespace) -> int:
             print(f'skipped {name}: the bag has no {needs}')
         else:
             print(f'wrote {written}')
+    for line in modes_seen(data):
+        print(line)
     return 0

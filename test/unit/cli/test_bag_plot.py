@@ -3,7 +3,7 @@
 import matplotlib.image
 import numpy as np
 import pytest
-from rm_bringup.cli.bag_plot import read_plot_data
+from rm_bringup.cli.bag_plot import modes_seen, read_plot_data
 from rm_bringup.cli.main import main
 from support.old_bags import older_store, write_old_bag
 
@@ -115,6 +115,12 @@ def test_values_and_times_are_read_from_the_messages(robot_bag):
     assert [modes[v] for v in range(6)] == ['PASSIVE', 'RAW', 'FOLLOW', 'TWIST', 'GYRO',
                                             'POSITION']  # not the speed gears' names
     assert data.state_names['rm_msgs/msg/ShooterState'][3] == 'PUSH'
+
+
+def test_the_modes_a_bag_went_through_are_said_by_name(robot_bag):
+    said = {line.split(':')[0]: line.split(': ')[1] for line in modes_seen(
+        read_plot_data(robot_bag))}
+    assert said['/robot/chassis_state state'] == 'RAW, GYRO'  # states 1 then 4
 
 
 def assert_real_png(path, min_bytes=15_000):
