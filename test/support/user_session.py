@@ -1,0 +1,144 @@
+"""A user at two terminals: `make run` in one, README's commands typed into the other.
+
+    with UserSession(tmp_path, robot='hero') as user:
+        user.type(readme_blocks('Drive the simulated robot')[0])
+        line = user.status.wait_for(lambda s: 'chassis GYRO' in s)
+
+The robot is `make -s run` (or another of README's commands, such as a bringup: the robot
+with its status line, one line every 2 s without a terminal), its log in ``run.log``; each
+typed script runs in bash from the repository root after README's ``source
+scripts/env.sh``, its output in ``user-N.log``. Both get the test's private ROS domain,
+localhost-only discovery and a ROS_HOME of their own. On exit every script is stopped
+(SIGTERM to its process group), then the robot with Ctrl-C (SIGINT), as a user does.
+"""
+
+from __future__ import annotations
+
+import os
+import pathlib
+import re
+import signal
+import subprocess
+import time
+from collections.abc import Callable
+
+from support.ros import isolate_ros_environment
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+WAIT = 60.0  # [s] longest wait for any status README promises
+
+
+def readme_blocks(section: str) -> list[str]:
+    """The bash blocks of one README section, in order."""
+    text = (ROOT / 'README.md').read_text(encoding='utf-8')
+    start = text.index(f'## {section}\n')
+    end = text.find('\n## ', start + 1)
+    return re.findall(r'```bash\n(.*?)```', text[start:end], flags=re.S)
+
+
+def user_environment(**extra: str) -> dict[str, str]:
+    """os.environ on the test's private domain, localhost only, plus extra."""
+    env = dict(os.environ)
+    isolate_ros_environment(env)
+    env.update(extra)
+    return env
+
+
+def shots(line: str) -> int:
+    """The shots of a status line's shooter part (-1 without one)."""
+    found = re.search(r'shooter \w+ (\d+) shots', line)
+    return int(found.group(1)) if found else -1
+
+
+class StatusLines:
+    """`make run`'s status lines as they come."""
+
+    def __init__(self, process: subprocess.Popen) -> None:
+        self.process, self.lines = process, []
+
+    def wait_for(self, predicate: Callable[[str], object], timeout: float = WAIT) -> str | None:
+        """The first new line that satisfies predicate, or None after timeout [s]."""
+        deadline = time.monotonic() + timeout
+        while time.monotonic() < deadline and self.process.poll() is None:
+            line = self.process.stdout.readline()
+            if line:
+                self.lines.append(line.rstrip())
+                if predicate(line):
+                    return line
+        return None
+
+    def read_for(self, seconds: float) -> list[str]:
+        """Every line that comes within seconds."""
+        start = len(self.lines)
+        self.wait_for(lambda _line: False, seconds)
+        return self.lines[start:]
+
+
+class UserSession:
+    """`make run` and a second terminal (see the module docstring)."""
+
+    def __init__(self, tmp: pathlib.Path, *, robot: str = 'standard',
+                 command: list[str] | None = None) -> None:
+        self.tmp = tmp
+        # a user's own ~/.ros (calibration kept between two runs of one test, not beyond)
+        self.env = user_environment(ROBOT=robot, ROS_HOME=str(tmp / 'ros_home'))
+        self._scripts: list[subprocess.Popen] = []
+        self.robot = subprocess.Popen(
+            command or ['make', '-s', 'run'], cwd=ROOT, env=self.env, text=True,
+            stdout=subprocess.PIPE, stderr=open(tmp / 'run.log', 'w'), start_new_session=True,
+        )
+        self.status = StatusLines(self.robot)
+
+    def __enter__(self) -> UserSession:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    @property
+    def log(self) -> str:
+        """The robot's log so far."""
+        return (self.tmp / 'run.log').read_text()
+
+    def wait_for_robot(self) -> None:
+        """Until the first status line with the chassis in it."""
+        assert self.status.wait_for(lambda s: s.startswith('chassis ')), self.log[-2000:]
+
+    def type(self, commands: str, *, wait: bool = False, timeout: float = WAIT) -> str:
+        """Run commands in the second terminal; with wait, until they end: their output."""
+        n = len(self._scripts)
+        script, out = self.tmp / f'user-{n}.sh', self.tmp / f'user-{n}.log'
+        script.write_text(f'source scripts/env.sh\n{commands}\n' + ('' if wait else 'wait\n'))
+        process = subprocess.Popen(['bash', str(script)], cwd=ROOT, env=self.env,
+                                   stdout=open(out, 'w'), stderr=subprocess.STDOUT,
+                                   start_new_session=True)
+        self._scripts.append(process)
+        if wait:
+            try:
+                process.wait(timeout=timeout)
+            except subprocess.TimeoutExpired:
+                os.killpg(process.pid, signal.SIGTERM)
+                raise
+            text = out.read_text()
+            assert process.returncode == 0, text
+            return text
+        return ''
+
+    def close(self) -> None:
+        """Stop the typed scripts, then the robot with Ctrl-C."""
+        for process in self._scripts:
+            if process.poll() is None:
+                os.killpg(process.pid, signal.SIGTERM)
+        for process in self._scripts:
+            try:
+                process.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                os.killpg(process.pid, signal.SIGKILL)
+                process.wait()
+        if self.robot.poll() is None:
+            os.killpg(self.robot.pid, signal.SIGINT)
+        try:
+            self.robot.wait(timeout=30)
+        except subprocess.TimeoutExpired:
+            os.killpg(self.robot.pid, signal.SIGKILL)
+            self.robot.wait()
