@@ -41,6 +41,7 @@ from rm_base.node_main import init_ros, spin_until_shutdown
 from rm_base.realtime import prepare_loop_process
 from rm_base.ros_logging import forward_package_logging
 
+from rm_bringup.console import Console
 from rm_bringup.sim_process import SimProcess
 from rm_bringup.status import StatusView, fit_status
 
@@ -109,13 +110,13 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
 
 
 class _StatusPrinter:
-    """Prints the status line: rewritten in place on a terminal, a line at a time otherwise."""
+    """Prints the status line: kept at the bottom of a terminal, a line at a time otherwise."""
 
-    def __init__(self, view: StatusView, stream=sys.stdout) -> None:
+    def __init__(self, view: StatusView, console: Console | None, stream=sys.stdout) -> None:
         self._view = view
+        self._console = console
         self._stream = stream
-        self._tty = stream.isatty()
-        self._period = _TTY_PERIOD if self._tty else _LOG_PERIOD
+        self._period = _TTY_PERIOD if console is not None else _LOG_PERIOD
         self._next = time.monotonic() + self._period
 
     def maybe_print(self) -> None:
@@ -124,16 +125,11 @@ class _StatusPrinter:
             return
         self._next = now + self._period
         line = self._view.line()
-        if self._tty:
+        if self._console is not None:
             width = os.get_terminal_size(self._stream.fileno()).columns
-            self._stream.write('\r\x1b[K' + fit_status(line, max(width - 1, 20)))
+            self._console.show(fit_status(line, max(width - 1, 20)))
         else:
             self._stream.write(line + '\n')
-        self._stream.flush()
-
-    def finish(self) -> None:
-        if self._tty:
-            self._stream.write('\n')
             self._stream.flush()
 
 
@@ -145,6 +141,17 @@ def main(argv: list[str] | None = None) -> int:
     except ConfigError as err:
         print(f'[bringup] {err}', file=sys.stderr)
         return 1
+    # On a terminal the status line stays at the bottom and log lines scroll above it; set
+    # up first, so that rm_sim's lines go above it too.
+    console = Console() if not args.no_status and sys.stdout.isatty() else None
+    try:
+        return _main(args, files, console)
+    finally:
+        if console is not None:
+            console.close()
+
+
+def _main(args: argparse.Namespace, files: list[pathlib.Path], console: Console | None) -> int:
     with tempfile.TemporaryDirectory(prefix='rm_bringup_') as workdir:
         sim = None
         if args.sim:
@@ -167,7 +174,7 @@ def main(argv: list[str] | None = None) -> int:
             # bridge's name
             handler = forward_package_logging(BRIDGE_NODE_NAME)
             try:
-                return _run(args, files)
+                return _run(args, files, console)
             finally:
                 logging.getLogger('rm_base').removeHandler(handler)
         finally:
@@ -218,7 +225,7 @@ def has_section(files: list[pathlib.Path], node: str) -> bool:
     return False
 
 
-def _run(args: argparse.Namespace, files: list[pathlib.Path]) -> int:
+def _run(args: argparse.Namespace, files: list[pathlib.Path], console: Console | None) -> int:
     bridge = host = manual = None
     try:
         bridge = CanBridgeNode()
@@ -246,7 +253,7 @@ def _run(args: argparse.Namespace, files: list[pathlib.Path]) -> int:
     if manual is not None:
         executor.add_node(manual)
     prepare_loop_process(bridge.edge_priority, bridge.cpu_index, bridge.cpu_latency_us)
-    printer = None if args.no_status else _StatusPrinter(StatusView(host))
+    printer = None if args.no_status else _StatusPrinter(StatusView(host), console)
     deadline = None if args.duration is None else time.monotonic() + args.duration
     mode = 'on rm_sim' if args.sim else 'on its CAN buses'
     print(f'[bringup] {", ".join(p.name for p in files)}: robot running {mode}; Ctrl-C stops')
@@ -263,8 +270,6 @@ def _run(args: argparse.Namespace, files: list[pathlib.Path]) -> int:
     try:
         spin_until_shutdown(executor, on_tick=tick, timeout_sec=_SPIN_TIMEOUT)
     finally:
-        if printer is not None:
-            printer.finish()
         # Plugins first (zero targets on their joints), then the bridge's zero frames.
         if manual is not None:
             manual.shutdown()
