@@ -1,6 +1,6 @@
 """The terminal of `bringup`: log lines scroll above a status line kept at the bottom.
 
-On a terminal the status line is rewritten in place (``\\r``, erase, the line). A log line
+On a terminal the status line is rewritten in place (carriage return, erase, the line). A log line
 written to stderr at the same time (by rcl, from any thread, or by rm_sim, a child) would
 land in the middle of it. So the process's stderr is a pipe while the console runs: a
 thread reads whole lines from it and writes each to the terminal as erase, the line, a
