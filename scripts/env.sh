@@ -1,7 +1,7 @@
 # Source this file (bash) to use rm_ros2 from the virtualenv:  source scripts/env.sh
 # It activates .venv, sources the colcon workspace (which chains the venv as underlay)
 # and keeps DDS on this machine unless you have chosen otherwise.
-_rm_root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+_rm_root=$(cd "$(dirname "$(readlink -f "${BASH_SOURCE[0]}")")/.." && pwd)
 if [ ! -f "$_rm_root/install/setup.bash" ]; then
   echo "rm_ros2: not set up yet; run scripts/setup.sh (or make test / make run) first" >&2
   unset _rm_root

@@ -8,7 +8,7 @@ it once (not once per 10 Hz report), the status line must show it, and README's
 """
 
 import pytest
-from support.user_session import UserSession
+from support.user_session import UserSession, readme_blocks
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow, pytest.mark.realtime]
 
@@ -31,8 +31,8 @@ def test_a_locked_launcher_is_said_once_and_the_reset_service_revives_the_robot(
         assert cut, user.status.lines[-3:]
         user.status.read_for(3.0)  # thirty more reports of the referee, still off
         assert user.log.count('referee: power off at shooter') == 1, user.log[-3000:]
-        said = user.type('rmcli service call /rm_sim/referee/reset std_srvs/srv/Trigger',
-                         wait=True)
+        (reset,) = readme_blocks('The referee system')
+        said = user.type(reset, wait=True)
         assert 'success=True' in said and 'robot revived' in said, said
         back = user.status.wait_for(lambda s: 'hp 200/200' in s and 'power off' not in s)
         assert back, user.status.lines[-3:]

@@ -100,16 +100,39 @@ class UserSession:
         """The robot's log so far."""
         return (self.tmp / 'run.log').read_text()
 
-    def wait_for_robot(self) -> None:
-        """Until the first status line with the chassis in it."""
-        assert self.status.wait_for(lambda s: s.startswith('chassis ')), self.log[-2000:]
+    def wait_for_robot(self, *, on_clock: bool = False) -> None:
+        """Until the first status line with the chassis in it.
 
-    def type(self, commands: str, *, wait: bool = False, timeout: float = WAIT) -> str:
+        on_clock: a robot on /clock (--sim-time) reports nothing before the clock runs;
+        then until its first status line, whatever it says.
+        """
+        first = (lambda s: True) if on_clock else (lambda s: s.startswith('chassis '))
+        assert self.status.wait_for(first), self.log[-2000:]
+
+    def workdir(self) -> pathlib.Path:
+        """A folder of the user's own to type in: what README's commands write lands there.
+
+        It holds the repository's ``scripts`` and ``test`` (links), which README's commands
+        name by relative paths (``source scripts/env.sh``, ``test/data/teleop``).
+        """
+        home = self.tmp / 'work'
+        if not home.exists():
+            home.mkdir()
+            for name in ('scripts', 'test'):
+                (home / name).symlink_to(ROOT / name)
+        return home
+
+    def output(self, n: int) -> str:
+        """What the n-th typed script printed so far."""
+        return (self.tmp / f'user-{n}.log').read_text()
+
+    def type(self, commands: str, *, wait: bool = False, timeout: float = WAIT,
+             cwd: pathlib.Path = ROOT) -> str:
         """Run commands in the second terminal; with wait, until they end: their output."""
         n = len(self._scripts)
         script, out = self.tmp / f'user-{n}.sh', self.tmp / f'user-{n}.log'
         script.write_text(f'source scripts/env.sh\n{commands}\n' + ('' if wait else 'wait\n'))
-        process = subprocess.Popen(['bash', str(script)], cwd=ROOT, env=self.env,
+        process = subprocess.Popen(['bash', str(script)], cwd=cwd, env=self.env,
                                    stdout=open(out, 'w'), stderr=subprocess.STDOUT,
                                    start_new_session=True)
         self._scripts.append(process)

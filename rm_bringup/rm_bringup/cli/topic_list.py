@@ -62,13 +62,24 @@ def format_topics(
     return [name for name, _ in topics]
 
 
+#: Topics every node has, this one too: a graph of only these has not been discovered yet.
+OWN_TOPICS = frozenset({'/rosout', '/parameter_events'})
+
+
 def settled(read, shortest_s: float, quiet_s: float = QUIET_S, longest_s: float = LONGEST_S):
-    """read()'s topics once no new one came for quiet_s (after shortest_s, by longest_s)."""
+    """read()'s topics once no new one came for quiet_s (after shortest_s, by longest_s).
+
+    A graph with nothing but this node's own topics is not settled: on a loaded machine
+    the first announcement of the others can take longer than quiet_s.
+    """
     start = time.monotonic()
     seen, changed = read(), start
     while True:
         now = time.monotonic()
-        if now - start >= longest_s or (now - start >= shortest_s and now - changed >= quiet_s):
+        if now - start >= longest_s:
+            return seen
+        others = {name for name, _ in seen} - OWN_TOPICS
+        if others and now - start >= shortest_s and now - changed >= quiet_s:
             return seen
         time.sleep(_POLL_S)
         current = read()

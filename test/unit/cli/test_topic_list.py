@@ -45,3 +45,20 @@ def test_the_list_is_taken_once_discovery_has_settled():
 
     assert [n for n, _ in settled(read, 0.0, quiet_s=0.5, longest_s=3.0)] == ['/a', '/b']
     assert [n for n, _ in settled(lambda: graph[0], 0.0, quiet_s=0.2, longest_s=3.0)] == ['/a']
+
+
+def test_a_graph_of_only_our_own_topics_is_not_settled():
+    # The finding: `bag play` into a live robot judged the graph after 1 s of nothing
+    # discovered yet, and replayed the robot's own states beside it.
+    from rm_bringup.cli.topic_list import settled
+
+    start = time.monotonic()
+    own = [('/parameter_events', ['T']), ('/rosout', ['T'])]
+
+    def read():  # the robot's topics come 1.3 s in, after more than quiet_s of nothing
+        return [*own, ('/odom', ['T'])] if time.monotonic() - start > 1.3 else own
+
+    assert '/odom' in [n for n, _ in settled(read, 0.0, quiet_s=0.5, longest_s=4.0)]
+    begun = time.monotonic()
+    assert settled(lambda: own, 0.0, quiet_s=0.1, longest_s=0.5) == own  # nobody: the longest
+    assert time.monotonic() - begun >= 0.5
