@@ -242,7 +242,7 @@ def replay(
     from rclpy.serialization import deserialize_message
     from rm_bringup.cli.bag_convert import read_installed
     from rm_bringup.cli.bag_io import open_bag
-    from rm_bringup.cli.bag_play import parse_remaps
+    from rm_bringup.cli.bag_topics import parse_remaps
     from rm_bringup.cli.interfaces import get_message_class
     from support.lockstep import LockstepRobot
 

@@ -19,6 +19,7 @@ import can
 from std_srvs.srv import SetBool, Trigger
 
 from rm_base.sim import Fault, FaultKind, SimError, SimWorld
+from rm_base.sim.referee import SimReferee
 
 #: Faults the services inject, by service name, with the parameters they use.
 SIM_FAULTS: dict[str, Callable[[], Fault]] = {
@@ -78,7 +79,10 @@ class SimFaultServices:
                 )
         if world.referee is not None:
             self.services.append(
-                node.create_service(Trigger, f'{prefix}referee/reset', self._on_referee_reset)
+                node.create_service(
+                    Trigger, f'{prefix}referee/reset',
+                    functools.partial(self._on_referee_reset, world.referee),
+                )
             )
 
     def _on_fault(
@@ -112,9 +116,8 @@ class SimFaultServices:
         return response
 
     def _on_referee_reset(
-        self, _request: Trigger.Request, response: Trigger.Response
+        self, referee: SimReferee, _request: Trigger.Request, response: Trigger.Response
     ) -> Trigger.Response:
-        referee = self._world.referee
         with self._world.lock:  # the physics thread switches the outputs too
             hp_before = referee.rules.hp
             referee.revive()

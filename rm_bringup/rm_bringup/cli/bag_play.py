@@ -47,13 +47,13 @@ from typing import Any
 
 from .bag_convert import Conversion, conversions
 from .bag_io import open_bag, read_messages
+from .bag_topics import by_topic, check_remaps, not_live, parse_remaps, select
 from .errors import CliError, MessageTypeError
 from .interfaces import get_message_class
 from .options import nonnegative_float, positive_float
 
 DEFAULT_WAIT_FOR_SUBSCRIBERS_S = 5.0
 DEFAULT_CLOCK_HZ = 40.0
-DISCOVERY_S = 0.5  # shortest wait for the graph before judging what is published live [s]
 CLOCK_TOPIC = '/clock'
 _ACK_TIMEOUT_S = 2.0
 _POLL_S = 0.02
@@ -142,13 +142,13 @@ def run(args: argparse.Namespace) -> int:
     path = Path(args.bag_path)
     remaps = parse_remaps(args.remap)
     with open_bag(path) as reader:
-        connections = _select(reader.connections, args.topics, path)
-        _check_remaps(remaps, _by_topic(connections))
+        connections = select(reader.connections, args.topics, path)
+        check_remaps(remaps, by_topic(connections))
         with cli_node('bag_play') as node, stop_on_signals() as stop:
             if not args.topics:  # named topics play whoever else publishes them
-                connections = _not_live(node, connections, remaps, path)
+                connections = not_live(node, connections, remaps, path)
             publishers = {}
-            for topic, conns in _by_topic(connections).items():
+            for topic, conns in by_topic(connections).items():
                 try:
                     msg_class = get_message_class(conns[0].msgtype)
                 except MessageTypeError as err:
@@ -162,8 +162,8 @@ def run(args: argparse.Namespace) -> int:
                 raise CliError(f'nothing to play in {path}: no topic has a known message type')
             playable = [c for c in connections if c.topic in publishers]
             converted = conversions(playable)
-            by_topic = {c.topic: converted[c.id] for c in playable if c.id in converted}
-            for topic, conversion in by_topic.items():
+            converted_by_topic = {c.topic: converted[c.id] for c in playable if c.id in converted}
+            for topic, conversion in converted_by_topic.items():
                 print(f'rmcli: {conversion.describe(topic)}', file=sys.stderr)
             restamp = None
             if args.restamp:
@@ -184,95 +184,6 @@ def run(args: argparse.Namespace) -> int:
                 _flush(publisher)
     print(f'Played {played} messages on {len(publishers)} topics')
     return 0
-
-
-def _absolute(topic: str) -> str:
-    return topic if topic.startswith('/') else f'/{topic}'
-
-
-def parse_remaps(items: list[str]) -> dict[str, str]:
-    """``['/a:=/b', ...]`` as {recorded topic: published topic}, both absolute.
-
-    Raises:
-        CliError: an item without ``:=``, an empty side, or one topic remapped twice.
-    """
-    remaps: dict[str, str] = {}
-    for item in items:
-        source, sep, target = item.partition(':=')
-        if not sep or not source.strip() or not target.strip():
-            raise CliError(f'--remap {item!r}: write FROM:=TO, e.g. /cmd_vel:=/vel_cmd')
-        source, target = _absolute(source.strip()), _absolute(target.strip())
-        if source in remaps:
-            raise CliError(f'--remap: {source} is remapped twice')
-        remaps[source] = target
-    return remaps
-
-
-def _check_remaps(remaps: dict[str, str], by_topic: dict[str, list]) -> None:
-    missing = sorted(set(remaps) - set(by_topic))
-    if missing:
-        print(f'rmcli: warning: --remap of topics not played: {", ".join(missing)}',
-              file=sys.stderr)
-    published: dict[str, tuple[str, str]] = {}  # published topic -> (recorded topic, type)
-    for topic, conns in by_topic.items():
-        name = remaps.get(topic, topic)
-        other = published.get(name)
-        if other is not None and other[1] != conns[0].msgtype:
-            raise CliError(
-                f'{topic} ({conns[0].msgtype}) and {other[0]} ({other[1]}) would both be '
-                f'published on {name}'
-            )
-        published[name] = (topic, conns[0].msgtype)
-
-
-def _select(connections, topics: list[str], path: Path) -> list:
-    if not topics:
-        if not connections:
-            raise CliError(f'nothing to play in {path}: the bag has no topics')
-        return list(connections)
-    wanted = {_absolute(t) for t in topics}
-    selected = [c for c in connections if c.topic in wanted]
-    missing = wanted - {c.topic for c in selected}
-    if missing and selected:
-        print(f'rmcli: warning: not in the bag: {", ".join(sorted(missing))}', file=sys.stderr)
-    if not selected:
-        raise CliError(
-            f'none of {", ".join(sorted(wanted))} is in {path}; it has '
-            f'{", ".join(sorted({c.topic for c in connections})) or "no topics"}'
-        )
-    return selected
-
-
-def _not_live(node, connections, remaps: dict[str, str], path: Path) -> list:
-    """The connections whose topic no node of the graph publishes now.
-
-    A recorded /chassis_state played into a running robot would mix with the live one (the
-    status line, a recorder, a planner would all see both): without ``--topics``, what is
-    published live is left out, and said.
-    """
-    from .topic_list import settled
-
-    settled(node.get_topic_names_and_types, DISCOVERY_S)
-    live = sorted({c.topic for c in connections
-                   if node.get_publishers_info_by_topic(remaps.get(c.topic, c.topic))})
-    if live:
-        print(f'rmcli: not playing {", ".join(live)}: published live by another node (name '
-              'them in --topics to play them too)', file=sys.stderr)
-    kept = [c for c in connections if c.topic not in live]
-    if not kept:
-        raise CliError(f'nothing to play from {path}: every topic of it is published live; '
-                       'name the ones to play in --topics')
-    return kept
-
-
-def _by_topic(connections) -> dict[str, list]:
-    grouped: dict[str, list] = {}
-    for connection in connections:
-        grouped.setdefault(connection.topic, []).append(connection)
-    for topic, conns in grouped.items():
-        if len({c.msgtype for c in conns}) > 1:
-            raise CliError(f'topic {topic} has more than one type in the bag')
-    return grouped
 
 
 def _wait_for_subscribers(publishers, timeout_s: float, stop) -> None:

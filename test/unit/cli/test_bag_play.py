@@ -6,7 +6,8 @@ import time
 import pytest
 from rclpy.serialization import deserialize_message
 from rm_bringup.cli.bag_io import open_bag
-from rm_bringup.cli.bag_play import PlayOptions, parse_remaps, play
+from rm_bringup.cli.bag_play import PlayOptions, play
+from rm_bringup.cli.bag_topics import parse_remaps
 from rm_bringup.cli.errors import BagError, CliError
 from rm_bringup.cli.main import main
 from std_msgs.msg import String
