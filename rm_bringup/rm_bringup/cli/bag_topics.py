@@ -96,7 +96,7 @@ def not_live(node, connections, remaps: dict[str, str], path: Path) -> list:
 
     settled(node.get_topic_names_and_types, DISCOVERY_S)
     live = sorted({c.topic for c in connections
-                   if node.get_publishers_infoby_topic(remaps.get(c.topic, c.topic))})
+                   if node.get_publishers_info_by_topic(remaps.get(c.topic, c.topic))})
     if live:
         print(f'rmcli: not playing {", ".join(live)}: published live by another node (name '
               'them in --topics to play them too)', file=sys.stderr)
