@@ -90,13 +90,17 @@ def not_live(node, connections, remaps: dict[str, str], path: Path) -> list:
 
     A recorded /chassis_state played into a running robot would mix with the live one (the
     status line, a recorder, a planner would all see both): without ``--topics``, what is
-    published live is left out, and said.
+    published live is left out, and said. Hidden nodes (``_`` first: rmcli's and ros2cli's
+    own, such as a `topic pub` that just ended and discovery still lists) do not count.
     """
     from .topic_list import settled
 
+    def published(topic: str) -> bool:
+        return any(not info.node_name.startswith('_')
+                   for info in node.get_publishers_info_by_topic(topic))
+
     settled(node.get_topic_names_and_types, DISCOVERY_S)
-    live = sorted({c.topic for c in connections
-                   if node.get_publishers_info_by_topic(remaps.get(c.topic, c.topic))})
+    live = sorted({c.topic for c in connections if published(remaps.get(c.topic, c.topic))})
     if live:
         print(f'rmcli: not playing {", ".join(live)}: published live by another node (name '
               'them in --topics to play them too)', file=sys.stderr)
