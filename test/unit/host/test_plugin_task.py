@@ -3,6 +3,7 @@
 import threading
 import time
 
+import pytest
 from rm_base.host.plugin_task import RESERVE_NS, PluginTask, TickInputs
 
 MS = 1_000_000  # ns
@@ -148,17 +149,29 @@ def test_a_phase_moves_the_schedule_not_the_rate():
     assert plugin.runs == [3 * MS, 13 * MS, 23 * MS]
 
 
+TASK_CLOCK = {'ns': 0}  # [ns] the task's clock while ``task_clock`` holds
+
+
 class SlowPlugin(FakePlugin):
-    """A plugin whose run takes a while of real time, so the task learns its cost."""
+    """A plugin whose run takes 300 us of the task's clock, so the task learns its cost.
+
+    The clock (time.perf_counter_ns, which the task reads around a run) is the test's own
+    while the fixture ``task_clock`` holds: on a loaded machine a busy-wait of real time
+    was sometimes preempted for milliseconds, and the learned cost with it.
+    """
 
     def run(self, now):
         super().run(now)
-        end = time.perf_counter_ns() + 300_000
-        while time.perf_counter_ns() < end:
-            pass
+        TASK_CLOCK['ns'] += 300_000
 
 
-def test_a_run_that_would_pass_the_deadline_waits_one_tick_then_runs_whatever_is_left():
+@pytest.fixture
+def task_clock(monkeypatch):
+    TASK_CLOCK['ns'] = 1_000_000_000
+    monkeypatch.setattr(time, 'perf_counter_ns', lambda: TASK_CLOCK['ns'])
+
+
+def test_a_run_that_would_pass_the_deadline_waits_one_tick_then_runs_whatever_is_left(task_clock):
     left = {'ns': None}
     plugin = SlowPlugin(1000.0)
     inputs = TickInputs(lambda: Time(len(plugin.runs)), time_left=lambda: left['ns'])
@@ -168,7 +181,7 @@ def test_a_run_that_would_pass_the_deadline_waits_one_tick_then_runs_whatever_is
         return task(i * MS, 0.001)
 
     assert tick(0) is True  # no deadline (a stepped loop): runs, learns its cost
-    assert task.cost_ns > 0
+    assert task.cost_ns > 100_000  # learned from the test's clock (a real run is microseconds)
     left['ns'] = RESERVE_NS + task.cost_ns // 2  # not enough left for a typical run
     assert tick(1) is False
     assert (task.deferred, task.ticks) == (1, 1)
@@ -180,7 +193,7 @@ def test_a_run_that_would_pass_the_deadline_waits_one_tick_then_runs_whatever_is
     assert (task.ticks, task.deferred, task.skipped) == (4, 2, 2)
 
 
-def test_a_run_for_a_new_command_that_would_not_fit_waits_one_tick_too():
+def test_a_run_for_a_new_command_that_would_not_fit_waits_one_tick_too(task_clock):
     plugin = SlowPlugin(100.0)
     inputs = TickInputs(lambda: Time(len(plugin.runs)), time_left=lambda: 0)  # no time left
     task = PluginTask(plugin, inputs)

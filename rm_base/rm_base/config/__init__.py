@@ -1,0 +1,1 @@
+"""Configuration: the parameter schema, parameter files, the calibration file."""

@@ -1,0 +1,1 @@
+"""The ROS edge: taking and publishing messages, log lines, the process's ROS set-up."""

@@ -1,0 +1,1 @@
+"""The process the loop runs in: real-time scheduling, CPU latency, the compiled modules."""
