@@ -5,7 +5,7 @@ once per wake-up: the loop after each tick (``Scheduler.add_after_tick``), the o
 through one frequently called method wrapped on the *instance* (the bridge publisher's
 ``_states_heard``, the outbox's ``flush``, the world's ``_tick`` where rm_sim runs in the
 process; the main thread checks in its spin loop). The loop's compiled modules
-(rm_base/compiled.py) are invisible to cProfile: their time shows in their callers;
+(rm_base/runtime/compiled.py) are invisible to cProfile: their time shows in their callers;
 ``RM_ROS2_COMPILED=0`` profiles them as Python. While a window is open the
 wrapper enables a ``cProfile.Profile`` in its thread, and disables it when the window
 closes. The timer is cProfile's default (wall clock, cheap): sleeps and waits show up as

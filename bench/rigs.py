@@ -21,6 +21,8 @@ from typing import Any
 
 import can
 
+from rm_base import motors
+
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG_DIR = ROOT / 'rm_bringup' / 'config'
 _channel_ids = itertools.count()
@@ -81,7 +83,7 @@ class Rig:
             options = {**bus.get('options', {}), 'world': self.world}
             buses[name] = {**bus, 'interface': 'rm_sim', 'channel': channel, 'options': options}
         config['buses'] = buses
-        self.hw = CanHardware(config)
+        self.hw = CanHardware(config, families=motors)
         self.feeder: FeedbackFeeder | None = None
 
     def sim_bus(self, name: str) -> Any:

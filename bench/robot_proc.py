@@ -102,7 +102,7 @@ class Robot:
         from rclpy.signals import SignalHandlerOptions
         from rm_base.bridge import CanBridgeNode
         from rm_base.host.node import RobotHost
-        from rm_base.ros_env import prepare_ros_process
+        from rm_base.ros.env import prepare_ros_process
         from rm_bringup.bringup import parameter_files
         from rm_bringup.sim_process import SimProcess
 
@@ -148,7 +148,7 @@ class Robot:
         for node in (self.bridge, self.host):
             if node is not None:
                 self.executor.add_node(node)
-        from rm_base.realtime import prepare_loop_process
+        from rm_base.runtime.realtime import prepare_loop_process
 
         owner = self.bridge if self.bridge is not None else self.host
         # as the executables do

@@ -2,7 +2,7 @@
 
 Usage: python scripts/build_compiled.py [--if-changed | --clean]
 
-The modules are those of ``rm_base.compiled.MODULES``, compiled as one group (one shared
+The modules are those of ``rm_base.runtime.compiled.MODULES``, compiled as one group (one shared
 library, ``rm_base/rm_base/native__mypyc.*.so``, and a small extension module next to each
 source). The stamp that lets them be used is written last, so an interrupted build is never
 imported. ``--if-changed`` builds only when the stamp does not match the sources and the
@@ -33,7 +33,7 @@ def main(argv: list[str]) -> int:
         os.execv(sys.executable, [sys.executable, *argv])
     sys.path[:0] = [str(ROOT / 'rm_base'), str(ROOT / 'rm_plugins')]
     os.environ['RM_ROS2_COMPILED'] = '0'  # this process imports the sources
-    from rm_base import compiled
+    from rm_base.runtime import compiled
 
     if argv[1:] == ['--if-changed'] and not compiled.stale():
         return 0

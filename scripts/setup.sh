@@ -82,7 +82,7 @@ if [ "$(cat "$STAMPS/build" 2>/dev/null)" != "$build_digest" ] || [ ! -f install
   }
   echo "$build_digest" > "$STAMPS/build"
 fi
-# 5. the control loop's modules compiled with mypyc beside their sources (rm_base/compiled.py
+# 5. the control loop's modules compiled with mypyc beside their sources (rm_base/runtime/compiled.py
 # names them); rebuilt when one of them changed. Without it they run from source, slower.
 mkdir -p "$ROOT/log"
 "$VENV/bin/python" "$ROOT/scripts/build_compiled.py" --if-changed > "$ROOT/log/build-compiled.log" 2>&1 || {

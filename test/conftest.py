@@ -20,14 +20,14 @@ def ros_context():
 def _loop_lines_within(phase):
     """Run a test phase with the control loops' lines written only while it runs.
 
-    A loop's lines are written by a thread of their own (rm_base.ros_logging); pytest
+    A loop's lines are written by a thread of their own (rm_base.ros.log); pytest
     captures output only during a phase, so a line written while pytest reports between
     phases reached the terminal. trylast: inside pytest's own capture wrapper.
     """
 
     @pytest.hookimpl(wrapper=True, trylast=True)
     def hook(item):
-        from rm_base.ros_logging import hold_loop_lines, release_loop_lines  # after isolation
+        from rm_base.ros.log import hold_loop_lines, release_loop_lines  # after isolation
 
         release_loop_lines()
         try:
@@ -45,6 +45,6 @@ pytest_runtest_teardown = _loop_lines_within('teardown')
 
 
 def pytest_sessionfinish(session):
-    from rm_base.ros_logging import release_loop_lines
+    from rm_base.ros.log import release_loop_lines
 
     release_loop_lines()

@@ -37,9 +37,9 @@ from rm_base.bridge import CanBridgeNode
 from rm_base.bridge.node import NODE_NAME as BRIDGE_NODE_NAME
 from rm_base.errors import ConfigError
 from rm_base.host.node import RobotHost
-from rm_base.node_main import init_ros, spin_until_shutdown
-from rm_base.realtime import prepare_loop_process
-from rm_base.ros_logging import forward_package_logging
+from rm_base.ros.log import forward_package_logging
+from rm_base.ros.node_main import init_ros, spin_until_shutdown
+from rm_base.runtime.realtime import prepare_loop_process
 
 from rm_bringup.console import Console
 from rm_bringup.sim_process import SimProcess

@@ -18,10 +18,10 @@ from typing import Any
 import rclpy
 from rclpy.context import Context
 from rm_base.bridge import CanBridgeNode
-from rm_base.config_schema import OPTIONAL
+from rm_base.config.schema import OPTIONAL
 from rm_base.host.node import RobotHost
 from rm_base.plugin.params import DeclaredParameter, declared_parameters
-from rm_base.ros_env import prepare_ros_process
+from rm_base.ros.env import prepare_ros_process
 
 from rm_bringup.bringup import MANUAL_NODE_NAME, has_section, parameter_files
 
@@ -212,7 +212,7 @@ def motor_tables() -> list[str]:
     """The sections of ``joints.<joint>.sim`` (a simulated motor), from their schemas."""
     from rm_base.motors import BUILT_IN, families
     from rm_base.sim.device_config import MOTOR_SCHEMA
-    from rm_base.sim.motor_params import PHYSICS_SCHEMA
+    from rm_base.sim_devices.motor_params import PHYSICS_SCHEMA
 
     prefix = 'joints.<joint>.sim.'
     # A joint's motor takes the joint's name and id, and its type's model unless set.

@@ -41,7 +41,9 @@ class Lockstep:
             },
             'joints': joints,
         }
-        self.hw = CanHardware(config, clock_ns=lambda: self.now_ns, receive_in_loop=False)
+        self.hw = CanHardware(
+            config, clock_ns=lambda: self.now_ns, receive_in_loop=False, families=motors,
+        )
 
     def __enter__(self):
         self.hw.open()

@@ -11,7 +11,7 @@ import itertools
 
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray
-from rm_base.calibration import CalibrationFile
+from rm_base.config.calibration import CalibrationFile
 from rm_base.hardware.protocols import hipnuc
 from rm_plugins.imu import ImuState
 from sensor_msgs.msg import Imu

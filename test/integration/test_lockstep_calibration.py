@@ -11,7 +11,7 @@ refused, each saying why.
 from __future__ import annotations
 
 import pytest
-from rm_base.calibration import CalibrationFile, joint_zero_offsets
+from rm_base.config.calibration import CalibrationFile, joint_zero_offsets
 from rm_base.geometry import wrap_to_pi
 from support.lockstep import LockstepRobot
 

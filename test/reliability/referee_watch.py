@@ -16,7 +16,7 @@ import time
 from collections.abc import Callable, Iterable, Mapping
 from typing import Any
 
-from rm_base.realtime import outside_robot
+from rm_base.runtime.realtime import outside_robot
 
 
 class RefereeWatch:
@@ -64,7 +64,7 @@ class RefereeWatch:
                 windows[-1][1] = now
 
     def _run(self) -> None:
-        with outside_robot():  # the test's, not the robot's (rm_base.realtime)
+        with outside_robot():  # the test's, not the robot's (rm_base.runtime.realtime)
             while not self._stop.wait(self._period_s):
                 self.sample(time.time())
 

@@ -26,7 +26,7 @@ from typing import Any
 
 import can
 from rm_base.hardware import CanHardware
-from rm_base.realtime import outside_robot
+from rm_base.runtime.realtime import outside_robot
 from rm_base.sim import SimBus, SimWorld
 
 from reliability.wire import WireChecker
@@ -70,7 +70,9 @@ class LockstepRig:
             'safety': dict(safety or {}),
         }
         self._sim_buses: list[SimBus] = []
-        self.hw = CanHardware(self.config, clock_ns=self.now_ns, bus_factory=self._open)
+        self.hw = CanHardware(
+            self.config, clock_ns=self.now_ns, bus_factory=self._open, families=motors,
+        )
         self.tap = SimBus(self.channel, world=self.world, rx_queue_size=0)
         self.peer = SimBus(self.channel, world=self.world, rx_queue_size=0)
         self.checker = WireChecker(self.config, grace_s=grace_s, record=True)
@@ -309,7 +311,7 @@ class WireWatch:
             self._thread.start()
 
     def _run(self) -> None:
-        with outside_robot():  # the test's, not the robot's (rm_base.realtime)
+        with outside_robot():  # the test's, not the robot's (rm_base.runtime.realtime)
             while not self._stop.wait(self._period_s):
                 self._work(time.time() - self._lag_s)
 

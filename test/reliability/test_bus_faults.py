@@ -31,6 +31,7 @@ from support.ros import wait_until
 
 from reliability.rigs import FlakyAdapter, unique_channel
 from reliability.wire import WireChecker
+from rm_base import motors
 
 pytestmark = pytest.mark.realtime
 
@@ -81,7 +82,7 @@ class RealtimeRig:
             'joints': JOINTS,
         }
         self.adapter = FlakyAdapter(self.world)
-        self.hw = CanHardware(self.config, bus_factory=self.adapter)
+        self.hw = CanHardware(self.config, bus_factory=self.adapter, families=motors)
         self.bus = self.hw.buses['can0']
         self.tap = SimBus(self.channel, world=self.world, rx_queue_size=0)
         self.checker = WireChecker(self.config, grace_s=GRACE, record=True)

@@ -68,12 +68,12 @@ from reliability.referee_watch import RefereeWatch  # noqa: E402
 from reliability.rigs import WireWatch, hardware_config  # noqa: E402
 from reliability.wire import check_actuator_states, max_efforts  # noqa: E402
 from rm_base.bridge import CanBridgeNode  # noqa: E402
-from rm_base.realtime import (  # noqa: E402
+from rm_base.ros.publish import publish  # noqa: E402
+from rm_base.runtime.realtime import (  # noqa: E402
     children_start_normal,
     outside_robot,
     prepare_loop_process,
 )
-from rm_base.ros_publish import publish  # noqa: E402
 from rm_base.sim import Fault, FaultKind  # noqa: E402
 from support.robot import CONFIG_DIR, load_parameters  # noqa: E402
 
@@ -161,7 +161,7 @@ class Robot:
         self.executor = EventsExecutor(context=self.context)
         self.executor.add_node(self.bridge)
         # the soak's own subscriptions (states, every /actuator_states checked) are not the
-        # robot's: another executor, in a thread outside it (rm_base.realtime)
+        # robot's: another executor, in a thread outside it (rm_base.runtime.realtime)
         self.soak_executor = EventsExecutor(context=self.context)
         self.soak_executor.add_node(self.node)
         self._cpus = os.sched_getaffinity(0)  # rm_robot's, before this process is pinned
@@ -341,7 +341,7 @@ class Commander:
             self.silent_until = time.monotonic() + rng.uniform(0.5, 2.0)
 
     def _run(self) -> None:
-        with outside_robot():  # the operator, not the robot (rm_base.realtime)
+        with outside_robot():  # the operator, not the robot (rm_base.runtime.realtime)
             self._publish_mixes()
 
     def _publish_mixes(self) -> None:

@@ -33,8 +33,8 @@ from rclpy.experimental import EventsExecutor
 from rclpy.parameter import Parameter
 from rclpy.qos import QoSProfile, qos_profile_sensor_data
 from rm_base.bridge import CanBridgeNode
+from rm_base.config.param_files import load_parameters
 from rm_base.host.node import RobotHost
-from rm_base.param_files import load_parameters
 
 from support.ros import wait_until
 

@@ -4,7 +4,7 @@ import math
 import threading
 
 import pytest
-from rm_base.calibration import (
+from rm_base.config.calibration import (
     CalibrationError,
     CalibrationFile,
     finite_values,

@@ -7,8 +7,7 @@ import subprocess
 import sys
 
 import pytest
-
-from rm_base import compiled
+from rm_base.runtime import compiled
 
 
 def test_set_up_compiled_every_module_of_the_group():
@@ -61,7 +60,7 @@ def test_the_source_finder_finds_the_python_file_beside_the_extension_module():
 
 
 def test_the_environment_variable_runs_the_whole_group_from_source():
-    code = ('import importlib, rm_base.compiled as c\n'
+    code = ('import importlib, rm_base.runtime.compiled as c\n'
             'print(c.choose())\n'
             'print(sum(c.running_compiled(importlib.import_module(m)) for m in c.MODULES))\n')
     env = {**os.environ, compiled.ENV: '0'}

@@ -1,9 +1,9 @@
-"""rm_base.config_schema: one declaration validates a table and gives its reference rows."""
+"""rm_base.config.schema: one declaration validates a table and gives its reference rows."""
 
 import math
 
 import pytest
-from rm_base.config_schema import (
+from rm_base.config.schema import (
     OPTIONAL,
     REQUIRED,
     Schema,

@@ -1,4 +1,4 @@
-"""The PM QoS request that keeps idle CPUs quick to wake (rm_base.cpu_latency)."""
+"""The PM QoS request that keeps idle CPUs quick to wake (rm_base.runtime.cpu_latency)."""
 
 import os
 import struct
@@ -6,8 +6,7 @@ import subprocess
 import sys
 
 import pytest
-
-from rm_base import cpu_latency
+from rm_base.runtime import cpu_latency
 
 
 @pytest.fixture(autouse=True)

@@ -4,7 +4,7 @@ import os
 import signal
 
 import pytest
-from rm_base.node_main import spin_until_shutdown
+from rm_base.ros.node_main import spin_until_shutdown
 
 
 class AlwaysOk:
@@ -60,7 +60,7 @@ def test_when_on_tick_returns_false_expect_the_loop_to_end():
 
 
 def test_a_sigint_while_the_node_starts_up_still_stops_it_cleanly(monkeypatch):
-    from rm_base import node_main
+    from rm_base.ros import node_main
 
     calls = []
 

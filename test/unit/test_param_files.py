@@ -1,8 +1,8 @@
 """param_files: ROS parameter files read as rcl reads them, without rcl."""
 
 import pytest
+from rm_base.config.param_files import load_parameters
 from rm_base.errors import ConfigError
-from rm_base.param_files import load_parameters
 
 
 def test_later_files_override_key_by_key_and_nesting_becomes_dots(tmp_path):

@@ -7,8 +7,7 @@ import sys
 import threading
 
 import pytest
-
-from rm_base import realtime
+from rm_base.runtime import realtime
 
 
 def test_raise_process_threads_changes_only_threads_under_normal_scheduling(monkeypatch):
@@ -60,7 +59,7 @@ def test_a_refusal_is_one_warning_and_normal_scheduling(monkeypatch, caplog):
         raise PermissionError(1, 'Operation not permitted')
 
     monkeypatch.setattr(realtime, 'raise_process_threads', refuse)
-    with caplog.at_level('WARNING', logger='rm_base.realtime'):
+    with caplog.at_level('WARNING', logger='rm_base.runtime.realtime'):
         assert realtime.raise_edge_priority(10) is False
     assert 'SCHED_FIFO 10 refused' in caplog.text
     assert realtime.raise_edge_priority(0) is False  # 0: asked for nothing
@@ -137,7 +136,7 @@ def test_a_refused_pinning_is_one_warning(monkeypatch, caplog):
         raise PermissionError(1, 'Operation not permitted')
 
     monkeypatch.setattr(realtime, 'pin_python_threads', refuse)
-    with caplog.at_level('WARNING', logger='rm_base.realtime'):
+    with caplog.at_level('WARNING', logger='rm_base.runtime.realtime'):
         assert realtime.keep_on_cpu(-1) is None
     assert 'threads not kept on CPU 1' in caplog.text
 

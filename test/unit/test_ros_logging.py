@@ -1,4 +1,4 @@
-"""rm_base.ros_logging: rclpy's output, without rclpy's 400 µs caller lookup, and no line
+"""rm_base.ros.log: rclpy's output, without rclpy's 400 µs caller lookup, and no line
 written (nor sent on /rosout) by a control loop's thread.
 
 The console cases run a short script in a fresh interpreter (rcutils reads its output
@@ -12,13 +12,13 @@ import sys
 import textwrap
 import threading
 
-from rm_base.realtime import loop_thread
-from rm_base.ros_logging import LogLine, LoopLines
+from rm_base.ros.log import LogLine, LoopLines
+from rm_base.runtime.realtime import loop_thread
 
 PRELUDE = """
 import inspect, logging
 from rclpy.logging import get_logger, LoggingSeverity
-from rm_base.ros_logging import FastLogger, forward_package_logging
+from rm_base.ros.log import FastLogger, forward_package_logging
 
 def no_source_lookup(*args, **kwargs):  # rclpy's slow caller lookup must not run
     raise AssertionError('inspect.getframeinfo called')
@@ -128,7 +128,7 @@ def test_when_python_logging_records_are_forwarded_expect_them_at_their_level_an
 def test_when_a_loop_thread_logs_expect_its_lines_written_in_order_before_later_lines():
     script = """
     import threading
-    from rm_base.realtime import loop_thread
+    from rm_base.runtime.realtime import loop_thread
 
     log = FastLogger(get_logger('rm_robot')).get_child('chassis')
 
@@ -158,7 +158,7 @@ def test_when_logging_expect_the_line_on_rosout_with_its_caller():
     import rclpy
     from rcl_interfaces.msg import Log
     from rclpy.qos import QoSProfile, ReliabilityPolicy, DurabilityPolicy
-    from rm_base.realtime import loop_thread
+    from rm_base.runtime.realtime import loop_thread
 
     rclpy.init()
     node = rclpy.create_node('rosout_probe')

@@ -1,4 +1,4 @@
-"""rm_base.ros_publish: rcl's serialised publish, with the GIL released while DDS sends."""
+"""rm_base.ros.publish: rcl's serialised publish, with the GIL released while DDS sends."""
 
 import ctypes
 import threading
@@ -9,10 +9,9 @@ import rclpy
 from rclpy.exceptions import InvalidHandle
 from rclpy.node import Node
 from rclpy.serialization import serialize_message
+from rm_base.ros import publish as ros_publish
 from std_msgs.msg import String
 from support.ros import spin_until, wait_until
-
-from rm_base import ros_publish
 
 
 def _subscribed(ros_context, topic):

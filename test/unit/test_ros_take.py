@@ -1,4 +1,4 @@
-"""rm_base.ros_take: rcl's serialised take, with the GIL released while rcl takes."""
+"""rm_base.ros.take: rcl's serialised take, with the GIL released while rcl takes."""
 
 import ctypes
 
@@ -8,7 +8,7 @@ from rclpy.context import Context
 from rclpy.exceptions import InvalidHandle
 from rclpy.node import Node
 from rclpy.serialization import deserialize_message
-from rm_base.ros_take import TakeBuffer, TakeError
+from rm_base.ros.take import TakeBuffer, TakeError
 from std_msgs.msg import String
 from support.ros import wait_until
 
@@ -107,7 +107,7 @@ def test_an_error_from_rcl_is_a_take_error_naming_the_topic_and_the_buffer_still
 def test_messages_dds_dropped_before_the_take_are_counted_from_the_sequence_numbers(ros_context):
     # The finding: messages dropped by a subscription's keep-last queue during a flood
     # were counted nowhere. A depth-3 reader given 20 messages keeps the last 3.
-    from rm_base.ros_take import MessageInfo, SequenceGaps
+    from rm_base.ros.take import MessageInfo, SequenceGaps
 
     node = Node('ros_take_gaps', context=ros_context)
     subscription = node.create_subscription(String, '/ros_take_gaps', lambda msg: None, 3)
@@ -135,7 +135,7 @@ def test_messages_dds_dropped_before_the_take_are_counted_from_the_sequence_numb
 
 
 def test_sequence_gaps_count_per_publisher_and_ignore_rmws_without_numbers():
-    from rm_base.ros_take import MessageInfo, SequenceGaps
+    from rm_base.ros.take import MessageInfo, SequenceGaps
 
     def info(number, gid):
         i = MessageInfo()

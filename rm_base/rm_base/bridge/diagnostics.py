@@ -24,9 +24,9 @@ from typing import Any
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 
-from rm_base.diagnostic_status import diagnostic_status
 from rm_base.hardware import BusStats, HoldReason, JointState, Mode, PeriodStats
 from rm_base.hardware.timing import HISTOGRAM_EDGES_US
+from rm_base.ros.diagnostics import diagnostic_status
 
 OK = DiagnosticStatus.OK
 WARN = DiagnosticStatus.WARN

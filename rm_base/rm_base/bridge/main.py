@@ -11,8 +11,8 @@ from rclpy.experimental import EventsExecutor
 from rm_base.bridge.node import NODE_NAME, CanBridgeNode
 from rm_base.errors import ConfigError
 from rm_base.hardware import BusError
-from rm_base.node_main import run_node
-from rm_base.ros_logging import forward_package_logging
+from rm_base.ros.log import forward_package_logging
+from rm_base.ros.node_main import run_node
 
 USAGE = """usage: can_bridge --ros-args --params-file ROBOT.yaml
                   [--params-file MORE.yaml] [-p NAME:=VALUE]

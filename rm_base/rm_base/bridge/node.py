@@ -21,7 +21,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 
-from rm_base import compiled
+from rm_base import motors
 from rm_base.bridge.command_input import ActuatorCmdInput
 from rm_base.bridge.diagnostics import CommandStats, DiagnosticsReporter
 from rm_base.bridge.errors import BridgeConfigError, PowerLimitRejectedError
@@ -38,16 +38,17 @@ from rm_base.bridge.params import with_sim_world
 from rm_base.bridge.power_limits import RemotePowerLimits, parse_power_limit
 from rm_base.bridge.sim_config import world_config
 from rm_base.bridge.sim_services import SimFaultServices
-from rm_base.calibration import CalibrationError
+from rm_base.config.calibration import CalibrationError
 from rm_base.hardware import CanHardware
 from rm_base.hardware.bus import BusFactory
 from rm_base.hardware.errors import CommandRejectedError, ValueRangeError
-from rm_base.node_main import inbox_node
 from rm_base.plugin.inbox import Inbox
 from rm_base.plugin.inbox_status import InboxReport
 from rm_base.plugin.remote_power import POWER_LIMIT_QOS, POWER_LIMIT_TOPIC
-from rm_base.ros_logging import FastLogger
-from rm_base.ros_publish import publish
+from rm_base.ros.log import FastLogger
+from rm_base.ros.node_main import inbox_node
+from rm_base.ros.publish import publish
+from rm_base.runtime import compiled
 from rm_base.sim import SimConfigError, SimWorld, Timing
 from rm_msgs.msg import ActuatorCmd, ActuatorState, CanFrame, PowerLimit
 
@@ -156,10 +157,10 @@ class CanBridgeNode(Node):
             # feedback itself, so every tick is the same on every run.
             self.hardware = hw = CanHardware(
                 hardware, bus_factory=bus_factory, clock_ns=lambda: world.time_ns,
-                receive_in_loop=True,
+                receive_in_loop=True, families=motors,
             )
         else:
-            self.hardware = hw = CanHardware(hardware, bus_factory=bus_factory)
+            self.hardware = hw = CanHardware(hardware, bus_factory=bus_factory, families=motors)
         self._joints = frozenset(hw.joint_names)
         self._commands = commands = ActuatorCmdInput(
             hw, self._joints, settings.hardware_config.safety.command_timeout_s,
@@ -460,7 +461,7 @@ class CanBridgeNode(Node):
 
 
 def _loop_build() -> str:
-    """How the loop's modules run: compiled, or from source and why (rm_base/compiled.py)."""
+    """How the loop's modules run: compiled, or from source and why (runtime/compiled.py)."""
     reason = compiled.choose()
     if reason is None:
         return f'loop compiled ({len(compiled.MODULES)} modules)'

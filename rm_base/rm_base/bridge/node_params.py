@@ -17,11 +17,11 @@ from rclpy.parameter import Parameter
 
 from rm_base.bridge.errors import BridgeConfigError
 from rm_base.bridge.params import BridgeSettings, is_ros_own, plain, settings_from_parameters
-from rm_base.calibration import CalibrationFile, joint_zero_offsets
-from rm_base.config_schema import Schema
+from rm_base.config.calibration import CalibrationFile, joint_zero_offsets
+from rm_base.config.schema import Schema
 from rm_base.hardware.config import SAFETY_SCHEMA, SCHEDULER_SCHEMA
 from rm_base.plugin.params import PluginParams
-from rm_base.realtime import EDGE_PRIORITY, LOOP_PRIORITY
+from rm_base.runtime.realtime import EDGE_PRIORITY, LOOP_PRIORITY
 from rm_base.sim import Timing
 
 

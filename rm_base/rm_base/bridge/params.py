@@ -50,10 +50,10 @@ from pathlib import PurePath
 from types import MappingProxyType
 from typing import Any
 
-from rm_base import cpu_latency
 from rm_base.bridge.errors import BridgeConfigError
 from rm_base.hardware.config import SAFETY_SCHEMA, HardwareConfig
-from rm_base.realtime import EDGE_PRIORITY, LOOP_PRIORITY, choose_cpu
+from rm_base.runtime import cpu_latency
+from rm_base.runtime.realtime import EDGE_PRIORITY, LOOP_PRIORITY, choose_cpu
 from rm_base.sim import Timing
 
 #: Parameters every rclpy node has; never part of the bridge config.
@@ -108,12 +108,12 @@ class BridgeSettings:
         publish_frames: publish every CAN frame on ``~/frames``.
         sim: simulator settings, or None on real hardware.
         edge_priority: SCHED_FIFO priority the executable gives the process's other
-            threads (:func:`rm_base.realtime.raise_edge_priority`); 0: none.
+            threads (:func:`rm_base.runtime.realtime.raise_edge_priority`); 0: none.
         cpu_index: the CPU the executable keeps every Python thread of the process on,
-            an index into the CPUs it may use (:func:`rm_base.realtime.keep_on_cpu`);
+            an index into the CPUs it may use (:func:`rm_base.runtime.realtime.keep_on_cpu`);
             None: wherever the kernel puts them.
         cpu_latency_us: the wake-up latency the executable asks of idle CPUs
-            (:func:`rm_base.realtime.hold_cpu_latency`) [µs]; None: no request.
+            (:func:`rm_base.runtime.realtime.hold_cpu_latency`) [µs]; None: no request.
         calibration_max_speed: a joint turning faster is not at rest (set_zero) [rad/s].
     """
 

@@ -28,11 +28,11 @@ from rclpy.node import Node
 from rm_base.bridge.params import settings_from_parameters
 from rm_base.bridge.sim_config import world_config
 from rm_base.bridge.sim_services import SimFaultServices
+from rm_base.config.param_files import load_parameters
 from rm_base.errors import ConfigError
 from rm_base.hardware.config import SAFETY_SCHEMA
-from rm_base.node_main import init_ros, spin_until_shutdown
-from rm_base.param_files import load_parameters
-from rm_base.ros_env import die_with_parent
+from rm_base.ros.env import die_with_parent
+from rm_base.ros.node_main import init_ros, spin_until_shutdown
 from rm_base.sim import SimWorld
 from rm_base.sim.server import SimServer
 from rm_base.sim.socket_bus import default_socket_path

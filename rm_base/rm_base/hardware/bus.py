@@ -188,7 +188,7 @@ class ManagedBus:
         self._failure_listeners: list[Callable[[int], None]] = []
         self._stop = threading.Event()
         self._reopen_requested = False
-        # not _thread: compiled (rm_base/compiled.py), that is __thread in C, a keyword
+        # not _thread: compiled (rm_base/runtime/compiled.py), that is __thread in C, a keyword
         self._worker: threading.Thread | None = None
         self._lock = threading.Lock()  # open/close and shutdown
         self._backoff_s = config.reconnect_initial_s

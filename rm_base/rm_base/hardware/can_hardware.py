@@ -2,7 +2,7 @@
 
 This is the whole CAN layer behind one object; the ROS bridge node is a thin wrapper::
 
-    hw = CanHardware(config)               # schema: rm_base.hardware.config
+    hw = CanHardware(config, families=motors)   # schema: rm_base.hardware.config
     hw.start()                             # buses up, receive threads, 1 kHz scheduler
     hw.set_command('yaw', MODE_POSITION, position=0.3)
     hw.states()                            # [JointState(...)], ActuatorState fields
@@ -14,6 +14,11 @@ with ``receive_in_loop`` the buses have no receive threads and each tick begins 
 every frame received since the last one (the ``feedback`` stage), which makes the whole
 tick deterministic on a simulated clock (lockstep).
 The simulator plugs in as ``interface: rm_sim`` in a bus config (``virtual`` works too).
+
+The motor families (which actuator class a joint ``type`` is, which frames its family
+shares) are handed in as ``families``: the registry, ``rm_base.motors``, lives in a layer
+above this one (its families are built on the actuators here), so it is injected, never
+imported.
 """
 
 from __future__ import annotations
@@ -27,15 +32,16 @@ from typing import Any
 import can
 
 from rm_base.control import ChassisPowerModel
+from rm_base.errors import ConfigError
 from rm_base.hardware.actuators import Actuator, HoldReason, JointState, MitActuator
 from rm_base.hardware.bus import BusFactory, ManagedBus
 from rm_base.hardware.config import HardwareConfig
 from rm_base.hardware.errors import CommandRejectedError, HardwareConfigError
+from rm_base.hardware.families import GroupBuilder, MotorFamilies
 from rm_base.hardware.power_stage import PowerLimitStage
 from rm_base.hardware.protocols.mit import SystemCommand
 from rm_base.hardware.scheduler import Packer, Scheduler
 from rm_base.joints import JointTarget
-from rm_base.motors import GroupBuilder, UnknownTypeError, actuator_class, family_of
 
 _log = logging.getLogger(__name__)
 
@@ -47,6 +53,7 @@ class CanHardware:
         self,
         config: Mapping[str, Any] | HardwareConfig,
         *,
+        families: MotorFamilies,
         clock_ns: Callable[[], int] = time.perf_counter_ns,
         bus_factory: BusFactory = can.Bus,
         on_error: Callable[[Exception], bool] | None = None,
@@ -57,6 +64,7 @@ class CanHardware:
         Args:
             config: a config dict (schema in :mod:`rm_base.hardware.config`) or a parsed
                 :class:`HardwareConfig`.
+            families: the motor families' registry (the module ``rm_base.motors``).
             clock_ns: monotonic clock [ns] shared by feedback stamps, commands and ticks.
             bus_factory: builds python-can buses (``can.Bus``).
             on_error: scheduler error hook (return True to go on); the default logs, counts
@@ -83,10 +91,10 @@ class CanHardware:
         own_frames: list[Actuator] = []
         for joint in config.joints:
             try:
-                family = family_of(joint.type)
-            except UnknownTypeError as err:
+                family = families.family_of(joint.type)
+            except ConfigError as err:  # the registry's UnknownTypeError
                 raise HardwareConfigError(f'joints.{joint.name}.{err}') from None
-            actuator = actuator_class(joint.type)(joint, config.safety)
+            actuator = families.actuator_class(joint.type)(joint, config.safety)
             self.actuators[joint.name] = actuator
             if family.build_groups is None:
                 own_frames.append(actuator)

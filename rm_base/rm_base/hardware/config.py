@@ -20,7 +20,7 @@ from collections.abc import Mapping
 from types import MappingProxyType
 from typing import Any
 
-from rm_base.config_schema import Key, Schema, boolean, integer, mapping, number, one_of, string
+from rm_base.config.schema import Key, Schema, boolean, integer, mapping, number, one_of, string
 from rm_base.control import PidConfig, PidGains, pid_config
 from rm_base.errors import ConfigError
 from rm_base.hardware.errors import HardwareConfigError

@@ -51,7 +51,7 @@ from rm_base.hardware.timing import (
     DurationSummary,
     PeriodStats,
 )
-from rm_base.realtime import loop_thread, set_fifo_priority
+from rm_base.runtime.realtime import loop_thread, set_fifo_priority
 
 _log = logging.getLogger(__name__)
 
@@ -164,7 +164,7 @@ class Scheduler:
         self._frames: list[tuple[Callable[[can.Message], object], can.Message]] = []
         self._observer: Callable[[int, int], object] | None = None
         self._stop = threading.Event()
-        # not _thread: compiled (rm_base/compiled.py), that is __thread in C, a keyword
+        # not _thread: compiled (rm_base/runtime/compiled.py), that is __thread in C, a keyword
         self._worker: threading.Thread | None = None
         self._final: Callable[[], None] | None = None
         # statistics

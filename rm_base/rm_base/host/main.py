@@ -8,7 +8,7 @@ from rclpy.executors import Executor, SingleThreadedExecutor
 from rclpy.experimental import EventsExecutor
 
 from rm_base.host.node import NODE_NAME, ExecutorKind, RobotHost
-from rm_base.node_main import run_node
+from rm_base.ros.node_main import run_node
 
 USAGE = """usage: rm_robot --ros-args --params-file ROBOT.yaml
                 [--params-file MORE.yaml] [-p NAME:=VALUE]

@@ -17,7 +17,6 @@ from rm_base.hardware import CanHardware, Scheduler
 from rm_base.host.command_sources import read_command_sources
 from rm_base.host.plugin_task import PluginTask, TickInputs
 from rm_base.host.process_params import process_settings
-from rm_base.node_main import inbox_node
 from rm_base.plugin import PluginBase, PluginLoader, PluginParams
 from rm_base.plugin.command_mux import CommandMux
 from rm_base.plugin.command_mux_status import command_sources_status
@@ -27,8 +26,9 @@ from rm_base.plugin.inbox import Inbox
 from rm_base.plugin.inbox_status import InboxReport
 from rm_base.plugin.node_io import DdsJointIO, NodeIO, node_io, use_local_io
 from rm_base.plugin.outbox import Outbox
-from rm_base.realtime import shorten_gil_switch_interval
-from rm_base.ros_logging import FastLogger
+from rm_base.ros.log import FastLogger
+from rm_base.ros.node_main import inbox_node
+from rm_base.runtime.realtime import shorten_gil_switch_interval
 
 NODE_NAME = 'rm_robot'
 

@@ -9,10 +9,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from rm_base import cpu_latency
 from rm_base.plugin import PluginParams
 from rm_base.plugin.errors import ParameterError
-from rm_base.realtime import EDGE_PRIORITY, LOOP_PRIORITY, choose_cpu
+from rm_base.runtime import cpu_latency
+from rm_base.runtime.realtime import EDGE_PRIORITY, LOOP_PRIORITY, choose_cpu
 
 
 @dataclass(frozen=True)

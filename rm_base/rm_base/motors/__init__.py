@@ -5,7 +5,8 @@ and how the simulator stands in for its motors (:class:`MotorFamily`). The hardw
 the bridge and the simulator ask the registry, never a family by name.
 """
 
-from rm_base.motors.family import DeviceParts, GroupBuilder, MotorFamily, SimFamily
+from rm_base.hardware.families import GroupBuilder
+from rm_base.motors.family import DeviceParts, MotorFamily, SimFamily
 from rm_base.motors.registry import (
     BUILT_IN,
     ENTRY_POINT_GROUP,

@@ -4,37 +4,18 @@ from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Protocol
+from typing import TYPE_CHECKING, Any
 
-import can
-
-from rm_base.config_schema import Schema
+from rm_base.config.schema import Schema
+from rm_base.hardware.families import GroupBuilder
 
 if TYPE_CHECKING:
     from rm_base.hardware.actuators.base import Actuator
     from rm_base.hardware.config import JointConfig
-    from rm_base.sim.devices import SimDevice
-    from rm_base.sim.motor import MotorModel
-    from rm_base.sim.motor_params import MotorParams
+    from rm_base.sim_devices.device import SimDevice
+    from rm_base.sim_devices.motor import MotorModel
+    from rm_base.sim_devices.motor_params import MotorParams
 
-class SharedFrame(Protocol):
-    """The owner of a command frame that several motors share (a DJI group)."""
-
-    bus_name: str
-    arbitration_id: int
-
-    @property
-    def name(self) -> str:
-        """Readable name for logs (``can0/0x200``)."""
-        ...
-
-    def pack_command(self) -> can.Message:
-        """The frame with every member's current command."""
-        ...
-
-
-#: Builds the shared frames of a family's actuators (those of the robot, that family's).
-GroupBuilder = Callable[[Sequence['Actuator']], Sequence[SharedFrame]]
 
 
 @dataclass(frozen=True)
@@ -46,7 +27,7 @@ class DeviceParts:
         sim_type: the simulated motor type (a key of the family's ``models``).
         motor_id: ESC id (DJI) or CAN id.
         model: its physics, built from the type's defaults and the config's overrides.
-        common: keyword arguments for :class:`~rm_base.sim.devices.SimDevice` (seed,
+        common: keyword arguments for :class:`~rm_base.sim_devices.device.SimDevice` (seed,
             overtemp_c).
     """
 

@@ -55,7 +55,7 @@ from rm_base.plugin.node_io import NodeIO, node_io
 from rm_base.plugin.outbox import is_heard, publish_built
 from rm_base.plugin.params import PluginParams
 from rm_base.plugin.state_machine import DefaultState, StateMachine, Transition
-from rm_base.ros_logging import FastLogger
+from rm_base.ros.log import FastLogger
 from rm_msgs.msg import PluginState
 
 _NS_PER_S = 1_000_000_000

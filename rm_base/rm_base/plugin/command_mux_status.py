@@ -9,8 +9,8 @@ from __future__ import annotations
 
 from diagnostic_msgs.msg import DiagnosticStatus
 
-from rm_base.diagnostic_status import diagnostic_status
 from rm_base.plugin.command_mux import CommandMux
+from rm_base.ros.diagnostics import diagnostic_status
 
 #: The status's name after ``<node>: ``.
 STATUS_NAME = 'command sources'

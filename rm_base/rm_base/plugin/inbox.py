@@ -2,9 +2,9 @@
 
 A message an executor delivers costs the loop a thread switch and a wait for the GIL
 behind the executor's thread (docs/PERFORMANCE.md). The inbox's subscriptions live on a
-node that no executor spins (``rm_base.node_main.inbox_node`` makes one beside the owner).
+node that no executor spins (``rm_base.ros.node_main.inbox_node`` makes one beside the owner).
 The inbox's own thread waits on them (rclpy's wait set, the GIL released while it waits),
-takes what arrives (:class:`rm_base.ros_take.TakeBuffer`: the GIL released while rcl
+takes what arrives (:class:`rm_base.ros.take.TakeBuffer`: the GIL released while rcl
 takes) and appends its serialised bytes to the subscription's queue. The loop's first
 stage, :meth:`Inbox.__call__`, deserialises every queued message, stamps it with the
 tick's receive time and hands it to the plugin's callback, the same callback a
@@ -15,7 +15,7 @@ thread that wakes for each message it cost several times as much (docs/PERFORMAN
 The loop itself never takes from DDS: a take can wait a third of a second for Fast DDS's locks
 when another node joins (docs/PERFORMANCE.md, "The take that still stopped the loop"), and
 then only this thread waits. Its priority is below the loop's and it runs on the loop's
-CPU (``rm_base.realtime``), so it takes in the loop's sleep, never mid-tick.
+CPU (``rm_base.runtime.realtime``), so it takes in the loop's sleep, never mid-tick.
 
 A queue holds as many messages as the subscription's QoS depth, as DDS would: if the loop
 falls behind, the oldest are dropped, counted per topic and logged. Messages DDS itself
@@ -41,7 +41,7 @@ from rclpy.qos import HistoryPolicy, QoSProfile
 from rclpy.serialization import deserialize_message
 
 from rm_base.plugin.commands import LogThrottle
-from rm_base.ros_take import MessageInfo, SequenceGaps, TakeBuffer
+from rm_base.ros.take import MessageInfo, SequenceGaps, TakeBuffer
 
 _log = logging.getLogger(__name__)
 

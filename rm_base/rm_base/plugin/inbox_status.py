@@ -12,7 +12,7 @@ from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticStatus
 
-from rm_base.diagnostic_status import diagnostic_status
+from rm_base.ros.diagnostics import diagnostic_status
 
 
 class InboxReport:

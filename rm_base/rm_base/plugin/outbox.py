@@ -45,7 +45,7 @@ from rclpy.qos import DurabilityPolicy
 from rclpy.serialization import serialize_message
 
 from rm_base.plugin.commands import LogThrottle
-from rm_base.ros_publish import publish
+from rm_base.ros.publish import publish
 
 _log = logging.getLogger(__name__)
 

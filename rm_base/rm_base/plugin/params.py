@@ -23,8 +23,8 @@ from typing import Any, TypeVar
 
 from rcl_interfaces.msg import ParameterDescriptor
 
-from rm_base import config_schema as schema
-from rm_base.config_schema import (
+from rm_base.config import schema
+from rm_base.config.schema import (
     REQUIRED,
     Bounds,
     DeclaredParameter,
@@ -179,7 +179,7 @@ class PluginParams:
         )
 
     def declare_key(self, key: Key) -> Any:
-        """Declare and read a key of a config schema (:mod:`rm_base.config_schema`).
+        """Declare and read a key of a config schema (:mod:`rm_base.config.schema`).
 
         The parameter takes the key's type, unit, bounds, default and description, which
         are declared once, in the schema.

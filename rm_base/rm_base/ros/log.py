@@ -17,7 +17,7 @@ rcutils sends each line on /rosout in the thread that logs, and rclpy keeps the 
 the call; a send can block a third of a second while a /rosout subscriber joins
 (docs/PERFORMANCE.md, "A log line that stopped the loop"). So the call goes through
 ctypes, which releases the GIL, and a control loop's thread
-(:func:`rm_base.realtime.loop_thread`) does not make it at all: its lines wait in a
+(:func:`rm_base.runtime.realtime.loop_thread`) does not make it at all: its lines wait in a
 queue that a thread of their own writes, in order with every other thread's lines.
 """
 
@@ -35,8 +35,8 @@ from typing import Any, NamedTuple
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.logging import LoggingSeverity
 
-from rm_base.realtime import at_most_edge_priority, in_loop_thread
-from rm_base.ros_publish import load_function
+from rm_base.ros.publish import load_function
+from rm_base.runtime.realtime import at_most_edge_priority, in_loop_thread
 
 _OWN_FILTERS = frozenset({'throttle_duration_sec', 'once'})
 #: Lines of a loop thread held at most while the writing thread is blocked.
@@ -175,7 +175,7 @@ class LoopLines:
                     if not self._held:  # else release() wakes the thread again
                         self._drain()
             except Exception as err:  # the thread must go on; rcutils is what failed
-                sys.stderr.write(f'rm_base.ros_logging: a log line was lost: {err!r}\n')
+                sys.stderr.write(f'rm_base.ros.log: a log line was lost: {err!r}\n')
 
 
 _LOOP_LINES = LoopLines()

@@ -23,8 +23,8 @@ from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
 from rm_base.errors import ConfigError
-from rm_base.realtime import prepare_loop_process
-from rm_base.ros_env import init_error_line, params_file_error, prepare_ros_process
+from rm_base.ros.env import init_error_line, params_file_error, prepare_ros_process
+from rm_base.runtime.realtime import prepare_loop_process
 
 
 def inbox_node(owner: Node) -> Node:

@@ -9,7 +9,7 @@ stopped the loop"). With the GIL held, that stops every Python thread of the pro
 Here ``rcl_take_serialized_message``, rcl's own entry point for serialised messages, runs
 through ctypes, which releases the GIL for the call; the bytes are then deserialised under
 the GIL (one short C call), by this thread or by the one that uses the message. The
-counterpart of :mod:`rm_base.ros_publish`.
+counterpart of :mod:`rm_base.ros.publish`.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from typing import Any
 
 from rclpy.serialization import deserialize_message
 
-from rm_base.ros_publish import Allocator, SerializedMessage, load_function
+from rm_base.ros.publish import Allocator, SerializedMessage, load_function
 
 #: Capacity a new buffer starts with [bytes]; rmw grows it for a larger message.
 INITIAL_CAPACITY = 256

@@ -57,9 +57,13 @@ STAMP_NAME = 'compiled_stamp.json'
 _log = logging.getLogger(__name__)
 
 
+# rm_base's own folder (this module lives in rm_base/runtime/)
+_RM_BASE = Path(__file__).parents[1]
+
+
 def _package_dir(package: str) -> Path | None:
     if package == 'rm_base':
-        return Path(__file__).parent
+        return _RM_BASE
     spec = importlib.util.find_spec(package)  # finds, does not import
     if spec is None or not spec.submodule_search_locations:
         return None
@@ -78,7 +82,7 @@ def source_path(module: str) -> Path | None:
 
 def stamp_path() -> Path:
     """Where the build records what it compiled."""
-    return Path(__file__).parent / STAMP_NAME
+    return _RM_BASE / STAMP_NAME
 
 
 def digest(path: Path) -> str:

@@ -28,7 +28,7 @@ import threading
 from collections.abc import Iterator
 from pathlib import Path
 
-from rm_base import cpu_latency
+from rm_base.runtime import cpu_latency
 
 _log = logging.getLogger(__name__)
 
@@ -55,7 +55,7 @@ def loop_thread() -> Iterator[None]:
     """Within it, the calling thread runs a control loop: nothing it calls may block on I/O.
 
     What could block goes to another thread instead: its log lines, for one
-    (rm_base.ros_logging), since rcutils sends each on /rosout in the caller's thread.
+    (rm_base.ros.log), since rcutils sends each on /rosout in the caller's thread.
     """
     _thread_role.loop = True
     try:
@@ -276,7 +276,7 @@ def raise_edge_priority(priority: int = EDGE_PRIORITY) -> bool:
 def hold_cpu_latency(max_us: int | None) -> bool:
     """Keep idle CPUs waking within max_us [µs] while the process runs (None: no request).
 
-    See :mod:`rm_base.cpu_latency`. Without the right to it, one warning and no request.
+    See :mod:`rm_base.runtime.cpu_latency`. Without the right to it, one warning and no request.
 
     Returns:
         Whether the request is held.

@@ -27,10 +27,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rm_base.geometry import SwerveKinematics, WheelKinematics, rotation_matrix_from_rpy
-from rm_base.sim.devices import SimDevice
-from rm_base.sim.errors import SimConfigError
 from rm_base.sim.joint import Joint
 from rm_base.sim.launcher import Launcher
+from rm_base.sim_devices.device import SimDevice
+from rm_base.sim_devices.errors import SimConfigError
 
 
 class Mount(Enum):

@@ -1,7 +1,7 @@
 """The simulated body's config, declared once: the ``body`` of a world (``sim.body``).
 
 Each table (the body, the chassis of each ``type``, a wheel, the gimbal's joints, the
-launcher) is a :class:`~rm_base.config_schema.Schema`: reading a config through it gives
+launcher) is a :class:`~rm_base.config.schema.Schema`: reading a config through it gives
 errors naming the key (``body.chassis.wheelbase must be > 0.0, got -0.4``), and the same
 schemas print the ``sim.body`` rows of docs/PARAMETERS.md (:data:`BODY_TABLES`). Motors
 are named, not configured, here: each name must be a motor of the world.
@@ -12,7 +12,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any, NamedTuple
 
-from rm_base.config_schema import (
+from rm_base.config.schema import (
     REQUIRED,
     Schema,
     boolean,
@@ -36,10 +36,10 @@ from rm_base.geometry import (
     square_modules,
 )
 from rm_base.sim.body import Chassis, RobotBody
-from rm_base.sim.devices import SimDevice
-from rm_base.sim.errors import SimConfigError
 from rm_base.sim.joint import Joint
 from rm_base.sim.launcher import CALIBRES, Launcher
+from rm_base.sim_devices.device import SimDevice
+from rm_base.sim_devices.errors import SimConfigError
 
 #: ``body``: every part is optional (a world may be a bare bench of motors).
 BODY_SCHEMA = Schema((

@@ -34,8 +34,8 @@ import can
 from can.typechecking import AutoDetectedConfig, CanFilters
 
 from rm_base.sim.channel import SimChannel, channel_names, find_channel
-from rm_base.sim.errors import SimConfigError
 from rm_base.sim.world import SimWorld, Timing, load_config
+from rm_base.sim_devices.errors import SimConfigError
 
 LOG = logging.getLogger(__name__)
 

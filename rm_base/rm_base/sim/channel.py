@@ -20,8 +20,8 @@ from typing import TYPE_CHECKING, Protocol
 
 import can
 
-from rm_base.sim.devices import Frame, SimDevice
-from rm_base.sim.errors import SimConfigError, SimStateError
+from rm_base.sim_devices.device import Frame, SimDevice
+from rm_base.sim_devices.errors import SimConfigError, SimStateError
 
 if TYPE_CHECKING:
     from rm_base.sim.world import SimWorld

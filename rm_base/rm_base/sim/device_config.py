@@ -10,13 +10,13 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from rm_base.config_schema import Schema, integer, number, string
+from rm_base.config.schema import Schema, integer, number, string
 from rm_base.hardware.errors import HardwareConfigError, ValueRangeError
 from rm_base.motors import DeviceParts, UnknownTypeError, families, sim_family
-from rm_base.sim.devices import STD_ID_MAX, SimDevice
-from rm_base.sim.errors import SimConfigError
-from rm_base.sim.motor import MotorModel
-from rm_base.sim.motor_params import PHYSICS_SCHEMA
+from rm_base.sim_devices.device import STD_ID_MAX, SimDevice
+from rm_base.sim_devices.errors import SimConfigError
+from rm_base.sim_devices.motor import MotorModel
+from rm_base.sim_devices.motor_params import PHYSICS_SCHEMA
 
 #: The keys every simulated motor has; its physics (PHYSICS_SCHEMA) and its family's
 #: keys (``SimFamily.schema``) complete them.
@@ -42,7 +42,7 @@ MOTOR_SCHEMA = Schema(
 def device_from_config(config: Mapping[str, Any], *, seed: int = 0) -> SimDevice:
     """Build a simulated motor from a plain dict.
 
-    Keys: :data:`MOTOR_SCHEMA`, :data:`~rm_base.sim.motor_params.PHYSICS_SCHEMA` (each
+    Keys: :data:`MOTOR_SCHEMA`, :data:`~rm_base.sim_devices.motor_params.PHYSICS_SCHEMA` (each
     defaulting to the type's model) and the family's ``SimFamily.schema``
     (docs/PARAMETERS.md lists them all).
 

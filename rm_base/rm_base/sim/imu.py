@@ -15,15 +15,15 @@ from typing import Any, TypedDict
 
 import numpy as np
 
-from rm_base.config_schema import Schema, integer, number, numbers, string
+from rm_base.config.schema import Schema, integer, number, numbers, string
 from rm_base.geometry import (
     rotation_matrix_from_rpy,
 )
 from rm_base.hardware.protocols import hipnuc
-from rm_base.sim._schedule import RateSchedule
 from rm_base.sim.body import Mount, RobotBody
-from rm_base.sim.errors import SimConfigError
 from rm_base.sim.pty_port import PtyPort
+from rm_base.sim_devices.errors import SimConfigError
+from rm_base.sim_devices.schedule import RateSchedule
 
 _NS_PER_S = 1_000_000_000
 _NS_PER_MS = 1_000_000

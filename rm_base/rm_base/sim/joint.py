@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from rm_base.sim.devices import SimDevice
+from rm_base.sim_devices.device import SimDevice
 
 
 @dataclass(frozen=True)

@@ -18,9 +18,9 @@ import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-from rm_base.sim.devices import SimDevice
-from rm_base.sim.errors import SimConfigError
 from rm_base.sim.joint import Joint
+from rm_base.sim_devices.device import SimDevice
+from rm_base.sim_devices.errors import SimConfigError
 
 CALIBRES = (17, 42)
 

@@ -13,10 +13,10 @@ import dataclasses
 from collections.abc import Callable, Mapping
 from typing import Any, Generic, TypeVar
 
-from rm_base.config_schema import Schema, string
-from rm_base.sim._schedule import RateSchedule
-from rm_base.sim.errors import SimConfigError
+from rm_base.config.schema import Schema, string
 from rm_base.sim.pty_port import PtyPort
+from rm_base.sim_devices.errors import SimConfigError
+from rm_base.sim_devices.schedule import RateSchedule
 
 State = TypeVar('State')
 

@@ -19,7 +19,7 @@ import termios
 import threading
 import tty
 
-from rm_base.sim.errors import SimConfigError
+from rm_base.sim_devices.errors import SimConfigError
 
 
 def expand_path(path: str) -> str:

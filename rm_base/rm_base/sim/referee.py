@@ -20,7 +20,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from rm_base.config_schema import Schema, integer, number, one_of, string
+from rm_base.config.schema import Schema, integer, number, one_of, string
 from rm_base.hardware.protocols.referee import (
     GameProgress,
     GameStatus,
@@ -28,11 +28,11 @@ from rm_base.hardware.protocols.referee import (
     encode_frame,
     encode_status,
 )
-from rm_base.sim.devices import SimDevice
-from rm_base.sim.errors import SimConfigError
 from rm_base.sim.launcher import Launcher, Shot
 from rm_base.sim.pty_port import PtyPort
 from rm_base.sim.referee_rules import STEP_NS, Outputs, RefereeRules, RefereeSettings
+from rm_base.sim_devices.device import SimDevice
+from rm_base.sim_devices.errors import SimConfigError
 
 _NS_PER_S = 1_000_000_000
 _GAME_STATUS_EVERY = 10  # rule steps: 1 Hz

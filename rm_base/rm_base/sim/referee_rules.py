@@ -30,7 +30,7 @@ from rm_base.hardware.protocols.referee import (
     RobotStatus,
     ShootData,
 )
-from rm_base.sim.errors import SimConfigError
+from rm_base.sim_devices.errors import SimConfigError
 
 _NS_PER_S = 1_000_000_000
 #: The referee's rule period [s].

@@ -14,13 +14,13 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 from rm_base.sim.body import RobotBody
-from rm_base.sim.errors import SimConfigError, SimLookupError, SimStateError
 from rm_base.sim.image_link import SimImageLink
 from rm_base.sim.imu import SimImu, imu_from_config
 from rm_base.sim.launcher import Shot
 from rm_base.sim.operator_link import link_from_config
 from rm_base.sim.referee import SimReferee, referee_from_config
 from rm_base.sim.remote import SimRemote
+from rm_base.sim_devices.errors import SimConfigError, SimLookupError, SimStateError
 
 #: A simulated device on a serial port.
 SerialDevice = SimImu | SimReferee | SimRemote | SimImageLink

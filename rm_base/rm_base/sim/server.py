@@ -27,8 +27,8 @@ import can
 
 from rm_base.sim import wire
 from rm_base.sim.channel import SimChannel
-from rm_base.sim.errors import SimError, SimLookupError
 from rm_base.sim.world import SimWorld
+from rm_base.sim_devices.errors import SimError, SimLookupError
 
 _log = logging.getLogger(__name__)
 

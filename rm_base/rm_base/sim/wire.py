@@ -20,7 +20,7 @@ from collections.abc import Iterable
 
 import can
 
-from rm_base.sim.errors import SimError
+from rm_base.sim_devices.errors import SimError
 
 HELLO = b'rm_sim 1 '
 OK = b'OK'

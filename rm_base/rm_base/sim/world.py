@@ -31,19 +31,19 @@ from enum import Enum
 from pathlib import Path
 from typing import Any
 
-from rm_base import realtime
+from rm_base.runtime import realtime
 from rm_base.sim.body import RobotBody
 from rm_base.sim.body_config import body_from_config
 from rm_base.sim.channel import SimChannel, register_channel, release_channel
 from rm_base.sim.device_config import check_channel, device_from_config
-from rm_base.sim.devices import SimDevice
-from rm_base.sim.errors import SimConfigError, SimLookupError, SimStateError
-from rm_base.sim.faults import Fault, FaultKind
 from rm_base.sim.image_link import SimImageLink
 from rm_base.sim.imu import SimImu
 from rm_base.sim.referee import SimReferee
 from rm_base.sim.remote import SimRemote
 from rm_base.sim.serial_devices import SerialDevice, SerialDevices
+from rm_base.sim_devices.device import SimDevice
+from rm_base.sim_devices.errors import SimConfigError, SimLookupError, SimStateError
+from rm_base.sim_devices.faults import Fault, FaultKind
 
 LOG = logging.getLogger(__name__)
 

@@ -1,6 +1,6 @@
 """Simulated motor drivers on a CAN bus: the shared device base.
 
-Each device owns a :class:`~rm_base.sim.motor.MotorModel` and behaves on the bus like the
+Each device owns a :class:`~rm_base.sim_devices.motor.MotorModel` and behaves on the bus like the
 real driver, using the device side of its family's protocol for every byte; the devices
 are in the family folders (``rm_base.motors.<family>.sim_device``), built from config
 dicts by :mod:`rm_base.sim.device_config` through the family registry.
@@ -21,10 +21,10 @@ from dataclasses import dataclass
 from typing import Any, ClassVar
 
 from rm_base.hardware.errors import ProtocolError, ValueRangeError
-from rm_base.sim._schedule import RateSchedule
-from rm_base.sim.faults import Fault, FaultKind
-from rm_base.sim.motor import MotorModel
-from rm_base.sim.motor_params import MotorType
+from rm_base.sim_devices.faults import Fault, FaultKind
+from rm_base.sim_devices.motor import MotorModel
+from rm_base.sim_devices.motor_params import MotorType
+from rm_base.sim_devices.schedule import RateSchedule
 
 #: A frame a device sends: (11-bit arbitration id, data bytes).
 Frame = tuple[int, bytes]

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from enum import Enum
 from typing import Any
 
-from rm_base.sim.errors import SimConfigError
+from rm_base.sim_devices.errors import SimConfigError
 
 
 class FaultKind(Enum):

@@ -9,9 +9,9 @@ from __future__ import annotations
 from abc import abstractmethod
 
 from rm_base.hardware.protocols import mit
-from rm_base.sim.devices import Frame, SimDevice
-from rm_base.sim.motor import MotorModel
-from rm_base.sim.motor_params import MotorType
+from rm_base.sim_devices.device import Frame, SimDevice
+from rm_base.sim_devices.motor import MotorModel
+from rm_base.sim_devices.motor_params import MotorType
 
 
 class MitDevice(SimDevice):

@@ -31,7 +31,7 @@ import math
 from enum import Enum
 from typing import NamedTuple
 
-from rm_base.sim.motor_params import MotorParams
+from rm_base.sim_devices.motor_params import MotorParams
 
 #: Rotor encoder counts per rotor revolution on DJI motors.
 DJI_ENCODER_COUNTS = 8192

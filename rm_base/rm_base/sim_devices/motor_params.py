@@ -1,6 +1,6 @@
 """What a simulated motor is: its physical constants, and the built-in models' values.
 
-Output-shaft values (what users configure); :mod:`rm_base.sim.motor` turns them into the
+Output-shaft values (what users configure); :mod:`rm_base.sim_devices.motor` turns them into the
 rotor-side model that moves.
 """
 
@@ -10,8 +10,8 @@ import dataclasses
 from dataclasses import dataclass
 from enum import Enum
 
-from rm_base.config_schema import Key, Schema, number
-from rm_base.sim.errors import SimConfigError
+from rm_base.config.schema import Key, Schema, number
+from rm_base.sim_devices.errors import SimConfigError
 
 
 class MotorType(Enum):

@@ -10,7 +10,7 @@ from collections.abc import Iterator
 from contextlib import contextmanager
 from typing import TYPE_CHECKING
 
-from rm_base.ros_env import prepare_ros_process
+from rm_base.ros.env import prepare_ros_process
 
 from .errors import CliError
 
@@ -33,7 +33,7 @@ def cli_node(verb: str, *, name: str | None = None) -> Iterator[Node]:
     """Yield a hidden node in a private, initialised rclpy context; shut both down after.
 
     Discovery stays on localhost unless ROS_AUTOMATIC_DISCOVERY_RANGE is set (network
-    rule), and SIGTERM ends the verb like SIGINT (rm_base.ros_env).
+    rule), and SIGTERM ends the verb like SIGINT (rm_base.ros.env).
 
     Args:
         verb: short name for the node, e.g. ``'topic_pub'``.
@@ -54,7 +54,7 @@ def cli_node(verb: str, *, name: str | None = None) -> Iterator[Node]:
 
     context = Context()
     # rclpy's own SIGINT handler would shut the context down under our feet (see
-    # rm_base.ros_env); Python's KeyboardInterrupt lets each verb finish cleanly instead.
+    # rm_base.ros.env); Python's KeyboardInterrupt lets each verb finish cleanly instead.
     # args: not sys.argv, in which rcl would take `--remap /a:=/b` for its own (deprecated)
     # remap syntax and warn; rmcli has no ROS arguments of its own.
     rclpy.init(args=['rmcli'], context=context, signal_handler_options=SignalHandlerOptions.NO)

@@ -37,7 +37,7 @@ import math
 import threading
 
 from diagnostic_msgs.msg import DiagnosticArray
-from rm_base.calibration import CalibrationError, CalibrationFile, finite_values
+from rm_base.config.calibration import CalibrationError, CalibrationFile, finite_values
 from rm_base.hardware.device_clock import DeviceClock
 from rm_base.hardware.protocols.hipnuc import HipnucParser, ImuSample
 from rm_base.plugin import PluginBase, PluginParams

@@ -17,8 +17,8 @@ from typing import Any
 
 import serial
 from diagnostic_msgs.msg import DiagnosticStatus
-from rm_base.diagnostic_status import diagnostic_status
 from rm_base.plugin import PluginConfigError, PluginParams
+from rm_base.ros.diagnostics import diagnostic_status
 
 from rm_plugins.serial.reader import FrameStream, ReaderStats, SerialReader
 

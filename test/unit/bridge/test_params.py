@@ -12,9 +12,8 @@ from rm_base.bridge.params import (
     with_sim_world,
 )
 from rm_base.hardware import HardwareConfigError
+from rm_base.runtime import realtime
 from rm_base.sim import Timing
-
-from rm_base import realtime
 
 YAW = {
     'buses.can0.interface': 'socketcan',

@@ -8,7 +8,7 @@ import pytest
 from rm_base.hardware.errors import HardwareConfigError
 from rm_base.hardware.scheduler import Scheduler
 from rm_base.hardware.timing import HISTOGRAM_EDGES_US
-from rm_base.realtime import in_loop_thread
+from rm_base.runtime.realtime import in_loop_thread
 from support.hardware import MS, T0
 from support.ros import wait_until
 

@@ -10,6 +10,8 @@ from rm_base.hardware import MODE_EFFORT, MODE_MIT, CanHardware
 from rm_base.sim.world import SimWorld
 from support.hardware import FakeClock, sim_factory, wait_fresh
 
+from rm_base import motors
+
 
 @pytest.fixture
 def world(channel):
@@ -38,7 +40,9 @@ def test_effort_and_native_mit_against_simulated_motors(channel, world):
             'arm': {'type': 'dm4310', 'bus': 'can0', 'id': 2},  # master id 0x12 in both
         },
     }
-    hw = CanHardware(cfg, clock_ns=clock, bus_factory=sim_factory, receive_in_loop=False)
+    hw = CanHardware(
+        cfg, clock_ns=clock, bus_factory=sim_factory, receive_in_loop=False, families=motors,
+    )
     with hw:
         hw.open()
         world.step(1)
@@ -72,7 +76,9 @@ def _velocity_run(channel, world, velocity_pid):
         'joints': {'wheel': {'type': 'm3508', 'bus': 'can0', 'id': 1,
                              'velocity_pid': velocity_pid}},
     }
-    hw = CanHardware(cfg, clock_ns=clock, bus_factory=sim_factory, receive_in_loop=False)
+    hw = CanHardware(
+        cfg, clock_ns=clock, bus_factory=sim_factory, receive_in_loop=False, families=motors,
+    )
     early = None
     with hw:
         hw.open()

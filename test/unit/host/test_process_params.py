@@ -5,8 +5,7 @@ import rclpy
 from rclpy.parameter import Parameter
 from rm_base.host.process_params import process_settings
 from rm_base.plugin import ParameterError, PluginParams
-
-from rm_base import realtime
+from rm_base.runtime import realtime
 
 pytestmark = pytest.mark.ros
 

@@ -9,8 +9,8 @@ from rm_base.hardware.errors import HardwareConfigError
 from rm_base.motors import MotorFamily, MotorFamilyError, UnknownTypeError
 from rm_base.motors.cheetah.actuator import Cheetah
 from rm_base.motors.dji.actuator import M3508, Gm6020Voltage
-from rm_base.sim.errors import SimConfigError
 from rm_base.sim.world import SimWorld
+from rm_base.sim_devices.errors import SimConfigError
 from support.hardware import FakeClock, joint, sim_factory, wait_fresh
 
 from rm_base import motors
@@ -18,7 +18,7 @@ from rm_base import motors
 # A motor family of its own package, as a team would ship it: an MIT-protocol joint type
 # and its simulated motor, registered through the rm_base.motor_families entry point.
 ACME_MODULE = """
-from rm_base.config_schema import Schema, integer
+from rm_base.config.schema import Schema, integer
 from rm_base.motors import MotorFamily, SimFamily
 from rm_base.motors.cheetah import protocol as cheetah
 from rm_base.motors.cheetah.actuator import Cheetah
@@ -113,7 +113,7 @@ def test_a_family_from_an_entry_point_drives_its_simulated_motor(tmp_path, monke
         },
         clock_ns=clock,
         bus_factory=sim_factory,
-        receive_in_loop=False,
+        receive_in_loop=False, families=motors,
     )
     try:
         with hw:
@@ -137,7 +137,7 @@ def test_without_the_entry_point_the_type_is_unknown_to_hardware_and_simulator()
             {
                 'buses': {'can0': {'interface': 'virtual', 'channel': 'x'}},
                 'joints': {'arm': {'type': 'acme_mit', 'bus': 'can0', 'id': 3}},
-            }
+            }, families=motors
         )
     with pytest.raises(SimConfigError, match="unknown motor type 'acme_sim'"):
         SimWorld(timing='stepped').add_channel('acme-none', [{'type': 'acme_sim', 'id': 3}])

@@ -10,14 +10,13 @@ from rclpy.context import Context
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from rm_base.hardware.scheduler import Scheduler
-from rm_base.node_main import inbox_node
 from rm_base.plugin.inbox import MAX_QUEUED, Inbox, queue_depth
 from rm_base.plugin.node_io import DdsJointIO
 from rm_base.plugin.outbox import Outbox
+from rm_base.ros import take as ros_take
+from rm_base.ros.node_main import inbox_node
 from std_msgs.msg import UInt32
 from support.ros import wait_until
-
-from rm_base import ros_take
 
 
 def _take_until(inbox, got, count, timeout=5.0):

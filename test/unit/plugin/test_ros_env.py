@@ -1,10 +1,10 @@
-"""rm_base.ros_env: localhost discovery by default, SIGTERM handled like SIGINT. No ROS."""
+"""rm_base.ros.env: localhost discovery by default, SIGTERM handled like SIGINT. No ROS."""
 
 import os
 import signal
 
 import pytest
-from rm_base.ros_env import (
+from rm_base.ros.env import (
     init_error_line,
     params_file_error,
     prepare_ros_process,

@@ -1,4 +1,4 @@
-"""Physics of rm_base.sim.motor: torque balance, friction, limits, encoder, heat, stability."""
+"""Physics of rm_base.sim_devices.motor: torque balance, friction, limits, encoder, heat."""
 
 import itertools
 import math
@@ -6,9 +6,9 @@ import math
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from rm_base.sim.errors import SimConfigError
-from rm_base.sim.motor import DJI_ENCODER_COUNTS, DriveMode, MotorModel
-from rm_base.sim.motor_params import MOTOR_DEFAULTS, MotorType, motor_params
+from rm_base.sim_devices.errors import SimConfigError
+from rm_base.sim_devices.motor import DJI_ENCODER_COUNTS, DriveMode, MotorModel
+from rm_base.sim_devices.motor_params import MOTOR_DEFAULTS, MotorType, motor_params
 
 DT = 1e-3
 

@@ -48,7 +48,7 @@ from typing import Any, ClassVar, NamedTuple
 import can
 from mypy_extensions import mypyc_attr
 
-from rm_base.config_schema import Schema, unknown_keys_message
+from rm_base.config.schema import Schema, unknown_keys_message
 from rm_base.control import build_pid
 from rm_base.hardware.config import JOINT_SCHEMA, JointConfig, SafetyConfig
 from rm_base.hardware.errors import CommandRejectedError, HardwareConfigError, ProtocolError
@@ -190,7 +190,7 @@ def _clamp(x: float, limit: float) -> float:
     return limit if x > limit else -limit if x < -limit else x
 
 
-# Compiled (rm_base/compiled.py); other motor families and tests subclass it. Not an
+# Compiled (rm_base/runtime/compiled.py); other motor families and tests subclass it. Not an
 # abc.ABC: compiled, its subclasses would share one isinstance cache (docs/ARCHITECTURE.md,
 # "The compiled loop"); mypy still refuses an instance of a class with abstract methods.
 @mypyc_attr(allow_interpreted_subclasses=True)

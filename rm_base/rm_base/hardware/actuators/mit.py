@@ -35,7 +35,7 @@ from typing import Any, ClassVar
 
 import can
 
-from rm_base.config_schema import Schema, boolean, integer, mapping
+from rm_base.config.schema import Schema, boolean, integer, mapping
 from rm_base.hardware.actuators.base import (
     Actuator,
     Feedback,

@@ -5,14 +5,14 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from rm_base.config_schema import Schema, boolean, integer
+from rm_base.config.schema import Schema, boolean, integer
 from rm_base.hardware.actuators.mit import LIMITS_KEY
 from rm_base.motors.cheetah import protocol as cheetah
 from rm_base.motors.cheetah.actuator import Cheetah
 from rm_base.motors.cheetah.sim_device import CheetahDevice
 from rm_base.motors.family import DeviceParts, MotorFamily, SimFamily
-from rm_base.sim.devices import STD_ID_MAX
-from rm_base.sim.motor_params import MOTOR_DEFAULTS, MotorType
+from rm_base.sim_devices.device import STD_ID_MAX
+from rm_base.sim_devices.motor_params import MOTOR_DEFAULTS, MotorType
 
 #: A simulated Cheetah driver's keys (``SimFamily.schema``).
 SIM_SCHEMA = Schema((

@@ -8,10 +8,10 @@ from __future__ import annotations
 
 from rm_base.hardware.protocols import mit
 from rm_base.motors.cheetah import protocol as cheetah
-from rm_base.sim.devices import Frame
-from rm_base.sim.mit_device import MitDevice
-from rm_base.sim.motor import DriveMode, MotorModel
-from rm_base.sim.motor_params import MotorType
+from rm_base.sim_devices.device import Frame
+from rm_base.sim_devices.mit_device import MitDevice
+from rm_base.sim_devices.motor import DriveMode, MotorModel
+from rm_base.sim_devices.motor_params import MotorType
 
 
 class CheetahDevice(MitDevice):

@@ -11,7 +11,7 @@ from typing import ClassVar
 
 import can
 
-from rm_base.config_schema import Schema, string
+from rm_base.config.schema import Schema, string
 from rm_base.hardware.actuators.base import Defaults
 from rm_base.hardware.actuators.mit import MitActuator, limits_from_config
 from rm_base.hardware.config import JointConfig, SafetyConfig

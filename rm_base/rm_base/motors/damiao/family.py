@@ -5,16 +5,16 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from rm_base.config_schema import Schema, boolean, integer, number, string
+from rm_base.config.schema import Schema, boolean, integer, number, string
 from rm_base.hardware.actuators.mit import LIMITS_KEY
 from rm_base.hardware.config import JointConfig
 from rm_base.motors.damiao import protocol as damiao
 from rm_base.motors.damiao.actuator import Damiao, Dm4310, Dm4340, Dm8009, Dm10010L
 from rm_base.motors.damiao.sim_device import DamiaoDevice
 from rm_base.motors.family import DeviceParts, MotorFamily, SimFamily
-from rm_base.sim.devices import STD_ID_MAX
-from rm_base.sim.errors import SimConfigError
-from rm_base.sim.motor_params import MOTOR_DEFAULTS, MotorType
+from rm_base.sim_devices.device import STD_ID_MAX
+from rm_base.sim_devices.errors import SimConfigError
+from rm_base.sim_devices.motor_params import MOTOR_DEFAULTS, MotorType
 
 _MODELS = {'dm4310': 'DM4310', 'dm8009': 'DM8009'}
 _MODES = {'mit': damiao.DmMode.MIT, 'pos_vel': damiao.DmMode.POS_VEL, 'vel': damiao.DmMode.VEL}

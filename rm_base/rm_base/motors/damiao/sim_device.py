@@ -10,11 +10,11 @@ from __future__ import annotations
 
 from rm_base.hardware.protocols import mit
 from rm_base.motors.damiao import protocol as damiao
-from rm_base.sim.devices import NS_PER_S, Frame, require_finite
-from rm_base.sim.errors import SimConfigError
-from rm_base.sim.mit_device import MitDevice
-from rm_base.sim.motor import MotorModel
-from rm_base.sim.motor_params import MotorType
+from rm_base.sim_devices.device import NS_PER_S, Frame, require_finite
+from rm_base.sim_devices.errors import SimConfigError
+from rm_base.sim_devices.mit_device import MitDevice
+from rm_base.sim_devices.motor import MotorModel
+from rm_base.sim_devices.motor_params import MotorType
 
 
 class DamiaoDevice(MitDevice):

@@ -22,7 +22,7 @@ from typing import ClassVar
 import can
 from mypy_extensions import mypyc_attr
 
-from rm_base.config_schema import Schema, integer, number
+from rm_base.config.schema import Schema, integer, number
 from rm_base.geometry.encoder import EncoderUnwrapper
 from rm_base.hardware.actuators.base import Actuator, Defaults, Feedback, JointCommand
 from rm_base.hardware.config import JointConfig, SafetyConfig

@@ -5,7 +5,7 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from rm_base.config_schema import Schema, number, string
+from rm_base.config.schema import Schema, number, string
 from rm_base.hardware.actuators import Actuator
 from rm_base.hardware.errors import HardwareConfigError, ValueRangeError
 from rm_base.motors.dji import protocol as dji
@@ -20,9 +20,9 @@ from rm_base.motors.dji.actuator import (
 from rm_base.motors.dji.groups import DjiCommandGroup, build_dji_groups
 from rm_base.motors.dji.sim_device import DjiDevice
 from rm_base.motors.family import DeviceParts, MotorFamily, SimFamily
-from rm_base.sim.devices import SimDevice
-from rm_base.sim.errors import SimConfigError
-from rm_base.sim.motor_params import MOTOR_DEFAULTS, MotorType
+from rm_base.sim_devices.device import SimDevice
+from rm_base.sim_devices.errors import SimConfigError
+from rm_base.sim_devices.motor_params import MOTOR_DEFAULTS, MotorType
 
 _KINDS = {'m3508': dji.DjiKind.C620, 'm2006': dji.DjiKind.C610}
 

@@ -9,10 +9,10 @@ C620's value is not documented).
 from __future__ import annotations
 
 from rm_base.motors.dji import protocol as dji
-from rm_base.sim._schedule import RateSchedule
-from rm_base.sim.devices import NS_PER_S, Frame, SimDevice
-from rm_base.sim.motor import MotorModel
-from rm_base.sim.motor_params import MotorType
+from rm_base.sim_devices.device import NS_PER_S, Frame, SimDevice
+from rm_base.sim_devices.motor import MotorModel
+from rm_base.sim_devices.motor_params import MotorType
+from rm_base.sim_devices.schedule import RateSchedule
 
 
 class DjiDevice(SimDevice):

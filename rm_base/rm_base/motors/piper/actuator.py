@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import can
 
-from rm_base.config_schema import Schema, one_of
+from rm_base.config.schema import Schema, one_of
 from rm_base.hardware.actuators.base import Actuator, Defaults, Feedback, JointCommand
 from rm_base.hardware.actuators.mit import LIMITS_KEY, fit_mit_target, limits_from_config
 from rm_base.hardware.config import JointConfig, SafetyConfig
