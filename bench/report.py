@@ -199,7 +199,7 @@ ROWS: tuple[Row, ...] = (
         ('cpu.tick.scheduler', '  CPU per tick: 1 kHz scheduler [µs]',
          _get('load', 'loops', 'can-scheduler', 'us_per_tick'), None, _LOAD),
         # the loop's input stages by their own names, each timed in the ticks where it had
-        # work (docs/PERFORMANCE.md, "Where a tick goes")
+        # work (docs/PERFORMANCE.md, "A tick is many small Python costs")
         ('cpu.tick.feedback', '  feedback stage (both buses, every tick), p50 [µs]',
          _get('load', 'components', 'feedback', 'p50_us'), None, _LOAD),
         ('cpu.tick.imu', '  IMU port stage in a tick that read the port, p50 [µs]',

@@ -96,7 +96,7 @@ def tick_cost(ticks: int, pause_s: float = 0.0) -> dict[str, Any]:
     Every joint online and commanded (velocity targets, fresh feedback every 10 ticks), the
     frames sent to empty rm_sim channels: the work of a tick without any contention.
     With pause_s, the thread sleeps that long after each tick, as the 1 kHz loop does: on
-    a VM the same work can cost more after a sleep (docs/PERFORMANCE.md, "Latest run").
+    a VM the same work can cost more after a sleep (docs/PERFORMANCE.md, "Latest table").
     """
     rig = Rig(standard_hardware())
     try:

@@ -6,7 +6,7 @@ the next tick after a new command arrived (``run_on_command``), so a command rea
 motors within a loop period, not a plugin period. A run for a new command comes at least
 a quarter of the plugin's period (at most 2 ms) after its last run, scheduled or not, so a
 command flood cannot run a plugin on every tick, nor a command add a run right beside a
-scheduled one (docs/PERFORMANCE.md, "A command's run beside a scheduled one").
+scheduled one (docs/PERFORMANCE.md, "Plugins that would not fit wait a tick").
 
 Tasks of one loop share a :class:`TickInputs`: the plugins' clock is read and the local
 joint view refreshed at most once per tick, and only on ticks where a plugin runs.

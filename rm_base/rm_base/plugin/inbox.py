@@ -13,7 +13,7 @@ Deserialising is most of a take's cost, and the loop pays it with its caches war
 thread that wakes for each message it cost several times as much (docs/PERFORMANCE.md).
 
 The loop itself never takes from DDS: a take can wait a third of a second for Fast DDS's locks
-when another node joins (docs/PERFORMANCE.md, "The take that still stopped the loop"), and
+when another node joins (docs/PERFORMANCE.md, "No DDS call from the loop"), and
 then only this thread waits. Its priority is below the loop's and it runs on the loop's
 CPU (``rm_base.runtime.realtime``), so it takes in the loop's sleep, never mid-tick.
 

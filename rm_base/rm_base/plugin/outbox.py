@@ -13,7 +13,7 @@ A report can also be handed over unbuilt (``publish_built(build, *values)``): th
 only queues the function and an immutable snapshot of the values, and the outbox thread
 builds the message, hands it to the robot's subscribers and publishes it. Building and
 serialising a state message costs the loop about as much as a plugin's control step
-(docs/PERFORMANCE.md, "Reports built by the edge"); this way it costs a tuple. Where the
+(docs/PERFORMANCE.md, "No DDS call from the loop"); this way it costs a tuple. Where the
 loopback is immediate (``loopback_at_put``: lockstep; a hand-over publisher) or the topic
 latched, the message is built at once instead.
 The queue is bounded: if the edge falls behind, the oldest messages are dropped, counted

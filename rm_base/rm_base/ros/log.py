@@ -15,7 +15,7 @@ their own caller information.
 
 rcutils sends each line on /rosout in the thread that logs, and rclpy keeps the GIL for
 the call; a send can block a third of a second while a /rosout subscriber joins
-(docs/PERFORMANCE.md, "A log line that stopped the loop"). So the call goes through
+(docs/PERFORMANCE.md, "No DDS call from the loop"). So the call goes through
 ctypes, which releases the GIL, and a control loop's thread
 (:func:`rm_base.runtime.realtime.loop_thread`) does not make it at all: its lines wait in a
 queue that a thread of their own writes, in order with every other thread's lines.

@@ -5,7 +5,7 @@ sends in the caller's thread. A send can block: the first message to a participa
 just appeared opens that participant's shared-memory port, and the port's health check
 sleeps a third of a second when the new process is not yet listening on it. With the GIL
 held, that stops every Python thread of the process, the control loop among them
-(docs/PERFORMANCE.md, "A publish that stopped every thread").
+(docs/PERFORMANCE.md, "No DDS call from the loop").
 
 Here the message is serialised under the GIL (one short C call), and the bytes go to
 ``rcl_publish_serialized_message``, rcl's own entry point for serialised messages, through

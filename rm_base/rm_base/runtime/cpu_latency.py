@@ -3,7 +3,7 @@
 A CPU with nothing to run enters an idle state, and leaving a deep one takes time. In a
 virtual machine an idle vCPU halts, and the host may give its core to other work. The
 loop, which sleeps between its ticks, then wakes late and runs its tick on cold caches
-(docs/PERFORMANCE.md, "Idle CPUs that wake late").
+(docs/PERFORMANCE.md, "Idle CPUs poll").
 
 A process that writes a latency [µs] to ``/dev/cpu_dma_latency`` and keeps the file open
 asks the kernel for at most that wake-up latency on every CPU; 0 keeps idle CPUs polling

@@ -88,7 +88,7 @@ def outside_robot() -> Iterator[None]:
     on a robot) and a test harness's own threads. At real-time priority beside the loop
     they took more than the 95 % of its CPU that the kernel leaves to real-time threads,
     and the kernel then stopped them all, the loop with them, for about 50 ms a second
-    (docs/PERFORMANCE.md, "The soak's lost 50 ms"). Wrap the thread's whole body in it:
+    (docs/PERFORMANCE.md, "Real-time throttling"). Wrap the thread's whole body in it:
     :func:`raise_process_threads` leaves the thread as it is, and a thread started after
     the process was prepared drops the priority it inherited. It stays on the CPU it is
     given (:func:`keep_on_cpu` pins it with the loop): it takes the GIL, and there only the

@@ -4,7 +4,7 @@ The control loop reads the serial ports itself (``SerialReader.poll``). ``os.rea
 ``select.poll`` release the interpreter lock around their system call, and on a 2-core
 machine another Python thread (the CAN log writer, the outbox) then takes the interpreter
 and the loop waits for it to hand it back: up to a switch interval, a late tick, a gap on
-the wire (docs/PERFORMANCE.md, "Serial ports read by the loop"). A ``poll(fd, 0)`` and a
+the wire (docs/PERFORMANCE.md, "Serial ports are read by the loop"). A ``poll(fd, 0)`` and a
 non-blocking ``read`` take about a microsecond each, so this calls libc's through
 ``ctypes.PyDLL``, which keeps the lock. Linux only (the robot's platform).
 """

@@ -13,7 +13,7 @@ A reader's thread opens the port, and reopens it with back-off when it fails. Wh
   the start of every tick, before the plugins: one non-blocking read of what the port
   holds, decoded in the loop's thread, so the plugins of that tick see it. No thread is
   woken for it: a 400 Hz IMU costs no thread switch and never waits for the interpreter
-  (docs/PERFORMANCE.md, "Serial ports read by the loop").
+  (docs/PERFORMANCE.md, "Serial ports are read by the loop").
 
 Bytes go through the device's parser (``FrameStream``: the HiPNUC IMU's, the referee's...),
 which resynchronises after garbage and counts what it skips; everything it decodes is
