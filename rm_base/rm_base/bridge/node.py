@@ -55,7 +55,8 @@ from rm_msgs.msg import ActuatorCmd, ActuatorState, CanFrame, PowerLimit
 NODE_NAME = 'can_bridge'
 
 # The states go out from a plain thread woken after the loop's ticks, not from an executor
-# timer: cheaper, and never behind callbacks (docs/PERFORMANCE.md, "States from a plain thread, not an executor timer").
+# timer: cheaper, and never behind callbacks (docs/PERFORMANCE.md, "States from a plain
+# thread, not an executor timer").
 
 # /actuator_cmd: reliable, as the plugins publish it; rm_robot waits for reliable readers
 # to acknowledge its final zero command on shutdown.

@@ -3,8 +3,8 @@
 CPython collects reference cycles when allocations pass a threshold, in whichever thread
 allocates at that moment, holding the interpreter lock throughout: the loop, or an edge
 thread the loop then waits for. Measured in the robot's process (docs/PERFORMANCE.md,
-"The loop collects the garbage"), a young collection takes 0.07 ms typically and about 1 ms at worst,
-a full one over 20 ms: a tick that meets one sends late, and the wire shows the gap.
+"The loop collects the garbage"), a young collection takes 0.07 ms typically and about
+1 ms at worst, a full one over 20 ms: a tick that meets one sends late, and the wire shows the gap.
 
 So while a loop's thread runs, automatic collection is off (``gc.disable``) and the loop
 collects after its tick's frames went out, in the idle time before the next deadline: the

@@ -321,7 +321,8 @@ class DdsJointIO(NodeIO):
         Its ``states_stamp`` is the oldest stamp of their joints' states, so a bridge
         restarted since refuses them (docs/RELIABILITY.md, "A restarted bridge").
         Through the host's outbox where it has one: the loop thread never hands a message
-        to DDS, whose send can block while a node joins (docs/PERFORMANCE.md, "No DDS call from the loop").
+        to DDS, whose send can block while a node joins (docs/PERFORMANCE.md, "No DDS call
+        from the loop").
         """
         msg = build_actuator_cmd(targets)
         msg.header.stamp = now.to_msg()

@@ -3,7 +3,8 @@
 rclpy's take (what its executors call) keeps the GIL for the whole of ``rcl_take``. A take
 can block: it waits for the reader's mutex, which Fast DDS's event thread holds while it
 answers a participant that just appeared, and that answer can wait a third of a second
-for the new participant's shared-memory port (docs/PERFORMANCE.md, "No DDS call from the loop"). With the GIL held, that stops every Python thread of the process.
+for the new participant's shared-memory port (docs/PERFORMANCE.md, "No DDS call from the
+loop"). With the GIL held, that stops every Python thread of the process.
 
 Here ``rcl_take_serialized_message``, rcl's own entry point for serialised messages, runs
 through ctypes, which releases the GIL for the call; the bytes are then deserialised under

@@ -1,10 +1,10 @@
 """The control loop's modules that run compiled, and the fall-back to their sources.
 
 Why: on a 2-vCPU machine the loop's own Python work is what misses the 1 kHz deadlines
-(docs/PERFORMANCE.md, "The busiest modules are compiled"). These modules are typed throughout, so mypyc
-(the compiler that ships with mypy) turns them into C extension modules, which set-up
-builds beside their sources (``scripts/build_compiled.py``). The sources stay the
-reference and the only thing edited.
+(docs/PERFORMANCE.md, "The busiest modules are compiled"). These modules are typed
+throughout, so mypyc (the compiler that ships with mypy) turns them into C extension
+modules, which set-up builds beside their sources (``scripts/build_compiled.py``). The
+sources stay the reference and the only thing edited.
 
 The group is used all or none: compiled modules call each other directly, so one of them
 from its source beside the others compiled would not be the code that was built. The
