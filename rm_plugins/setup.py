@@ -6,7 +6,7 @@ setup(
     name=package_name,
     version='0.1.0',
     packages=find_packages(exclude=['test']),
-    package_data={'rm_plugins.manual': ['default_mapping.yaml']},
+    package_data={'rm_plugins': ['py.typed'], 'rm_plugins.manual': ['default_mapping.yaml']},
     data_files=[
         ('share/ament_index/resource_index/packages', ['resource/' + package_name]),
         ('share/' + package_name, ['package.xml', 'plugins.xml']),
