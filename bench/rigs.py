@@ -21,7 +21,7 @@ from typing import Any
 
 import can
 
-from rm_base import motors
+from rm_base import motors as motor_families
 
 ROOT = Path(__file__).resolve().parents[1]
 CONFIG_DIR = ROOT / 'rm_bringup' / 'config'
@@ -83,7 +83,7 @@ class Rig:
             options = {**bus.get('options', {}), 'world': self.world}
             buses[name] = {**bus, 'interface': 'rm_sim', 'channel': channel, 'options': options}
         config['buses'] = buses
-        self.hw = CanHardware(config, families=motors)
+        self.hw = CanHardware(config, families=motor_families)
         self.feeder: FeedbackFeeder | None = None
 
     def sim_bus(self, name: str) -> Any:

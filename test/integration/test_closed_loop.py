@@ -18,6 +18,8 @@ import time
 from rm_base.hardware import MODE_MIT, MODE_POSITION, MODE_VELOCITY, CanHardware
 from rm_base.sim import DJI_ENCODER_COUNTS, SimWorld
 
+from rm_base import motors as motor_families
+
 MS = 1_000_000  # [ns]
 _channels = itertools.count()
 
@@ -42,7 +44,7 @@ class Lockstep:
             'joints': joints,
         }
         self.hw = CanHardware(
-            config, clock_ns=lambda: self.now_ns, receive_in_loop=False, families=motors,
+            config, clock_ns=lambda: self.now_ns, receive_in_loop=False, families=motor_families,
         )
 
     def __enter__(self):

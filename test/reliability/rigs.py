@@ -30,6 +30,7 @@ from rm_base.runtime.realtime import outside_robot
 from rm_base.sim import SimBus, SimWorld
 
 from reliability.wire import WireChecker
+from rm_base import motors as motor_families
 
 NS_PER_MS = 1_000_000
 _channels = itertools.count()
@@ -71,7 +72,7 @@ class LockstepRig:
         }
         self._sim_buses: list[SimBus] = []
         self.hw = CanHardware(
-            self.config, clock_ns=self.now_ns, bus_factory=self._open, families=motors,
+            self.config, clock_ns=self.now_ns, bus_factory=self._open, families=motor_families,
         )
         self.tap = SimBus(self.channel, world=self.world, rx_queue_size=0)
         self.peer = SimBus(self.channel, world=self.world, rx_queue_size=0)

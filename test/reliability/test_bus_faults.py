@@ -31,7 +31,7 @@ from support.ros import wait_until
 
 from reliability.rigs import FlakyAdapter, unique_channel
 from reliability.wire import WireChecker
-from rm_base import motors
+from rm_base import motors as motor_families
 
 pytestmark = pytest.mark.realtime
 
@@ -82,7 +82,7 @@ class RealtimeRig:
             'joints': JOINTS,
         }
         self.adapter = FlakyAdapter(self.world)
-        self.hw = CanHardware(self.config, bus_factory=self.adapter, families=motors)
+        self.hw = CanHardware(self.config, bus_factory=self.adapter, families=motor_families)
         self.bus = self.hw.buses['can0']
         self.tap = SimBus(self.channel, world=self.world, rx_queue_size=0)
         self.checker = WireChecker(self.config, grace_s=GRACE, record=True)

@@ -149,7 +149,7 @@ def test_a_thread_pinned_in_a_child_process_runs_on_that_cpu():
 
     cpu = sorted(os.sched_getaffinity(0))[-1]
     code = (
-        'import os, threading; from rm_base import realtime\n'
+        'import os, threading; from rm_base.runtime import realtime\n'
         't = threading.Thread(target=threading.Event().wait, args=(0.5,)); t.start()\n'
         'cpu = realtime.keep_on_cpu(-1)\n'
         'print(cpu, os.sched_getaffinity(t.native_id) == {cpu}, os.sched_getaffinity(0) == {cpu})\n'

@@ -21,7 +21,7 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 from sensor_msgs.msg import JointState
 from std_srvs.srv import Trigger
 
-from rm_base import motors
+from rm_base import motors as motor_families
 from rm_base.bridge.command_input import ActuatorCmdInput
 from rm_base.bridge.diagnostics import CommandStats, DiagnosticsReporter
 from rm_base.bridge.errors import BridgeConfigError, PowerLimitRejectedError
@@ -158,10 +158,12 @@ class CanBridgeNode(Node):
             # feedback itself, so every tick is the same on every run.
             self.hardware = hw = CanHardware(
                 hardware, bus_factory=bus_factory, clock_ns=lambda: world.time_ns,
-                receive_in_loop=True, families=motors,
+                receive_in_loop=True, families=motor_families,
             )
         else:
-            self.hardware = hw = CanHardware(hardware, bus_factory=bus_factory, families=motors)
+            self.hardware = hw = CanHardware(
+                hardware, bus_factory=bus_factory, families=motor_families,
+            )
         self._joints = frozenset(hw.joint_names)
         self._commands = commands = ActuatorCmdInput(
             hw, self._joints, settings.hardware_config.safety.command_timeout_s,

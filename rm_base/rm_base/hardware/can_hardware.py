@@ -2,7 +2,7 @@
 
 This is the whole CAN layer behind one object; the ROS bridge node is a thin wrapper::
 
-    hw = CanHardware(config, families=motors)   # schema: rm_base.hardware.config
+    hw = CanHardware(config, families=rm_base.motors)   # schema: rm_base.hardware.config
     hw.start()                             # buses up, receive threads, 1 kHz scheduler
     hw.set_command('yaw', MODE_POSITION, position=0.3)
     hw.states()                            # [JointState(...)], ActuatorState fields

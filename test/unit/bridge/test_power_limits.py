@@ -8,7 +8,7 @@ from rm_base.bridge.power_limits import RemotePowerLimits, parse_power_limit
 from rm_base.control import ChassisPowerModel
 from rm_base.hardware import CanHardware
 
-from rm_base import motors
+from rm_base import motors as motor_families
 from rm_msgs.msg import PowerLimit
 
 WHEELS = ('wheel_fl', 'wheel_fr')
@@ -19,7 +19,7 @@ def hardware():
         'buses': {'can0': {'interface': 'virtual', 'channel': 'power-limit-test'}},
         'joints': {name: {'type': 'm3508', 'bus': 'can0', 'id': i + 1}
                    for i, name in enumerate(WHEELS)},
-    }, families=motors)
+    }, families=motor_families)
 
 
 def request(**fields):

@@ -23,7 +23,7 @@ from rm_base.motors.damiao import protocol as damiao
 from rm_base.motors.dji import protocol as dji
 from support.ros import wait_until
 
-from rm_base import motors
+from rm_base import motors as motor_families
 
 TIMEOUT = 10.0  # [s], condition waits only
 DM4310 = damiao.dm_limits('DM4310')
@@ -76,7 +76,9 @@ def slots(data):
 
 @pytest.fixture
 def rig(channel, clock):
-    hw = CanHardware(config(channel), clock_ns=clock, receive_in_loop=False, families=motors)
+    hw = CanHardware(
+        config(channel), clock_ns=clock, receive_in_loop=False, families=motor_families,
+    )
     peer = can.Bus(interface='virtual', channel=channel)
     hw.open()
     yield hw, peer, clock
@@ -219,7 +221,9 @@ def test_unknown_joint_is_rejected_and_counted(rig):
 
 
 def test_shutdown_sends_zero_then_disable_and_is_idempotent(channel, clock):
-    hw = CanHardware(config(channel), clock_ns=clock, receive_in_loop=False, families=motors)
+    hw = CanHardware(
+        config(channel), clock_ns=clock, receive_in_loop=False, families=motor_families,
+    )
     with can.Bus(interface='virtual', channel=channel) as peer:
         hw.open()
         fed(hw, peer)
@@ -294,7 +298,9 @@ def test_set_zero_makes_the_present_position_zero_and_returns_the_offset(rig):
 
 
 def test_a_zero_taken_after_whole_turns_reads_zero_after_a_restart(channel, clock):
-    hw = CanHardware(config(channel), clock_ns=clock, receive_in_loop=False, families=motors)
+    hw = CanHardware(
+        config(channel), clock_ns=clock, receive_in_loop=False, families=motor_families,
+    )
     peer = can.Bus(interface='virtual', channel=channel)
     hw.open()
     try:
@@ -308,7 +314,7 @@ def test_a_zero_taken_after_whole_turns_reads_zero_after_a_restart(channel, cloc
     assert zero == pytest.approx(1000 / 8192 * math.tau)  # single-turn: what a restart reads
     restarted = config(channel)
     restarted['joints']['yaw']['zero_offset'] = zero
-    hw = CanHardware(restarted, clock_ns=clock, receive_in_loop=False, families=motors)
+    hw = CanHardware(restarted, clock_ns=clock, receive_in_loop=False, families=motor_families)
     hw.open()
     try:
         assert yaw_at(hw, peer, 1000) == pytest.approx(0.0, abs=1e-12)
@@ -387,7 +393,7 @@ def test_after_a_bus_error_the_bus_reopens_and_sends_zero_until_commanded(channe
     cfg = config(channel)
     cfg['buses']['can0'].update(reconnect_initial_s=0.01, reconnect_max_s=0.02)
     hw = CanHardware(
-        cfg, clock_ns=clock, bus_factory=factory, receive_in_loop=False, families=motors,
+        cfg, clock_ns=clock, bus_factory=factory, receive_in_loop=False, families=motor_families,
     )
     with hw, can.Bus(interface='virtual', channel=channel) as peer:
         hw.open()
@@ -415,7 +421,7 @@ def test_after_a_bus_error_the_bus_reopens_and_sends_zero_until_commanded(channe
 def test_started_hardware_runs_at_its_rate_and_shuts_down_with_zero(channel):
     cfg = config(channel, safety={'command_timeout_s': 60.0})
     del cfg['joints']['arm']
-    hw = CanHardware(cfg, families=motors)
+    hw = CanHardware(cfg, families=motor_families)
     seen = []
     stop = threading.Event()
 
@@ -472,24 +478,24 @@ def test_config_errors_name_the_culprit(channel, change, match):
     cfg = config(channel)
     cfg['joints'].update(change)
     with pytest.raises(HardwareConfigError, match=match):
-        CanHardware(cfg, families=motors)
+        CanHardware(cfg, families=motor_families)
 
 
 def test_joints_may_be_a_list_and_top_level_keys_are_checked(channel):
     cfg = config(channel)
     cfg['joints'] = [{'name': 'wheel', 'type': 'm3508', 'bus': 'can0', 'id': 2}]
-    hw = CanHardware(cfg, families=motors)
+    hw = CanHardware(cfg, families=motor_families)
     assert hw.joint_names == ['wheel']
     with pytest.raises(HardwareConfigError, match='duplicate name'):
-        CanHardware(dict(cfg, joints=cfg['joints'] * 2), families=motors)
+        CanHardware(dict(cfg, joints=cfg['joints'] * 2), families=motor_families)
     with pytest.raises(HardwareConfigError, match=r"unknown key\(s\) \['scheduler_rate'\]"):
-        CanHardware(dict(cfg, scheduler_rate=1), families=motors)
+        CanHardware(dict(cfg, scheduler_rate=1), families=motor_families)
     with pytest.raises(HardwareConfigError, match=r'safety\.command_timeout_s must be > 0'):
-        CanHardware(dict(cfg, safety={'command_timeout_s': 0}), families=motors)
+        CanHardware(dict(cfg, safety={'command_timeout_s': 0}), families=motor_families)
 
 
 def test_by_default_the_loop_takes_the_feedback_at_the_start_of_its_tick(channel, clock):
-    hw = CanHardware(config(channel), clock_ns=clock, families=motors)
+    hw = CanHardware(config(channel), clock_ns=clock, families=motor_families)
     peer = can.Bus(interface='virtual', channel=channel)
     try:
         hw.open()

@@ -10,7 +10,7 @@ from rm_base.motors import actuator_class
 from support.hardware import MS, T0, joint
 from support.hardware import feed_dji as feed
 
-from rm_base import motors
+from rm_base import motors as motor_families
 
 # k1 = 3 W/(N*m)^2 copper loss, no speed losses, 2 W static: at standstill four wheels
 # at 2 N*m draw 4 * 3 * 4 + 2 = 50 W.
@@ -93,7 +93,7 @@ def test_the_hardware_runs_a_power_limit_after_the_update_and_before_packing(cha
     hw = CanHardware({
         'buses': {'can0': {'interface': 'virtual', 'channel': channel}},
         'joints': {f'w{i}': {'type': 'm3508', 'bus': 'can0', 'id': i} for i in range(1, 5)},
-    }, families=motors)
+    }, families=motor_families)
     with pytest.raises(HardwareConfigError, match=r"unknown joint\(s\) \['nope'\]"):
         hw.add_power_limit('chassis', ['w1', 'nope'], MODEL)
     stage = hw.add_power_limit('chassis', ['w1', 'w2', 'w3', 'w4'], MODEL)

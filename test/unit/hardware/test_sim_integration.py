@@ -10,7 +10,7 @@ from rm_base.hardware import MODE_EFFORT, MODE_MIT, CanHardware
 from rm_base.sim.world import SimWorld
 from support.hardware import FakeClock, sim_factory, wait_fresh
 
-from rm_base import motors
+from rm_base import motors as motor_families
 
 
 @pytest.fixture
@@ -41,7 +41,8 @@ def test_effort_and_native_mit_against_simulated_motors(channel, world):
         },
     }
     hw = CanHardware(
-        cfg, clock_ns=clock, bus_factory=sim_factory, receive_in_loop=False, families=motors,
+        cfg, clock_ns=clock, bus_factory=sim_factory, receive_in_loop=False,
+        families=motor_families,
     )
     with hw:
         hw.open()
@@ -77,7 +78,8 @@ def _velocity_run(channel, world, velocity_pid):
                              'velocity_pid': velocity_pid}},
     }
     hw = CanHardware(
-        cfg, clock_ns=clock, bus_factory=sim_factory, receive_in_loop=False, families=motors,
+        cfg, clock_ns=clock, bus_factory=sim_factory, receive_in_loop=False,
+        families=motor_families,
     )
     early = None
     with hw:

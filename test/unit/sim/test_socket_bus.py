@@ -16,7 +16,7 @@ from rm_base.sim.server import SimServer
 from rm_base.sim.socket_bus import SimSocketBus
 from support.ros import wait_until
 
-from rm_base import motors
+from rm_base import motors as motor_families
 
 WAIT = 5.0  # [s]
 
@@ -149,7 +149,7 @@ def test_a_ticks_frames_go_to_rm_sim_in_one_datagram_per_bus(served):
                            'options': {'socket': path}}},
         'joints': {'wheel': {'type': 'm3508', 'bus': 'can0', 'id': 1},
                    'yaw': {'type': 'gm6020', 'bus': 'can0', 'id': 1}},
-    }, families=motors)
+    }, families=motor_families)
     try:
         hw.open()
         assert wait_until(lambda: world.channel('can0').bus_count == 1, WAIT)
