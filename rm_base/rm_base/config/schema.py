@@ -91,7 +91,7 @@ def as_sequence(value: object) -> list[Any] | None:
     if isinstance(value, str | bytes) or value is None or isinstance(value, Mapping):
         return None
     try:
-        return list(value)  # type: ignore[call-overload]
+        return list(value)  # type: ignore[call-overload,no-any-return]
     except TypeError:
         return None
 

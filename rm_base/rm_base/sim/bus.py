@@ -44,7 +44,7 @@ LOG = logging.getLogger(__name__)
 DEFAULT_RX_QUEUE_SIZE = 10_000
 
 
-class _RxQueue(queue.Queue):
+class _RxQueue(queue.Queue[can.Message]):
     """A receive queue that also takes a batch of frames under one lock."""
 
     def put_all_nowait(self, items: Sequence[can.Message]) -> int:
