@@ -1,4 +1,4 @@
-"""Control maths: PID, tracking differentiator, ramps, filters and mechanism helpers.
+"""Control maths: PID, tracking differentiator, ramps, filters, lookup tables, chassis power.
 
 Pure Python on plain floats (no ROS, no I/O, no threads), cheap enough for 1 kHz loops.
 Every ``update`` raises ``rm_base.errors.InputRejectedError`` on NaN/inf input or a
@@ -6,21 +6,8 @@ non-positive dt, and every config dataclass raises ``rm_base.errors.ConfigError`
 construction with a bad value.
 """
 
-from rm_base.control.barrel_heat import BarrelHeat, BarrelHeatParams
-from rm_base.control.buffer_energy import BufferEnergyParams, power_budget
-from rm_base.control.chassis_modes import (
-    ChassisModeController,
-    ChassisModeParams,
-    ChassisMotionMode,
-    FollowParams,
-    GyroParams,
-    TwistParams,
-    TwistWaveform,
-    twist_waveform,
-)
 from rm_base.control.filters import LowPassFilter, MovingAverage
 from rm_base.control.incremental_pid import IncrementalPid, IncrementalPidGains
-from rm_base.control.jam_detector import JamDetector, JamDetectorParams
 from rm_base.control.lookup import LookupTable
 from rm_base.control.pid import Pid, PidGains
 from rm_base.control.pid_form import IncrementalPidConfig, PidConfig, build_pid, pid_config
@@ -33,24 +20,13 @@ from rm_base.control.power_limit import (
     power_limit_scale,
 )
 from rm_base.control.ramp import RampLimiter, RampLimits, ramp_step
-from rm_base.control.spin_heading import SpinHeadingLoop, SpinHeadingParams
 from rm_base.control.tracking_differentiator import TdParams, TrackingDifferentiator, fhan
 
 __all__ = [
-    'BarrelHeat',
-    'BarrelHeatParams',
-    'BufferEnergyParams',
-    'ChassisModeController',
-    'ChassisModeParams',
-    'ChassisMotionMode',
     'ChassisPowerModel',
-    'FollowParams',
-    'GyroParams',
     'IncrementalPid',
     'IncrementalPidConfig',
     'IncrementalPidGains',
-    'JamDetector',
-    'JamDetectorParams',
     'LookupTable',
     'LowPassFilter',
     'MovingAverage',
@@ -60,20 +36,14 @@ __all__ = [
     'PowerLimitResult',
     'RampLimiter',
     'RampLimits',
-    'SpinHeadingLoop',
-    'SpinHeadingParams',
     'TdParams',
     'TrackingDifferentiator',
-    'TwistParams',
-    'TwistWaveform',
     'build_pid',
     'estimate_power',
     'fhan',
     'fit_power_model',
     'limit_power',
     'pid_config',
-    'power_budget',
     'power_limit_scale',
     'ramp_step',
-    'twist_waveform',
 ]

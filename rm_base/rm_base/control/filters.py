@@ -3,7 +3,7 @@
 import math
 from collections import deque
 
-from rm_base.control._validation import require_positive
+from rm_base.control.validation import require_positive
 from rm_base.errors import ConfigError, InputRejectedError
 
 

@@ -20,8 +20,8 @@ setpoint the short way round from where it is.
 import math
 from dataclasses import dataclass
 
-from rm_base.control._validation import require_non_negative, require_positive
 from rm_base.control.tracking_differentiator import TdParams, TrackingDifferentiator
+from rm_base.control.validation import require_non_negative, require_positive
 from rm_base.errors import ConfigError, InputRejectedError
 from rm_base.geometry.angles import wrap_to_pi
 

@@ -18,7 +18,7 @@ plain floats and allocates nothing but the float results.
 import math
 from dataclasses import dataclass
 
-from rm_base.control._validation import require_non_negative, require_positive
+from rm_base.control.validation import require_non_negative, require_positive
 from rm_base.errors import ConfigError, InputRejectedError
 
 _INF = math.inf

@@ -49,7 +49,7 @@ from typing import NamedTuple
 import numpy as np
 from numpy.typing import ArrayLike
 
-from rm_base.control._validation import require_non_negative
+from rm_base.control.validation import require_non_negative
 from rm_base.errors import InputRejectedError
 
 

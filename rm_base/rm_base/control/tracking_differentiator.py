@@ -16,7 +16,7 @@ chattering near the target, larger ``h0`` filters more.
 import math
 from dataclasses import dataclass
 
-from rm_base.control._validation import require_positive
+from rm_base.control.validation import require_positive
 from rm_base.errors import InputRejectedError
 
 

@@ -16,18 +16,7 @@ from dataclasses import dataclass
 from enum import Enum
 from typing import Any
 
-from rm_base.control import (
-    BufferEnergyParams,
-    ChassisModeParams,
-    ChassisPowerModel,
-    FollowParams,
-    GyroParams,
-    PidGains,
-    RampLimits,
-    SpinHeadingParams,
-    TwistParams,
-    TwistWaveform,
-)
+from rm_base.control import ChassisPowerModel, PidGains, RampLimits
 from rm_base.errors import ConfigError
 from rm_base.geometry import (
     MECANUM_ROLLER_SIGNS,
@@ -40,8 +29,17 @@ from rm_base.geometry import (
 from rm_base.plugin import ParameterError, PluginParams
 from rm_base.plugin.pid_params import loop_pid
 
+from rm_plugins.chassis.buffer_energy import BufferEnergyParams
 from rm_plugins.chassis.commands import SpeedGear
+from rm_plugins.chassis.modes import (
+    ChassisModeParams,
+    FollowParams,
+    GyroParams,
+    TwistParams,
+    TwistWaveform,
+)
 from rm_plugins.chassis.position import DEFAULT_POSITION, PositionConfig
+from rm_plugins.chassis.spin_heading import SpinHeadingParams
 
 # SRML's speed gears: (linear, angular) coefficients on /vel_cmd by default.
 _GEAR_DEFAULTS = {

@@ -32,14 +32,7 @@ import math
 from collections.abc import Sequence
 from typing import NamedTuple
 
-from rm_base.control import (
-    ChassisModeController,
-    ChassisModeParams,
-    ChassisMotionMode,
-    RampLimiter,
-    RampLimits,
-    SpinHeadingLoop,
-)
+from rm_base.control import RampLimiter, RampLimits
 from rm_base.errors import InputRejectedError
 from rm_base.geometry import (
     Twist2D,
@@ -49,6 +42,8 @@ from rm_base.geometry import (
 )
 
 from rm_plugins.chassis.drive import Drive
+from rm_plugins.chassis.modes import ChassisModeController, ChassisModeParams, ChassisMotionMode
+from rm_plugins.chassis.spin_heading import SpinHeadingLoop
 
 _MAX_UPDATE_DT = 0.05
 """Longest dt [s] the ramps and PIDs integrate in one step; a stalled tick (CPU steal) must

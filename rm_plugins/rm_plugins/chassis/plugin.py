@@ -27,7 +27,7 @@ States (values = ChassisCmd mode constants), all decided in ``_decide``:
     PASSIVE: commanded; or no valid /chassis_cmd (watchdog); or a wheel or steering joint
         (or, in a mode that follows the gimbal, the yaw joint) without fresh feedback.
         Wheels (and steering joints) get MODE_OFF.
-    RAW, FOLLOW, TWIST, GYRO: as commanded, see ``rm_base.control.chassis_modes``.
+    RAW, FOLLOW, TWIST, GYRO: as commanded, see ``rm_plugins.chassis.modes``.
     POSITION: move by ChassisCmd's (move_x, move_y, move_yaw) from the odometry pose where
         a new move_id began, then hold there (``rm_plugins.chassis.position``); a move_id
         runs once: after a PASSIVE or a silence the same one holds where the chassis
@@ -59,7 +59,7 @@ Odometry (``odometry``) counts the wheels' angle changes, so late ticks lose no 
 its yaw comes from the IMU when one is configured and fresh (minus the yaw joint angle
 when it sits on the gimbal), from the wheels otherwise.
 
-GYRO's spin is closed on that yaw (``gyro.heading.*``, ``rm_base.control.spin_heading``):
+GYRO's spin is closed on that yaw (``gyro.heading.*``, ``rm_plugins.chassis.spin_heading``):
 a wheel that drags or slips does not slow the spin, the other wheels are asked for more.
 """
 
@@ -73,7 +73,7 @@ from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry as OdometryMsg
 from rclpy.qos import qos_profile_sensor_data
 from rclpy.time import Time
-from rm_base.control import ChassisMotionMode, estimate_power
+from rm_base.control import estimate_power
 from rm_base.errors import InputRejectedError
 from rm_base.geometry import (
     SE3,
@@ -99,6 +99,7 @@ from rm_plugins.chassis.commands import (
 )
 from rm_plugins.chassis.config import ChassisConfig, ImuMount, read_config
 from rm_plugins.chassis.drive import Drive, SwerveDrive
+from rm_plugins.chassis.modes import ChassisMotionMode
 from rm_plugins.chassis.motion import (
     BASE_LINK_FRAME,
     GIMBAL_FRAME,

@@ -10,9 +10,8 @@ from __future__ import annotations
 import math
 import threading
 
-from rm_base.control import BufferEnergyParams, power_budget
-
 from rm_msgs.msg import RefereePowerHeat, RefereeRobotStatus
+from rm_plugins.chassis.buffer_energy import BufferEnergyParams, power_budget
 
 _NS_PER_S = 1_000_000_000
 

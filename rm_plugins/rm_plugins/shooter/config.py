@@ -6,14 +6,16 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from rm_base.control import JamDetectorParams, LookupTable
-from rm_base.control.barrel_heat import (
+from rm_base.control import LookupTable
+from rm_base.errors import ConfigError
+from rm_base.plugin import PluginParams
+
+from rm_plugins.shooter.barrel_heat import (
     HEAT_PER_17MM_SHOT,
     HEAT_PER_42MM_SHOT,
     BarrelHeatParams,
 )
-from rm_base.errors import ConfigError
-from rm_base.plugin import PluginParams
+from rm_plugins.shooter.jam_detector import JamDetectorParams
 
 
 @dataclass(frozen=True)

@@ -11,9 +11,8 @@ from __future__ import annotations
 import math
 import threading
 
-from rm_base.control import BarrelHeat
-
 from rm_msgs.msg import RefereePowerHeat, RefereeRobotStatus, RefereeShot
+from rm_plugins.shooter.barrel_heat import BarrelHeat
 
 _NS_PER_S = 1_000_000_000
 

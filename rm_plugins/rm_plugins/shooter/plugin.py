@@ -13,7 +13,6 @@ from typing import Any, NamedTuple
 
 from rclpy.qos import qos_profile_sensor_data
 from rclpy.time import Time
-from rm_base.control import BarrelHeat, JamDetector
 from rm_base.errors import InputRejectedError
 from rm_base.plugin import JointState, JointTarget, PluginBase
 
@@ -25,9 +24,11 @@ from rm_msgs.msg import (
     ShootCmd,
     ShooterState,
 )
+from rm_plugins.shooter.barrel_heat import BarrelHeat
 from rm_plugins.shooter.command import ShootCommand, ShooterStage, ShootMode, parse_shoot_cmd
 from rm_plugins.shooter.config import read_config
 from rm_plugins.shooter.heat import RefereeHeatInput
+from rm_plugins.shooter.jam_detector import JamDetector
 
 COMMAND_TOPIC = 'shoot_cmd'
 STATE_TOPIC = 'shooter_state'

@@ -3,19 +3,18 @@
 import math
 
 import pytest
-from rm_base.control import (
+from rm_base.control import PidGains, RampLimits
+from rm_base.geometry import Twist2D, WheelKinematics, mecanum_wheels
+from rm_plugins.chassis import MotionPlanner
+from rm_plugins.chassis.modes import (
     ChassisModeParams,
     ChassisMotionMode,
     FollowParams,
     GyroParams,
-    PidGains,
-    RampLimits,
-    SpinHeadingParams,
     TwistParams,
 )
-from rm_base.geometry import Twist2D, WheelKinematics, mecanum_wheels
-from rm_plugins.chassis import MotionPlanner
 from rm_plugins.chassis.motion import BASE_LINK_FRAME, GIMBAL_FRAME, ODOM_FRAME
+from rm_plugins.chassis.spin_heading import SpinHeadingParams
 
 RAW = ChassisMotionMode.RAW
 FOLLOW = ChassisMotionMode.FOLLOW

@@ -3,9 +3,10 @@
 import math
 
 import pytest
-from rm_base.control import JamDetectorParams, LookupTable
+from rm_base.control import LookupTable
 from rm_base.errors import ConfigError, InputRejectedError
 from rm_plugins.shooter import ShooterConfig, ShootMode, parse_shoot_cmd
+from rm_plugins.shooter.jam_detector import JamDetectorParams
 
 from rm_msgs.msg import ShootCmd
 

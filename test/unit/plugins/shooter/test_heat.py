@@ -2,7 +2,7 @@
 
 import math
 
-from rm_base.control import BarrelHeat, BarrelHeatParams
+from rm_plugins.shooter.barrel_heat import BarrelHeat, BarrelHeatParams
 from rm_plugins.shooter.heat import RefereeHeatInput
 
 from rm_msgs.msg import RefereePowerHeat, RefereeRobotStatus, RefereeShot

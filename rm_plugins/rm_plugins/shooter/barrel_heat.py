@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from rm_base.control._validation import require_non_negative, require_positive
+from rm_base.control.validation import require_non_negative, require_positive
 from rm_base.errors import ConfigError, InputRejectedError
 
 #: The referee applies cooling in steps of this period [s].

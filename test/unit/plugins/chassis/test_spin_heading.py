@@ -3,8 +3,8 @@
 import math
 
 import pytest
-from rm_base.control import SpinHeadingLoop, SpinHeadingParams
 from rm_base.errors import ConfigError, InputRejectedError
+from rm_plugins.chassis.spin_heading import SpinHeadingLoop, SpinHeadingParams
 
 DT = 0.005  # [s]
 

@@ -9,7 +9,7 @@ of each step, not the wall clock, so it behaves the same in a replay or the simu
 import math
 from dataclasses import dataclass
 
-from rm_base.control._validation import require_non_negative, require_positive
+from rm_base.control.validation import require_non_negative, require_positive
 from rm_base.errors import InputRejectedError
 
 # Summing dt rounds: ten steps of 0.01 s add up to 0.09999999999999999 s, which must still

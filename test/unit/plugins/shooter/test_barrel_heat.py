@@ -5,8 +5,8 @@ import math
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
-from rm_base.control.barrel_heat import BarrelHeat, BarrelHeatParams
 from rm_base.errors import ConfigError, InputRejectedError
+from rm_plugins.shooter.barrel_heat import BarrelHeat, BarrelHeatParams
 
 PARAMS = BarrelHeatParams(heat_per_shot=10.0, margin=20.0, fallback_limit=50.0,
                           fallback_cooling_per_s=10.0)

@@ -22,7 +22,7 @@ One controller, :class:`ChassisModeController`, decides for every mode in one me
   fast, so the wheels keep headroom for the translation) and the gimbal-frame translation
   is rotated into the spinning chassis frame. The closed heading loop that keeps the
   spin what was asked (``GyroParams.heading``) runs after the spin's ramp
-  (:mod:`rm_base.control.spin_heading`, used by the chassis plugin's planner).
+  (:mod:`rm_plugins.chassis.spin_heading`, used by the chassis plugin's planner).
 
 Rotating the translation: the command is applied a little later (actuation latency) and
 then held for a control period while phi keeps changing, so it is rotated by the angle
@@ -41,11 +41,12 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from enum import Enum
 
-from rm_base.control._validation import require_non_negative, require_positive, require_real
 from rm_base.control.pid_form import PidConfig, build_pid
-from rm_base.control.spin_heading import OPEN_LOOP, SpinHeadingParams
+from rm_base.control.validation import require_non_negative, require_positive, require_real
 from rm_base.errors import ConfigError, InputRejectedError
 from rm_base.geometry.kinematics import Twist2D, body_to_world_twist
+
+from rm_plugins.chassis.spin_heading import OPEN_LOOP, SpinHeadingParams
 
 _TAU = 2.0 * math.pi
 

@@ -2,20 +2,18 @@ import math
 from collections import deque
 
 import pytest
-from rm_base.control import (
+from rm_base.control import IncrementalPidConfig, IncrementalPidGains, PidGains
+from rm_base.errors import ConfigError, InputRejectedError
+from rm_plugins.chassis.modes import (
     ChassisModeController,
     ChassisModeParams,
     ChassisMotionMode,
     FollowParams,
     GyroParams,
-    IncrementalPidConfig,
-    IncrementalPidGains,
-    PidGains,
     TwistParams,
     TwistWaveform,
     twist_waveform,
 )
-from rm_base.errors import ConfigError, InputRejectedError
 
 RAW = ChassisMotionMode.RAW
 FOLLOW = ChassisMotionMode.FOLLOW

@@ -1,8 +1,8 @@
 import math
 
 import pytest
-from rm_base.control import JamDetector, JamDetectorParams
 from rm_base.errors import ConfigError, InputRejectedError
+from rm_plugins.shooter.jam_detector import JamDetector, JamDetectorParams
 
 # Jam: |effort| > 2 N·m and |speed| < 1 rad/s for at least 0.1 s.
 PARAMS = JamDetectorParams(effort_threshold=2.0, speed_threshold=1.0, time_s=0.1)

@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-from rm_base.control._validation import require_non_negative
+from rm_base.control.validation import require_non_negative
 from rm_base.errors import InputRejectedError
 
 

@@ -3,8 +3,8 @@
 import math
 
 import pytest
-from rm_base.control import BufferEnergyParams, power_budget
 from rm_base.errors import ConfigError, InputRejectedError
+from rm_plugins.chassis.buffer_energy import BufferEnergyParams, power_budget
 
 PARAMS = BufferEnergyParams(reserve_j=20.0, gain_w_per_j=2.0, max_boost_w=60.0)
 
