@@ -226,7 +226,7 @@ class FastLogger:
 
     def is_enabled_for(self, severity: LoggingSeverity) -> bool:
         """Whether a message at severity would go out (the rcutils level check)."""
-        return _rclpy.rclpy_logging_logger_is_enabled_for(self.name, severity)
+        return bool(_rclpy.rclpy_logging_logger_is_enabled_for(self.name, severity))
 
     def log(self, message: str, severity: LoggingSeverity, **kwargs: Any) -> bool:
         """Log message at severity; True if it went out (as rclpy's ``log``)."""
@@ -267,7 +267,7 @@ class FastLogger:
         if not self.is_enabled_for(severity):
             return False
         if not kwargs.keys() <= _OWN_FILTERS:
-            return self._logger.log(message, severity, **kwargs)  # rclpy's filters
+            return bool(self._logger.log(message, severity, **kwargs))  # rclpy's filters
         if kwargs and not self._passes(frame, kwargs):
             return False
         code = frame.f_code

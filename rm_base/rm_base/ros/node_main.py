@@ -77,7 +77,7 @@ def spin_until_shutdown(
     executor: Executor,
     context: Context | None = None,
     *,
-    on_tick=None,
+    on_tick: Callable[[], bool] | None = None,
     timeout_sec: float = SPIN_TIMEOUT,
 ) -> None:
     """Spin until Ctrl-C, SIGTERM or context shutdown (or on_tick returns False).

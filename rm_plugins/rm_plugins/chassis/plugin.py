@@ -393,7 +393,7 @@ class StandChassis(PluginBase):
             msg = sample[0]
             q, w = msg.orientation, msg.angular_velocity
             # z row of the body -> world rotation: the world z part of the body rate.
-            return (
+            return float(
                 2.0 * (q.x * q.z - q.w * q.y) * w.x
                 + 2.0 * (q.y * q.z + q.w * q.x) * w.y
                 + (1.0 - 2.0 * (q.x * q.x + q.y * q.y)) * w.z

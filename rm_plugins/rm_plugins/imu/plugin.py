@@ -37,6 +37,7 @@ import math
 import threading
 
 from diagnostic_msgs.msg import DiagnosticArray
+from rclpy.time import Time
 from rm_base.config.calibration import CalibrationError, CalibrationFile, finite_values
 from rm_base.hardware.device_clock import DeviceClock
 from rm_base.hardware.protocols.hipnuc import HipnucParser, ImuSample
@@ -202,7 +203,7 @@ class Hi220(PluginBase):
 
     # -- tick -------------------------------------------------------------------------------
 
-    def update(self, now, dt: float) -> None:
+    def update(self, now: Time, dt: float) -> None:
         """Decide the state from the reader's report; publish /diagnostics when due."""
         now_ns = now.nanoseconds
         state, reason, stats = self._link.decide(now_ns)
@@ -300,7 +301,7 @@ class Hi220(PluginBase):
 
     # -- diagnostics ------------------------------------------------------------------------
 
-    def _publish_diagnostics(self, now, stats: ReaderStats) -> None:
+    def _publish_diagnostics(self, now: Time, stats: ReaderStats) -> None:
         state = LinkState(self.state.value)
         with self._lock:
             published, user_id = self._published, self._user_id

@@ -186,7 +186,7 @@ class StandShooter(PluginBase):
         self._fault = False
         self._fault_reason = ''
         self._next_reject_log_ns = 0
-        self._last_published: tuple | None = None
+        self._last_published: tuple[object, ...] | None = None
         self._next_publish_ns = 0
         self.on_reset()
 
