@@ -18,9 +18,9 @@ from typing import Any
 import rclpy
 from rclpy.context import Context
 from rm_base.bridge import CanBridgeNode
-from rm_base.config.schema import OPTIONAL
+from rm_base.config.schema import OPTIONAL, DeclaredParameter
 from rm_base.host.node import RobotHost
-from rm_base.plugin.params import DeclaredParameter, declared_parameters
+from rm_base.plugin.params import declared_parameters
 from rm_base.ros.env import prepare_ros_process
 
 from rm_bringup.bringup import MANUAL_NODE_NAME, has_section, parameter_files

@@ -76,7 +76,7 @@ def check_stamp(msg: object, now_ns: int, timeout_s: float) -> int:
         raise ActuatorCmdRejectedError(
             Rejection.STALE, f'stamp is {when} (command timeout {timeout_s:g} s)'
         )
-    return max(0, age_ns)
+    return max(0, int(age_ns))
 
 
 def first_states_stamp(first_ns: int | None, stamp_ns: int) -> int:

@@ -19,7 +19,7 @@ from rm_base.hardware import JointState
 from rm_msgs.msg import ActuatorState, CanFrame
 
 
-def _doubles(values: Sequence[float] | object) -> array.array:
+def _doubles(values: Sequence[float] | object) -> array.array[float]:
     return array.array('d', values)  # type: ignore[arg-type]
 
 
@@ -27,14 +27,14 @@ class _Columns(NamedTuple):
     """The states' fields as columns, in the types the messages take."""
 
     names: tuple[str, ...]
-    position: array.array
-    velocity: array.array
-    effort: array.array
-    temperature: array.array
+    position: array.array[float]
+    velocity: array.array[float]
+    effort: array.array[float]
+    temperature: array.array[float]
     online: tuple[bool, ...]
-    error_code: array.array
-    mode: array.array
-    command: array.array
+    error_code: array.array[int]
+    mode: array.array[int]
+    command: array.array[float]
 
 
 def _columns(states: Sequence[JointState]) -> _Columns:

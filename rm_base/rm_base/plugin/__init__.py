@@ -4,6 +4,7 @@ A plugin author needs ``PluginBase`` and the helpers it hands out (``PluginParam
 ``CommandInput``, ``JointTarget``, the joint-state view); the host needs ``PluginLoader``.
 """
 
+from rm_base.config.schema import REQUIRED
 from rm_base.joints import JointState, JointTarget, Mode
 from rm_base.plugin.base import STATE_QOS, PluginBase
 from rm_base.plugin.commands import CommandInput, CommandStatus, LatestMessage, LogThrottle
@@ -20,7 +21,7 @@ from rm_base.plugin.errors import (
 from rm_base.plugin.joints import JointStateView, build_actuator_cmd
 from rm_base.plugin.loader import BASE_CLASS_TYPE, PluginDescription, PluginLoader
 from rm_base.plugin.node_io import ACTUATOR_CMD_TOPIC, ACTUATOR_STATES_TOPIC
-from rm_base.plugin.params import REQUIRED, PluginParams
+from rm_base.plugin.params import PluginParams
 from rm_base.plugin.state_machine import DefaultState, StateMachine, Transition
 
 __all__ = [

@@ -47,10 +47,11 @@ from tf2_msgs.msg import TFMessage
 
 from rm_base.errors import ConfigError
 from rm_base.geometry.frame_tree import FrameTree
+from rm_base.joints import JointTarget
 from rm_base.plugin.commands import CommandInput
 from rm_base.plugin.errors import PluginConfigError, PluginInitError, TargetRejectedError
 from rm_base.plugin.frames import TF_QOS, TF_STATIC_QOS, FramePublisher
-from rm_base.plugin.joints import JointStates, JointStateView, JointTarget
+from rm_base.plugin.joints import JointStates, JointStateView
 from rm_base.plugin.node_io import NodeIO, node_io
 from rm_base.plugin.outbox import is_heard, publish_built
 from rm_base.plugin.params import PluginParams
@@ -120,7 +121,7 @@ class PluginBase:
         self._io: NodeIO | None = None
         self._machine: StateMachine[Any] | None = None
         self._state_pub: Any = None
-        self._inputs: list[CommandInput] = []
+        self._inputs: list[CommandInput[Any]] = []
         # Called (from the executor thread) when a command input stores a new command and
         # run_on_command is set: the host's loop runs the plugin at its next tick.
         self.command_listener: Callable[[], None] | None = None
@@ -307,7 +308,8 @@ class PluginBase:
     def state(self) -> Enum:
         """The current state."""
         self._require_init()
-        return self._sm.state
+        state: Enum = self._sm.state
+        return state
 
     @property
     def reason(self) -> str:
@@ -366,7 +368,7 @@ class PluginBase:
         timeout: float | None = None,
         watchdog: bool = True,
         qos: Any = None,
-    ) -> CommandInput:
+    ) -> CommandInput[Any]:
         """Subscribe to a command topic; return its input (``latest(now_ns)`` in update).
 
         The command's ``header.stamp`` starts its timeout (the receive time if the message
@@ -591,7 +593,7 @@ class PluginBase:
             now = self.node.get_clock().now()
         self._nio.send(targets, now, self._tick_states)
 
-    def _on_transition(self, change: Transition) -> None:
+    def _on_transition(self, change: Transition[Any]) -> None:
         if change.previous == change.current:
             self.logger.info(f'{change.current.name}: {change.reason}')
         else:

@@ -113,11 +113,11 @@ class _EdgePublisher:
         return self._outbox.heard(self)
 
     def get_subscription_count(self) -> int:
-        return self.publisher.get_subscription_count()
+        return int(self.publisher.get_subscription_count())
 
     def wait_for_all_acked(self, *args: Any, **kwargs: Any) -> bool:
         self._outbox.flush()
-        return self.publisher.wait_for_all_acked(*args, **kwargs)
+        return bool(self.publisher.wait_for_all_acked(*args, **kwargs))
 
 
 class Outbox:

@@ -19,7 +19,7 @@ from __future__ import annotations
 import weakref
 from collections.abc import Callable, Sequence
 from enum import Enum
-from typing import Any, TypeVar
+from typing import Any, TypeVar, cast
 
 from rcl_interfaces.msg import ParameterDescriptor
 
@@ -117,9 +117,9 @@ class PluginParams:
         Raises:
             ParameterError: missing, not a number, not finite, or out of bounds.
         """
-        return self.declare_key(schema.number(
+        return cast(float, self.declare_key(schema.number(
             name, default, description=description, unit=unit, gt=gt, ge=ge, lt=lt, le=le
-        ))
+        )))
 
     def integer(
         self,
@@ -134,13 +134,13 @@ class PluginParams:
         le: int | None = None,
     ) -> int:
         """Declare and read an integer parameter (see ``double`` for the arguments)."""
-        return self.declare_key(schema.integer(
+        return cast(int, self.declare_key(schema.integer(
             name, default, description=description, unit=unit, gt=gt, ge=ge, lt=lt, le=le
-        ))
+        )))
 
     def boolean(self, name: str, default: bool = REQUIRED, *, description: str) -> bool:
         """Declare and read a boolean parameter (``true``/``false`` in YAML)."""
-        return self.declare_key(schema.boolean(name, default, description=description))
+        return cast(bool, self.declare_key(schema.boolean(name, default, description=description)))
 
     def string(
         self,
@@ -151,9 +151,9 @@ class PluginParams:
         choices: Sequence[str] | None = None,
     ) -> str:
         """Declare and read a string parameter, optionally one of choices."""
-        return self.declare_key(
+        return cast(str, self.declare_key(
             schema.string(name, default, description=description, choices=choices)
-        )
+        ))
 
     def choice(
         self, name: str, options: type[E], default: E = REQUIRED, *, description: str
@@ -173,10 +173,10 @@ class PluginParams:
             return by_name[text.lower()]
 
         default_text = default if default is REQUIRED else default.name.lower()
-        return self._declare(
+        return cast(E, self._declare(
             name, default=default_text, type_name='string', description=description, unit='',
             constraint=f'one of: {", ".join(names)}', convert=convert,
-        )
+        ))
 
     def declare_key(self, key: Key) -> Any:
         """Declare and read a key of a config schema (:mod:`rm_base.config.schema`).
@@ -297,15 +297,15 @@ class PluginParams:
         length: int | None,
         constraint: str,
         convert_item: Callable[[object], Any],
-    ) -> tuple:
+    ) -> tuple[Any, ...]:
         constraints = [c for c in (constraint, f'length {length}' if length else '') if c]
 
         if default is not REQUIRED:
             default = list(default)  # type: ignore[call-overload]
-        return self._declare(
+        return cast(tuple[Any, ...], self._declare(
             name, default=default, type_name=type_name, description=description, unit=unit,
             constraint='; '.join(constraints), convert=array_of(convert_item, length),
-        )
+        ))
 
     def _declare(
         self,
