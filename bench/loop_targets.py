@@ -96,16 +96,20 @@ def _fmt_beside(x: float | None, bound: float) -> str:
     return text
 
 
-def format_targets(evaluated: list[dict[str, Any]]) -> str:
-    """The lines as a Markdown table."""
-    lines = [
-        '**Control loop targets (before: 2026-11-24, 3 runs, median)**',
-        '',
-        '| metric | before | now median (min-max) | target | result |',
-        '|---|---|---|---|---|',
-    ]
+def format_targets(evaluated: list[dict[str, Any]], *, with_before: bool = True) -> str:
+    """The lines as a Markdown table (without the *before* column for docs/PERFORMANCE.md)."""
+    if with_before:
+        lines = [
+            '**Control loop targets (before: 2026-11-24, 3 runs, median)**',
+            '',
+            '| metric | before | now median (min-max) | target | result |',
+            '|---|---|---|---|---|',
+        ]
+    else:
+        lines = ['| metric | median (min-max) | target | result |', '|---|---|---|---|']
     for e in evaluated:
         shown = [_fmt_beside(e[k], e['bound']) for k in ('median', 'min', 'max')]
         now = f'{shown[0]} ({shown[1]}-{shown[2]})' if e['median'] is not None else 'n/a'
-        lines.append(f'| {e["label"]} | {e["before"]} | {now} | {e["target"]} | {e["verdict"]} |')
+        before = f' {e["before"]} |' if with_before else ''
+        lines.append(f'| {e["label"]} |{before} {now} | {e["target"]} | {e["verdict"]} |')
     return '\n'.join(lines)

@@ -17,10 +17,12 @@ import datetime as dt
 import importlib.metadata
 import os
 import platform
+import subprocess
 import sys
 import threading
 import time
 from dataclasses import dataclass
+from pathlib import Path
 
 _CLK_TCK = os.sysconf('SC_CLK_TCK')
 
@@ -62,7 +64,21 @@ def machine_facts() -> dict[str, object]:
         'rclpy': _version('ros-rclpy'),
         'python-can': _version('python-can'),
         'numpy': _version('numpy'),
+        'commit': _commit(),
     }
+
+
+def _commit() -> str:
+    """The checkout's commit (short), with ``+changes`` when the tree differs from it."""
+    root = Path(__file__).resolve().parents[1]
+    try:
+        head = subprocess.run(['git', 'rev-parse', '--short', 'HEAD'], cwd=root, text=True,
+                              capture_output=True, check=True).stdout.strip()
+        dirty = subprocess.run(['git', 'status', '--porcelain', '--untracked-files=no'],
+                               cwd=root, text=True, capture_output=True, check=True).stdout
+    except (OSError, subprocess.CalledProcessError):
+        return 'unknown'
+    return head + ('+changes' if dirty.strip() else '')
 
 
 def read_proc_stat() -> list[int]:

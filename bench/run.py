@@ -84,6 +84,7 @@ def main(argv: list[str] | None = None) -> int:
     os.environ['ROS_DOMAIN_ID'] = str(args.domain_id)
 
     from bench import baseline, robot, throughput, wire_check
+    from bench.doc_table import write_table
     from bench.loop_targets import evaluate_targets, format_targets
     from bench.machine import Window, machine_facts
     from bench.report import ROWS, evaluate, format_table
@@ -192,6 +193,13 @@ def main(argv: list[str] | None = None) -> int:
     print()
     shown = result_path.relative_to(ROOT) if result_path.is_relative_to(ROOT) else result_path
     print(f'results: {shown}')
+    if not args.quick and args.only is None and args.runs is None and not args.plugins:
+        # a full run is the page's latest table; a partial one would leave rows empty
+        caption = (f'`make bench`, {runs} runs, median (min-max), commit {facts["commit"]}, '
+                   f'{facts["cpu_model"]} ({facts["cores"]} cores), {facts["date"]}')
+        write_table(ROOT / 'docs' / 'PERFORMANCE.md', format_targets(targets, with_before=False),
+                    caption)
+        print("docs/PERFORMANCE.md: its latest table is this run's")
     return 0 if all(raw[name] for name in only) else 1
 
 

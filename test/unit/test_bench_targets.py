@@ -35,3 +35,13 @@ def test_a_value_that_would_read_as_its_bound_gets_the_digits_that_tell_them_apa
     assert '| 996 (990-998) | >= 995 | PASS |' in wire  # far enough: printed as always
     missed = _line(table, 'missed deadlines [%], one process')
     assert '| 0.10 (0.096-0.104) | < 0.10 | MISS |' in missed  # at the bound: as always
+
+
+def test_the_docs_table_has_no_before_column():
+    from bench.loop_targets import evaluate_targets, format_targets
+
+    rows = [{'key': 'cpu.rate.scheduler', 'values': [999.5, 1000.0, 999.8]}]
+    table = format_targets(evaluate_targets(rows), with_before=False)
+    assert table.splitlines()[0] == '| metric | median (min-max) | target | result |'
+    assert '| scheduler ticks/s, one process (make run) | 1000 (1000-1000) | >= 999 | PASS |' \
+        in table
