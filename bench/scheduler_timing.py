@@ -1,6 +1,6 @@
 """Measurement 1: the 1 kHz scheduler's period error and missed deadlines.
 
-The production :class:`rm_base.hardware.scheduler.Scheduler` keeps only a histogram, a
+The production :class:`rm_base.loop.scheduler.Scheduler` keeps only a histogram, a
 mean and a max of ``|start - deadline|``. For percentiles the bench observes every tick
 (``Scheduler.observe_ticks``): one ``array.append`` per tick while recording.
 

@@ -24,8 +24,9 @@ from typing import Any
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 
-from rm_base.hardware import BusStats, HoldReason, JointState, Mode, PeriodStats
-from rm_base.hardware.timing import HISTOGRAM_EDGES_US
+from rm_base.hardware import BusStats, HoldReason, JointState, Mode
+from rm_base.loop import PeriodStats
+from rm_base.loop.timing import HISTOGRAM_EDGES_US
 from rm_base.ros.diagnostics import diagnostic_status
 
 OK = DiagnosticStatus.OK

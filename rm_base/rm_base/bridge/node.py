@@ -42,6 +42,7 @@ from rm_base.config.calibration import CalibrationError
 from rm_base.hardware import CanHardware
 from rm_base.hardware.bus import BusFactory
 from rm_base.hardware.errors import CommandRejectedError, ValueRangeError
+from rm_base.loop.data import JOINT_STATES, JOINT_TARGETS
 from rm_base.plugin.inbox import Inbox
 from rm_base.plugin.inbox_status import InboxReport
 from rm_base.plugin.remote_power import POWER_LIMIT_QOS, POWER_LIMIT_TOPIC
@@ -193,7 +194,9 @@ class CanBridgeNode(Node):
                 ActuatorCmd, 'actuator_cmd', commands, _COMMAND_QOS
             )
         else:  # the loop hands /actuator_cmd out at the start of each tick (no executor hop)
-            self._inbox = Inbox(inbox_node(self), self.get_clock(), name='actuator_cmd')
+            self._inbox = Inbox(
+                inbox_node(self), self.get_clock(), name='actuator_cmd', writes=(JOINT_TARGETS,)
+            )
             self._inbox.subscribe(
                 ActuatorCmd, self.resolve_topic_name('actuator_cmd'),
                 lambda msg, _receive_ns: commands(msg), _COMMAND_QOS,
@@ -223,7 +226,8 @@ class CanBridgeNode(Node):
             hw.open()
         else:
             hw.start()
-        hw.scheduler.add_after_tick(self._tick_done.set)
+        # the publisher thread: /actuator_states and /joint_states from the tick's feedback
+        hw.scheduler.add_after_tick(self._tick_done.set, reads=(JOINT_STATES,))
         self._publisher_thread = threading.Thread(
             target=self._run_publisher, name='can_bridge-publish', daemon=True
         )

@@ -1,4 +1,4 @@
-"""The CAN hardware layer: buses, the actuator base, the scheduler, CanHardware.
+"""The CAN hardware layer: buses, the actuator base, CanHardware (on rm_base.loop).
 
 No rclpy here. ``rm_base.hardware.protocols`` is the pure bytes <-> values layer of what
 is not one motor family's; the families (``rm_base.motors``) bring their own protocol and
@@ -31,8 +31,6 @@ from rm_base.hardware.errors import (
     ValueRangeError,
 )
 from rm_base.hardware.power_stage import PowerLimitStage
-from rm_base.hardware.scheduler import Scheduler, Stage
-from rm_base.hardware.timing import DurationHistogram, DurationSummary, PeriodStats
 
 __all__ = [
     'MODE_EFFORT',
@@ -48,8 +46,6 @@ __all__ = [
     'CanHardware',
     'ChecksumError',
     'CommandRejectedError',
-    'DurationHistogram',
-    'DurationSummary',
     'FrameLengthError',
     'HardwareConfig',
     'HardwareConfigError',
@@ -60,11 +56,8 @@ __all__ = [
     'JointState',
     'ManagedBus',
     'Mode',
-    'PeriodStats',
     'PowerLimitStage',
     'ProtocolError',
     'SafetyConfig',
-    'Scheduler',
-    'Stage',
     'ValueRangeError',
 ]

@@ -40,8 +40,9 @@ from rm_base.hardware.errors import CommandRejectedError, HardwareConfigError
 from rm_base.hardware.families import GroupBuilder, MotorFamilies
 from rm_base.hardware.power_stage import PowerLimitStage
 from rm_base.hardware.protocols.mit import SystemCommand
-from rm_base.hardware.scheduler import Packer, Scheduler
 from rm_base.joints import JointTarget
+from rm_base.loop.data import JOINT_STATES
+from rm_base.loop.scheduler import Packer, Scheduler
 
 _log = logging.getLogger(__name__)
 
@@ -315,8 +316,10 @@ class CanHardware:
                 f'power limit {group!r}: unknown joint(s) {unknown}' if unknown
                 else f'power limit {group!r}: no joints'
             )
+        if group in self.power_limits:
+            raise HardwareConfigError(f'power limit {group!r}: the group has one already')
         stage = PowerLimitStage(group, [self.actuators[j] for j in joints], model)
-        self.scheduler.add_stage(stage, after_update=True)
+        self.scheduler.add_stage(stage)
         self.power_limits[group] = stage
         return stage
 
@@ -394,6 +397,8 @@ class _FeedbackStage:
     """The loop's first stage with ``receive_in_loop``: every frame received so far."""
 
     name = 'feedback'
+    reads: tuple[str, ...] = ()
+    writes = (JOINT_STATES,)
 
     def __init__(self, buses: tuple[ManagedBus, ...]) -> None:
         self._buses = buses

@@ -1,6 +1,7 @@
 """PowerLimitStage: a group of joints whose efforts share one power limit, at the loop rate.
 
-An output stage of the loop (after every actuator's update, before packing): it predicts
+A component of the loop that modifies the efforts (so it runs after every actuator's
+update, before packing; rm_base.loop.order): it predicts
 the group's electrical power from the efforts the actuators' own loops just computed and
 the speeds measured at most a tick ago (:func:`rm_base.control.limit_power`), and when the
 prediction is over the limit scales every effort of the group by one common factor, as
@@ -17,6 +18,7 @@ from collections.abc import Sequence
 
 from rm_base.control import ChassisPowerModel, PowerLimitResult, limit_power
 from rm_base.hardware.actuators import Actuator
+from rm_base.loop.data import JOINT_EFFORTS, JOINT_STATES
 
 
 class PowerLimitStage:
@@ -36,6 +38,9 @@ class PowerLimitStage:
         self, name: str, actuators: Sequence[Actuator], model: ChassisPowerModel
     ) -> None:
         self.name = f'power limit {name}'
+        # modifies the efforts: after the actuators' update, before pack
+        self.reads = (JOINT_EFFORTS, JOINT_STATES)
+        self.writes = (JOINT_EFFORTS,)
         self.group = name
         self.model = model
         self.limit_w = math.inf

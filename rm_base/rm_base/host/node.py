@@ -13,10 +13,12 @@ from rclpy.duration import Duration
 from rclpy.node import Node
 from std_srvs.srv import SetBool
 
-from rm_base.hardware import CanHardware, Scheduler
+from rm_base.hardware import CanHardware
 from rm_base.host.command_sources import read_command_sources
 from rm_base.host.plugin_task import PluginTask, TickInputs
 from rm_base.host.process_params import process_settings
+from rm_base.loop import Scheduler
+from rm_base.loop.data import PUBLISHED
 from rm_base.plugin import PluginBase, PluginLoader, PluginParams
 from rm_base.plugin.command_mux import CommandMux
 from rm_base.plugin.command_mux_status import command_sources_status
@@ -24,7 +26,7 @@ from rm_base.plugin.errors import ParameterError
 from rm_base.plugin.inbox import STAGE_NAME as INBOX_STAGE
 from rm_base.plugin.inbox import Inbox
 from rm_base.plugin.inbox_status import InboxReport
-from rm_base.plugin.node_io import DdsJointIO, NodeIO, node_io, use_local_io
+from rm_base.plugin.node_io import DdsJointIO, LocalJointIO, NodeIO
 from rm_base.plugin.outbox import Outbox
 from rm_base.ros.log import FastLogger
 from rm_base.ros.node_main import inbox_node
@@ -116,12 +118,12 @@ class RobotHost(Node):
         io: NodeIO
         self.loop: Scheduler | None
         if hardware is not None:
-            io = use_local_io(self, hardware)
+            io = LocalJointIO(self, hardware)
             self.loop = hardware.scheduler
             self._own_loop = False
             inputs = TickInputs(now or self.get_clock().now, io.refresh, self.loop.time_left_ns)
         else:
-            io = node_io(self)
+            io = DdsJointIO(self)
             self.loop = None  # built in _configure, once loop_rate is read
             self._own_loop = True
             inputs = TickInputs(now or self.get_clock().now)
@@ -270,45 +272,49 @@ class RobotHost(Node):
             )
             inputs.time_left = loop.time_left_ns
 
-        self._io.loop = loop
-        start_enabled = {}
-        for name in names:
-            host_params = PluginParams(self, name)
-            type_name = host_params.string(
-                'type', description='plugin type, e.g. rm_plugins/StandChassis'
-            )
-            start_enabled[name] = host_params.boolean(
-                'enabled', True, description='enable the plugin at start-up'
-            )
-            plugin = loader.create(type_name, plugin=name)
-            plugin.init(self, name, PluginParams(self, name, type_name))
-            # one loop period apart: plugins of like rates do not all fall on one tick
-            phase_ns = len(self._tasks) * loop.period_ns
-            self._tasks[name] = PluginTask(plugin, inputs, phase_ns)
+        # the plugins, their devices and the inbox join the loop together, checked at the end
+        with loop.compose():
+            self._io.loop = loop
+            start_enabled = {}
+            for name in names:
+                host_params = PluginParams(self, name)
+                type_name = host_params.string(
+                    'type', description='plugin type, e.g. rm_plugins/StandChassis'
+                )
+                start_enabled[name] = host_params.boolean(
+                    'enabled', True, description='enable the plugin at start-up'
+                )
+                plugin = loader.create(type_name, plugin=name)
+                plugin.init(self, name, PluginParams(self, name, type_name), self._io)
+                # one loop period apart: plugins of like rates do not all fall on one tick
+                phase_ns = len(self._tasks) * loop.period_ns
+                self._tasks[name] = PluginTask(plugin, inputs, phase_ns, self._io.targets_datum)
 
-        for name, task in self._tasks.items():
-            self.create_service(
-                SetBool,
-                f'~/{name}/enable',
-                functools.partial(self._on_enable, task),
-            )
-        self.create_service(SetBool, '~/enable_all', self._on_enable_all)
-        self.create_timer(state_period, self._on_state_timer)
+            for name, task in self._tasks.items():
+                self.create_service(
+                    SetBool,
+                    f'~/{name}/enable',
+                    functools.partial(self._on_enable, task),
+                )
+            self.create_service(SetBool, '~/enable_all', self._on_enable_all)
+            self.create_timer(state_period, self._on_state_timer)
 
-        if self._inbox is not None:  # first: a command reaches its plugin in the same tick
-            loop.add_stage(self._inbox)
-        self._outbox.pace()  # publishes in the loop's idle time
-        loop.add_after_tick(self._outbox.wake)
-        for name, task in self._tasks.items():
-            plugin = task.plugin
-            if start_enabled[name]:
-                task.enable()
-            self.get_logger().info(
-                f"plugin '{name}' ({plugin.type_name}) at {plugin.rate:g} Hz, "
-                f'{"enabled" if plugin.enabled else "disabled"}'
-                + (f', joints: {", ".join(plugin.joints)}' if plugin.joints else '')
-            )
-            loop.add_stage(task)
+            if self._inbox is not None:  # first: a command reaches its plugin in the same tick
+                loop.add_stage(self._inbox)
+            self._outbox.pace()  # publishes in the loop's idle time
+            loop.add_after_tick(self._outbox.wake, reads=(PUBLISHED,))
+            for name, task in self._tasks.items():
+                plugin = task.plugin
+                if start_enabled[name]:
+                    task.enable()
+                self.get_logger().info(
+                    f"plugin '{name}' ({plugin.type_name}) at {plugin.rate:g} Hz, "
+                    f'{"enabled" if plugin.enabled else "disabled"}'
+                    + (f', joints: {", ".join(plugin.joints)}' if plugin.joints else '')
+                )
+                loop.add_stage(task)
+        # derived from what each component reads and writes (rm_base.loop.order)
+        self.get_logger().info(f'loop order: {" -> ".join(loop.order())}')
         if self._own_loop:
             loop.start()
 

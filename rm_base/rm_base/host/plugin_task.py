@@ -34,6 +34,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
+from rm_base.loop.data import COMMANDS, JOINT_STATES, JOINT_TARGETS, PUBLISHED
 from rm_base.plugin.base import PluginBase
 
 _NS_PER_S = 1_000_000_000
@@ -88,6 +89,8 @@ class PluginTask:
         phase_ns: how long after enable the first scheduled run comes [ns]; the host
             gives each plugin another tick, so that plugins of similar rates do not all
             run in one tick and overrun it (firmware schedulers offset their tasks alike).
+        targets_datum: what its joint targets are in the loop's order: the targets the
+            actuators read, or (over DDS) what the ROS edge publishes.
 
     Attributes:
         name: stage name, ``plugin <instance name>``.
@@ -101,9 +104,18 @@ class PluginTask:
             disables the plugin (zero output), with the error as its reason.
     """
 
-    def __init__(self, plugin: PluginBase, inputs: TickInputs, phase_ns: int = 0) -> None:
+    def __init__(
+        self,
+        plugin: PluginBase,
+        inputs: TickInputs,
+        phase_ns: int = 0,
+        targets_datum: str = JOINT_TARGETS,
+    ) -> None:
         self.plugin = plugin
         self.name = f'plugin {plugin.name}'
+        # after the feedback, the commands and its devices; its state goes to the ROS edge
+        self.reads = (JOINT_STATES, COMMANDS, *plugin.loop_reads)
+        self.writes = (targets_datum, PUBLISHED) if plugin.joints else (PUBLISHED,)
         self.period_ns = round(_NS_PER_S / plugin.rate)
         self.lock = threading.Lock()
         self.ticks = 0

@@ -48,11 +48,12 @@ from tf2_msgs.msg import TFMessage
 from rm_base.errors import ConfigError
 from rm_base.geometry.frame_tree import FrameTree
 from rm_base.joints import JointTarget
+from rm_base.loop.data import port
 from rm_base.plugin.commands import CommandInput
 from rm_base.plugin.errors import PluginConfigError, PluginInitError, TargetRejectedError
 from rm_base.plugin.frames import TF_QOS, TF_STATIC_QOS, FramePublisher
 from rm_base.plugin.joints import JointStates, JointStateView
-from rm_base.plugin.node_io import NodeIO, node_io
+from rm_base.plugin.node_io import DdsJointIO, NodeIO
 from rm_base.plugin.outbox import is_heard, publish_built
 from rm_base.plugin.params import PluginParams
 from rm_base.plugin.state_machine import DefaultState, StateMachine, Transition
@@ -119,6 +120,7 @@ class PluginBase:
         self.command_timeout = 0.0
         self.error_count = 0
         self._io: NodeIO | None = None
+        self.loop_reads: tuple[str, ...] = ()  # its devices' data the loop reads for it
         self._machine: StateMachine[Any] | None = None
         self._state_pub: Any = None
         self._inputs: list[CommandInput[Any]] = []
@@ -136,7 +138,13 @@ class PluginBase:
 
     # -- framework: lifecycle -----------------------------------------------------------
 
-    def init(self, node: Any, name: str, params: PluginParams | None = None) -> None:
+    def init(
+        self,
+        node: Any,
+        name: str,
+        params: PluginParams | None = None,
+        io: NodeIO | None = None,
+    ) -> None:
         """Set the plugin up on node as instance name; call ``on_init``.
 
         Declares ``<name>.rate`` [Hz] (default 100) and ``<name>.command_timeout`` [s]
@@ -146,6 +154,8 @@ class PluginBase:
             node: the host node.
             name: instance name; also the parameter prefix and the state topic.
             params: parameter access; default ``PluginParams(node, name, <class name>)``.
+            io: the I/O the node's plugins share (the host's); default: joint I/O over
+                DDS of this plugin's own.
 
         Raises:
             PluginConfigError: a parameter is missing or invalid, a joint is taken, or the
@@ -172,7 +182,7 @@ class PluginBase:
                 description='also run at the next loop tick when a new command arrives, '
                 'not only at the own rate (up to a period less latency)',
             )
-            self._io = node_io(node)
+            self._io = io if io is not None else DdsJointIO(node)
             safe = self.safe_state
             self._machine = StateMachine(
                 self.State, safe, safe=safe, allowed=self.TRANSITIONS,
@@ -496,7 +506,11 @@ class PluginBase:
             False where no loop runs the plugins (then nothing will call it).
         """
         self._require_init()
-        return self._nio.loop_input(name or f'{self.name} input', read)
+        datum = port(self.name)
+        if not self._nio.loop_input(name or f'{self.name} input', read, datum):
+            return False
+        self.loop_reads += (datum,)
+        return True
 
     def power_limit(self, joints: Iterable[str], model: Any) -> Any:
         """A power limit over some of our joints, run in the control loop, or None.

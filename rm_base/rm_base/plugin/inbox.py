@@ -40,6 +40,7 @@ from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.qos import HistoryPolicy, QoSProfile
 from rclpy.serialization import deserialize_message
 
+from rm_base.loop.data import COMMANDS
 from rm_base.plugin.commands import LogThrottle
 from rm_base.ros.take import MessageInfo, SequenceGaps, TakeBuffer
 
@@ -95,10 +96,17 @@ class Inbox:
         clock: stamps each message's receive time when the loop hands it out (the
             owner's clock: simulated time where the owner uses it).
         name: its name among the loop's components.
+        writes: what its callbacks fill, for the loop's order (:mod:`rm_base.loop.data`):
+            the plugins' commands, or the bridge's joint targets.
     """
 
-    def __init__(self, node: Any, clock: Any, name: str = STAGE_NAME) -> None:
+    reads: tuple[str, ...] = ()
+
+    def __init__(
+        self, node: Any, clock: Any, name: str = STAGE_NAME, writes: tuple[str, ...] = (COMMANDS,)
+    ) -> None:
         self.name = name
+        self.writes = writes
         self._clock = clock
         self._node = node
         self._subscriptions: tuple[_Subscription, ...] = ()

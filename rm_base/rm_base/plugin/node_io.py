@@ -18,16 +18,15 @@ the outbox's thread, so the control loop never publishes itself; and an
 :class:`~rm_base.plugin.inbox.Inbox`: then every subscription a plugin makes through
 :meth:`NodeIO.subscribe` reaches its callback in the control loop, never through an executor.
 
-Created on first use per node (``node_io(node)``: DDS) or by the host
-(``use_local_io(node, hardware)``), and kept as long as the node lives. The plugin layer
-uses rclpy only through the node object it is given (plus rclpy's QoS value types).
+The host creates one for its node and hands it to each plugin's ``init`` (a plugin
+initialised on its own gets DDS joint I/O of its own). The plugin layer uses rclpy only
+through the node object it is given (plus rclpy's QoS value types).
 """
 
 from __future__ import annotations
 
 import abc
 import threading
-import weakref
 from collections.abc import Callable, Iterable, Sequence
 from typing import Any, Protocol
 
@@ -38,6 +37,7 @@ from rclpy.time import Time
 from rm_base.control import ChassisPowerModel
 from rm_base.geometry.frame_tree import FrameTree
 from rm_base.joints import JointState, JointTarget
+from rm_base.loop.data import JOINT_TARGETS, PUBLISHED
 from rm_base.plugin.command_mux import CommandMux, CommandSource
 from rm_base.plugin.errors import JointClaimError, TargetRejectedError
 from rm_base.plugin.inbox import Inbox
@@ -80,10 +80,13 @@ class JointBackend(Protocol):
 
 
 class _InputStage:
-    """A plugin's device read as a loop stage (``Stage``)."""
+    """A plugin's device read as a loop stage (``Stage``): it writes the device's datum."""
 
-    def __init__(self, name: str, read: Callable[[], bool]) -> None:
+    reads: tuple[str, ...] = ()
+
+    def __init__(self, name: str, read: Callable[[], bool], datum: str) -> None:
         self.name = name
+        self.writes = (datum,)
         self._read = read
 
     def __call__(self, now_ns: int, dt: float) -> bool:
@@ -91,7 +94,14 @@ class _InputStage:
 
 
 class NodeIO(abc.ABC):
-    """Shared plugin I/O of one node; see the subclasses. Use ``node_io(node)``."""
+    """Shared plugin I/O of one node; see the subclasses.
+
+    Attributes:
+        targets_datum: what a plugin that sets joint targets writes in the loop's order
+            (rm_base.loop.data): the joint targets themselves, or what it publishes.
+    """
+
+    targets_datum = PUBLISHED
 
     def __init__(self, node: Any, joint_states: JointStateView) -> None:
         self.node = node
@@ -130,15 +140,15 @@ class NodeIO(abc.ABC):
         """
         return None
 
-    def loop_input(self, name: str, read: Callable[[], bool]) -> bool:
-        """Run read() at the start of every tick, before the plugins; False if no loop.
+    def loop_input(self, name: str, read: Callable[[], bool], datum: str) -> bool:
+        """Run read() in every tick, before the plugin reading datum; False if no loop.
 
         read() takes what a device holds without blocking and returns whether it took
         anything (the loop times it then, as the component ``name``).
         """
         if self.loop is None:
             return False
-        self.loop.add_stage(_InputStage(name, read))
+        self.loop.add_stage(_InputStage(name, read, datum))
         self._inputs.append(name)
         return True
 
@@ -355,6 +365,8 @@ class DdsJointIO(NodeIO):
 class LocalJointIO(NodeIO):
     """Joint targets set on the actuators directly; the loop refreshes the view."""
 
+    targets_datum = JOINT_TARGETS
+
     def __init__(self, node: Any, hardware: JointBackend) -> None:
         super().__init__(node, JointStateView(node.get_logger()))
         self._hardware = hardware
@@ -388,31 +400,3 @@ class LocalJointIO(NodeIO):
             stamp_ns: the tick's time on the plugins' clock [ns], the states' stamp.
         """
         self.joint_states.replace({s.name: s for s in self._hardware.states(stamp_ns)})
-
-
-_BY_NODE: weakref.WeakKeyDictionary[Any, NodeIO] = weakref.WeakKeyDictionary()
-_BY_NODE_LOCK = threading.Lock()
-
-
-def node_io(node: Any) -> NodeIO:
-    """Return the shared plugin I/O of node, creating DDS joint I/O on first use."""
-    with _BY_NODE_LOCK:
-        io = _BY_NODE.get(node)
-        if io is None:
-            io = DdsJointIO(node)
-            _BY_NODE[node] = io
-        return io
-
-
-def use_local_io(node: Any, hardware: JointBackend) -> LocalJointIO:
-    """Give node's plugins local joint I/O on hardware (before any plugin is initialised).
-
-    Raises:
-        RuntimeError: node has plugin I/O already.
-    """
-    with _BY_NODE_LOCK:
-        if node in _BY_NODE:
-            raise RuntimeError('the node has plugin I/O already: choose it before init()')
-        io = LocalJointIO(node, hardware)
-        _BY_NODE[node] = io
-        return io

@@ -34,8 +34,8 @@ from types import ModuleType
 
 #: The compiled modules: the loop's hardware side and the plugins' busiest helpers.
 MODULES: tuple[str, ...] = (
-    'rm_base.hardware.timing',
-    'rm_base.hardware.scheduler',
+    'rm_base.loop.timing',
+    'rm_base.loop.scheduler',
     'rm_base.hardware.bus',
     'rm_base.hardware.actuators.base',
     'rm_base.motors.dji.actuator',

@@ -7,7 +7,8 @@ import pytest
 from diagnostic_msgs.msg import DiagnosticStatus
 from rm_base.bridge.diagnostics import CommandStats, DiagnosticsReporter
 from rm_base.bridge.messages import time_msg
-from rm_base.hardware import BusStats, JointState, PeriodStats
+from rm_base.hardware import BusStats, JointState
+from rm_base.loop import PeriodStats
 
 OK, WARN, ERROR = DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR
 
@@ -161,7 +162,7 @@ def test_scheduler_warns_about_new_overruns_only_once():
 
 
 def test_the_loop_reports_its_lateness_and_every_component():
-    from rm_base.hardware import DurationSummary
+    from rm_base.loop import DurationSummary
 
     stats = dataclasses.replace(
         scheduler_stats(),

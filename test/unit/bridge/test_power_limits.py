@@ -47,7 +47,7 @@ def test_new_joints_or_model_replace_the_stage():
     limits.apply(parse_power_limit(request(joints=['wheel_fl'], k1=1.0), WHEELS))
     stage = hw.power_limits['chassis']
     assert stage is not first and stage.joints == ('wheel_fl',)
-    assert [s.name for s in hw.scheduler._outputs].count(stage.name) == 1
+    assert hw.scheduler.order().count(stage.name) == 1
 
 
 @pytest.mark.parametrize(

@@ -20,6 +20,8 @@ class FakePlugin:
     def __init__(self, rate=100.0):
         self.name = 'fake'
         self.rate = rate
+        self.joints = ()
+        self.loop_reads = ()
         self.enabled = True
         self.command_listener = None
         self.runs = []

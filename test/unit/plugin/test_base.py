@@ -18,7 +18,7 @@ from rm_base.plugin import (
     PluginParams,
     TargetRejectedError,
 )
-from rm_base.plugin.node_io import node_io
+from rm_base.plugin.node_io import DdsJointIO
 from support.ros import wait_until
 from support.wheel_plugin import MS, T0, Wheel, WheelPlugin, at, command, modes
 
@@ -37,9 +37,15 @@ def node(ros_context):
 
 
 @pytest.fixture
-def sent(node, monkeypatch):
+def io(node):
+    """The plugin I/O the node's plugins share, as a host gives it to each."""
+    return DdsJointIO(node)
+
+
+@pytest.fixture
+def sent(io, monkeypatch):
     """ActuatorCmd messages published through the node's shared publisher, in order."""
-    publisher = node_io(node).actuator_cmd
+    publisher = io.actuator_cmd
     messages = []
     original = publisher.publish
 
@@ -52,9 +58,9 @@ def sent(node, monkeypatch):
 
 
 @pytest.fixture
-def plugin(node):
+def plugin(node, io):
     plugin = WheelPlugin()
-    plugin.init(node, 'wheel', PluginParams(node, 'wheel', 'test/Wheel'))
+    plugin.init(node, 'wheel', PluginParams(node, 'wheel', 'test/Wheel'), io)
     return plugin
 
 
@@ -243,13 +249,13 @@ def test_send_rejects_joints_the_plugin_did_not_claim(plugin, sent):
     assert sent == []
 
 
-def test_two_plugins_cannot_drive_the_same_joint(node, plugin):
+def test_two_plugins_cannot_drive_the_same_joint(node, io, plugin):
     other = WheelPlugin()
     with pytest.raises(
         JointClaimError,
         match=r"plugin 'other' cannot drive joint 'wheel' \(already driven by plugin 'wheel'\)",
     ):
-        other.init(node, 'other')
+        other.init(node, 'other', io=io)
 
 
 def test_state_is_published_on_transition(node, plugin):

@@ -9,7 +9,8 @@ import rclpy
 from rclpy.context import Context
 from rclpy.node import Node
 from rclpy.qos import HistoryPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
-from rm_base.hardware.scheduler import Scheduler
+from rm_base.loop.data import PUBLISHED
+from rm_base.loop.scheduler import Scheduler
 from rm_base.plugin.inbox import MAX_QUEUED, Inbox, queue_depth
 from rm_base.plugin.node_io import DdsJointIO
 from rm_base.plugin.outbox import Outbox
@@ -124,13 +125,21 @@ def test_other_nodes_publishing_a_local_topic_are_reported(ros_context):
 def test_input_stages_of_plugins_run_before_the_plugins_and_leave_on_release(ros_context):
     node = Node('inbox_test', context=ros_context)
     io = DdsJointIO(node)
-    assert io.loop_input('imu port', lambda: True) is False  # no loop: nothing would call it
+    # no loop: nothing would call it
+    assert io.loop_input('imu port', lambda: True, 'port imu') is False
     io.loop = Scheduler([], [])
     calls = []
-    assert io.loop_input('imu port', lambda: calls.append(len(calls)) is None) is True
-    plugin = lambda now_ns, dt: calls.append('plugin')  # noqa: E731
-    plugin.name = 'plugin imu'
-    io.loop.add_stage(plugin)
+
+    class Plugin:
+        name, reads, writes = 'plugin imu', ('port imu',), (PUBLISHED,)
+
+        def __call__(self, now_ns, dt):
+            calls.append('plugin')
+
+    io.loop.add_after_tick(lambda: None, reads=(PUBLISHED,))  # the ROS edge
+    with io.loop.compose():
+        io.loop.add_stage(Plugin())  # added first, runs after the port it reads
+        assert io.loop_input('imu port', lambda: calls.append(len(calls)) is None, 'port imu')
     io.loop.tick(0)
     assert calls == [0, 'plugin']
     assert dict(io.loop.component_stats())['imu port'].count == 1  # it took something: timed

@@ -5,9 +5,10 @@ import threading
 
 import can
 import pytest
-from rm_base.hardware.errors import HardwareConfigError
-from rm_base.hardware.scheduler import Scheduler
-from rm_base.hardware.timing import HISTOGRAM_EDGES_US
+from rm_base.loop import LoopConfigError
+from rm_base.loop.data import JOINT_EFFORTS, JOINT_STATES, JOINT_TARGETS
+from rm_base.loop.scheduler import Scheduler
+from rm_base.loop.timing import HISTOGRAM_EDGES_US
 from rm_base.runtime.realtime import in_loop_thread
 from support.hardware import MS, T0
 from support.ros import wait_until
@@ -79,7 +80,7 @@ def test_dt_is_the_time_since_the_previous_tick():
 
 
 def test_rate_must_be_positive():
-    with pytest.raises(HardwareConfigError, match='rate must be > 0'):
+    with pytest.raises(LoopConfigError, match='rate must be > 0'):
         Scheduler([], [], rate_hz=0.0)
 
 
@@ -214,22 +215,28 @@ def test_real_thread_runs_and_stops_idempotently():
 
 
 class Stage:
-    def __init__(self, events, name, works=True):
+    def __init__(self, events, name, works=True, reads=(), writes=()):
         self.events = events
         self.name = name
         self.works = works
+        self.reads, self.writes = reads, writes
 
     def __call__(self, now_ns, dt):
         self.events.append(('stage', self.name, now_ns))
         return self.works
 
 
-def test_stages_run_before_and_after_the_update_in_the_order_added():
+def test_the_order_follows_what_each_stage_reads_and_writes_not_the_order_added():
     events = []
     scheduler, _ = make(events)
-    scheduler.add_stage(Stage(events, 'feedback'))
-    scheduler.add_stage(Stage(events, 'plugin chassis'))
-    scheduler.add_stage(Stage(events, 'power limit'), after_update=True)
+    power = Stage(events, 'power limit', reads=(JOINT_EFFORTS,), writes=(JOINT_EFFORTS,))
+    plugin = Stage(events, 'plugin chassis', reads=(JOINT_STATES,), writes=(JOINT_TARGETS,))
+    scheduler.add_stage(power)
+    scheduler.add_stage(plugin)
+    scheduler.add_stage(Stage(events, 'feedback', writes=(JOINT_STATES,)))
+    assert scheduler.order() == (
+        'feedback', 'plugin chassis', 'actuators', 'power limit', 'pack', 'send'
+    )
     scheduler.tick(T0)
     order = [e[:2] for e in events if e[0] in ('stage', 'update')] + [events[-1][:1]]
     assert order == [
@@ -262,7 +269,7 @@ def test_a_removed_stage_no_longer_runs_and_a_name_cannot_be_taken_twice():
     events = []
     scheduler, _ = make(events)
     scheduler.add_stage(Stage(events, 'plugin x'))
-    with pytest.raises(HardwareConfigError, match="component named 'plugin x' already"):
+    with pytest.raises(LoopConfigError, match="component named 'plugin x' already"):
         scheduler.add_stage(Stage(events, 'plugin x'))
     assert scheduler.remove_stage('plugin x')
     assert not scheduler.remove_stage('plugin x')
@@ -279,7 +286,7 @@ def test_priority_is_asked_for_on_the_loop_thread_and_a_refusal_is_a_warning(cap
         raise PermissionError(1, 'Operation not permitted')
 
     scheduler = Scheduler([], [], priority=50, set_priority=refuse, thread_name='loop-test')
-    with caplog.at_level('WARNING', logger='rm_base.hardware.scheduler'):
+    with caplog.at_level('WARNING', logger='rm_base.loop.scheduler'):
         scheduler.start()
         assert wait_until(lambda: scheduler.stats().ticks >= 5, timeout=10.0)  # runs on
         scheduler.stop()
@@ -298,7 +305,7 @@ def test_priority_zero_keeps_normal_scheduling():
 
 @pytest.mark.parametrize('priority', [-1, 100])
 def test_priority_outside_0_to_99_is_refused(priority):
-    with pytest.raises(HardwareConfigError, match='priority must be 0-99'):
+    with pytest.raises(LoopConfigError, match='priority must be 0-99'):
         Scheduler([], [], priority=priority)
 
 
@@ -323,6 +330,7 @@ def test_time_left_is_known_only_inside_a_tick_of_the_loop_thread():
 
     class Probe:
         name = 'probe'
+        reads = writes = ()
 
         def __call__(self, now_ns, dt):
             seen.append(scheduler.time_left_ns())
@@ -343,6 +351,7 @@ def test_while_the_thread_runs_the_loop_collects_garbage_after_its_ticks():
     class Cycles:
         # each tick leaves reference cycles behind: only a collection frees them
         name = 'cycles'
+        reads = writes = ()
 
         def __call__(self, now_ns, dt):
             for _ in range(200):
@@ -374,6 +383,7 @@ class LoopMark:
     """A stage that records whether it runs in a thread marked as a control loop's."""
 
     name = 'mark'
+    reads = writes = ()
 
     def __init__(self):
         self.marks = []

@@ -3,7 +3,7 @@
 import gc
 
 import pytest
-from rm_base.hardware import garbage
+from rm_base.loop import garbage
 
 THRESHOLDS = (700, 10, 10)  # CPython's defaults
 

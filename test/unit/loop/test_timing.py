@@ -1,7 +1,7 @@
 """DurationHistogram: p50 / p99 / max of the loop's components, window and total."""
 
 import pytest
-from rm_base.hardware.timing import BUCKET_EDGES_NS, DurationHistogram
+from rm_base.loop.timing import BUCKET_EDGES_NS, DurationHistogram
 
 
 def test_when_nothing_is_recorded_expect_an_empty_summary():

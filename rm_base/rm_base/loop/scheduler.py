@@ -1,51 +1,54 @@
-"""The robot's one control loop: inputs, then update, then pack, then send.
-
-Why one module: the tick, the thread that paces it and the statistics they keep share the
-deadline and the per-component timings; apart, each would reach into the others' state.
+"""The robot's one control loop: components in their derived order, at a fixed rate.
 
 One dedicated thread sleeps to absolute deadlines on ``time.perf_counter_ns`` (1 kHz by
 default) and runs :meth:`Scheduler.tick`; tests call ``tick(now_ns)`` themselves, with no
-thread, for deterministic (lockstep) steps. Each tick runs, in this fixed order:
+thread, for deterministic (lockstep) steps. A tick runs every *component* once:
 
-1. the *input stages* (:meth:`Scheduler.add_stage`): the received feedback, what the
-   serial devices sent (the loop reads their ports itself), the commands, then each
-   plugin that is due, which sets joint targets on the actuators directly,
-2. ``update(now_ns, dt)`` on every actuator (control laws, safety),
-3. the *output stages* (``add_stage(..., after_update=True)``): group stages such as a
-   power limit that scales a group's efforts,
-4. ``pack_command()`` on every packer (actuators with their own frame, command groups),
-5. ``send(msg)`` of every packed frame, each through the send function (bus) paired with
-   its packer,
-6. the *after-tick callbacks* (:meth:`Scheduler.add_after_tick`): they only wake the
-   threads of the ROS edge (the publishers), so that those run in the loop's idle time
-   instead of taking the interpreter from it in the middle of a tick,
-7. in the loop's thread, the interpreter's garbage collection when one is due
-   (:mod:`rm_base.hardware.garbage`): never in the middle of a tick.
+- the loop's own three: ``actuators`` (every actuator's ``update(now_ns, dt)``: control
+  laws, safety), ``pack`` (``pack_command()`` of every packer) and ``send`` (each packed
+  frame through the send function paired with its packer);
+- the stages added (:meth:`Scheduler.add_stage`): the received feedback, what the serial
+  devices sent, the commands, each plugin that is due, a power limit per group...
+
+Each component declares what it reads and writes (:mod:`rm_base.loop.data`) and the order
+follows from that (:mod:`rm_base.loop.order`): the feedback and the plugins before the
+actuators (they write the states and targets the actuators read), a power limit between
+the actuators and ``pack`` (it modifies the efforts). Adding a component is declaring its
+data; a cycle, or an output nothing reads, is a :class:`LoopConfigError` naming the
+components. Several additions check together inside :meth:`Scheduler.compose`.
+
+After the components, the *after-tick callbacks* (:meth:`Scheduler.add_after_tick`) only
+wake the threads of the ROS edge (the publishers, which read what the tick left), so those
+run in the loop's idle time instead of taking the interpreter from it mid-tick; then, in
+the loop's thread, the interpreter's garbage collection when one is due
+(:mod:`rm_base.loop.garbage`): never in the middle of a tick.
 
 A tick that ends after the next deadline is an overrun (a missed deadline): the next tick
 then starts at once, late, if its period has not passed yet (as a firmware loop on
 ``vTaskDelayUntil`` does); periods that passed whole are skipped and counted, never caught
-up in a burst. The loop
-measures itself: start lateness and the duration of every component (each stage, the
-actuator updates, packing, sending) as p50 / p99 / max (:mod:`rm_base.hardware.timing`),
-and logs the window every ``report_period_s`` with the three most expensive components.
-An exception escaping a tick goes to ``on_error(exc)``, which decides whether to go on (as
-python-can's ``ThreadBasedCyclicSendTask``); without a hook the loop stops.
+up in a burst. The loop measures itself: start lateness and the duration of every
+component as p50 / p99 / max (:mod:`rm_base.loop.timing`), and logs the window every
+``report_period_s`` with the three most expensive components. An exception escaping a
+tick goes to ``on_error(exc)``, which decides whether to go on (as python-can's
+``ThreadBasedCyclicSendTask``); without a hook the loop stops.
 """
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import threading
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import Protocol
 
 import can
 
-from rm_base.hardware import garbage
-from rm_base.hardware.errors import HardwareConfigError
-from rm_base.hardware.timing import (
+from rm_base.loop import garbage
+from rm_base.loop.data import FRAMES, JOINT_EFFORTS, JOINT_STATES, JOINT_TARGETS
+from rm_base.loop.errors import LoopConfigError
+from rm_base.loop.order import Declared, derive_order, unread_outputs
+from rm_base.loop.timing import (
     HISTOGRAM_EDGES_US,
     DurationHistogram,
     DurationSummary,
@@ -69,14 +72,13 @@ class Packer(Protocol):
         """Return this tick's frame, or None."""
 
 
-class Stage(Protocol):
+class Stage(Declared, Protocol):
     """A component of the loop besides the actuators (feedback, a plugin, a power limit).
 
-    Attributes:
-        name: component name in the timing statistics (``plugin chassis``).
+    Its ``name`` is its name in the timing statistics (``plugin chassis``); ``reads`` and
+    ``writes`` name its data (:mod:`rm_base.loop.data`): a datum it reads and writes, it
+    modifies.
     """
-
-    name: str
 
     def __call__(self, now_ns: int, dt: float) -> bool | None:
         """Do this tick's work; return False if there was none (then it is not timed)."""
@@ -86,6 +88,90 @@ class Stage(Protocol):
 ACTUATORS, PACK, SEND = 'actuators', 'pack', 'send'
 #: The garbage collections the loop thread ran after its ticks (not part of a tick).
 GC = 'gc'
+_OWN = (ACTUATORS, PACK, SEND)
+
+
+class _Update:
+    """The loop's ``actuators`` component: every actuator's update."""
+
+    name = ACTUATORS
+    reads = (JOINT_TARGETS, JOINT_STATES)
+    writes = (JOINT_EFFORTS,)
+
+    def __init__(self, actuators: tuple[Updatable, ...]) -> None:
+        self._actuators = actuators
+
+    def __call__(self, now_ns: int, dt: float) -> bool:
+        for actuator in self._actuators:
+            actuator.update(now_ns, dt)
+        return True
+
+
+class _Pack:
+    """The loop's ``pack`` component: this tick's frame of every packer, with its send."""
+
+    name = PACK
+    reads = (JOINT_EFFORTS,)
+    writes = (FRAMES,)
+
+    def __init__(
+        self,
+        packers: tuple[tuple[Packer, Callable[[can.Message], object]], ...],
+        frames: list[tuple[Callable[[can.Message], object], can.Message]],
+    ) -> None:
+        self._packers = packers
+        self.frames = frames
+
+    def __call__(self, now_ns: int, dt: float) -> bool:
+        frames = self.frames
+        frames.clear()
+        for packer, send in self._packers:
+            msg = packer.pack_command()
+            if msg is not None:
+                frames.append((send, msg))
+        return True
+
+
+class _Send:
+    """The loop's ``send`` component: the packed frames, then the flush."""
+
+    name = SEND
+    reads = (FRAMES,)
+    writes: tuple[str, ...] = ()
+
+    def __init__(
+        self,
+        frames: list[tuple[Callable[[can.Message], object], can.Message]],
+        flush: Callable[[], object] | None,
+    ) -> None:
+        self.frames = frames
+        self._flush = flush
+
+    def __call__(self, now_ns: int, dt: float) -> bool:
+        for send, msg in self.frames:
+            send(msg)
+        if self._flush is not None:
+            self._flush()
+        return True
+
+
+class _Edge:
+    """An after-tick callback as the order sees it: a reader of what the tick left."""
+
+    writes: tuple[str, ...] = ()
+
+    def __init__(self, callback: Callable[[], object], reads: tuple[str, ...]) -> None:
+        self.name = f'after tick {getattr(callback, "__qualname__", callback)!s}'
+        self.callback = callback
+        self.reads = reads
+
+
+def _check_read(components: tuple[Stage, ...], edges: tuple[_Edge, ...]) -> None:
+    """Raise LoopConfigError naming each output of components that nothing reads."""
+    unread = unread_outputs(components + edges)
+    if unread:
+        text = '; '.join(f'{name!r} writes {datum!r}' for name, datum in unread)
+        raise LoopConfigError(f'the loop has outputs that nothing reads: {text}')
 
 
 class Scheduler:
@@ -129,26 +215,31 @@ class Scheduler:
                 warning.
             set_priority: applies the priority to the calling thread (tests replace it).
             collect_garbage: while the thread runs, the process's garbage collection is
-                the loop's, after its ticks (:mod:`rm_base.hardware.garbage`); False
+                the loop's, after its ticks (:mod:`rm_base.loop.garbage`); False
                 leaves it to the interpreter.
 
         Raises:
-            HardwareConfigError: rate_hz not positive, priority outside 0-99.
+            LoopConfigError: rate_hz not positive, priority outside 0-99.
         """
         if not rate_hz > 0:
-            raise HardwareConfigError(f'scheduler rate must be > 0 Hz, got {rate_hz!r}')
+            raise LoopConfigError(f'scheduler rate must be > 0 Hz, got {rate_hz!r}')
         if not 0 <= priority <= 99:
-            raise HardwareConfigError(f'scheduler priority must be 0-99, got {priority!r}')
+            raise LoopConfigError(f'scheduler priority must be 0-99, got {priority!r}')
         self.priority = priority
         self._set_priority = set_priority or set_fifo_priority
-        self._actuators = tuple(actuators)
-        self._packers = tuple(packers)
-        self._inputs: tuple[Stage, ...] = ()
-        self._outputs: tuple[Stage, ...] = ()
+        self._frames: list[tuple[Callable[[can.Message], object], can.Message]] = []
+        # every component in the order added (the order's tie-break), the loop's own first
+        self._components: tuple[Stage, ...] = (
+            _Update(tuple(actuators)),
+            _Pack(tuple(packers), self._frames),
+            _Send(self._frames, flush),
+        )
+        self._order: tuple[Stage, ...] = self._components
+        self._edges: tuple[_Edge, ...] = ()
         self._after_tick: tuple[Callable[[], object], ...] = ()
+        self._composing = 0
         self._report_period_ns = round(report_period_s * 1e9)
         self._thread_name = thread_name
-        self._flush = flush
         self._collect_garbage = collect_garbage
         self._lateness = DurationHistogram()
         self._durations: dict[str, DurationHistogram] = {}
@@ -161,7 +252,6 @@ class Scheduler:
         self._sleep = sleep
         self._last_tick_ns: int | None = None
         self._tick_deadline_ns: int | None = None
-        self._frames: list[tuple[Callable[[can.Message], object], can.Message]] = []
         self._observer: Callable[[int, int], object] | None = None
         self._stop = threading.Event()
         # not _thread: compiled (rm_base/runtime/compiled.py), that is __thread in C, a keyword
@@ -180,34 +270,95 @@ class Scheduler:
         self._edges_ns = tuple(e * 1000 for e in HISTOGRAM_EDGES_US)
 
     # --- composition ---
-    def add_stage(self, stage: Stage, *, after_update: bool = False) -> None:
-        """Add a component: before the actuators' update (inputs), or after it (outputs).
+    def add_stage(self, stage: Stage) -> None:
+        """Add a component; it runs where its declared reads and writes put it.
 
-        Stages run in the order added; a stage added while the loop runs joins at its
-        next tick (the stage tuple is swapped whole, never changed in place).
+        A stage added while the loop runs joins at its next tick (the order is swapped
+        whole, never changed in place). Inside :meth:`compose` the checks wait for its end.
 
         Raises:
-            HardwareConfigError: a component of that name exists already.
+            LoopConfigError: a component of that name exists already; the stage closes a
+                cycle; outside ``compose``, an output that no component reads.
         """
-        names = {s.name for s in self._inputs + self._outputs} | {ACTUATORS, PACK, SEND, GC}
+        names = {s.name for s in self._components} | {GC}
         if stage.name in names:
-            raise HardwareConfigError(f'the loop has a component named {stage.name!r} already')
+            raise LoopConfigError(f'the loop has a component named {stage.name!r} already')
         self._durations.setdefault(stage.name, DurationHistogram())
-        if after_update:
-            self._outputs += (stage,)
-        else:
-            self._inputs += (stage,)
+        self._rearrange((*self._components, stage), self._edges)
 
-    def add_after_tick(self, callback: Callable[[], object]) -> None:
+    def remove_stage(self, name: str) -> bool:
+        """Remove the stage of that name from the loop (from its next tick on).
+
+        The loop's own components stay. No check: a removal leaves no cycle, and an output
+        its reader's removal leaves unread is the remover's (a plugin's port goes with it).
+
+        Returns:
+            Whether there was one. A tick in progress in the loop thread may still be
+            running it: the caller must wait for it by its own means (a lock).
+        """
+        if name in (ACTUATORS, PACK, SEND):
+            return False
+        kept = tuple(s for s in self._components if s.name != name)
+        found = len(kept) < len(self._components)
+        # Its timing stays: a tick in progress may still record into it.
+        self._components = kept
+        self._order = tuple(s for s in self._order if s.name != name)
+        return found
+
+    def add_after_tick(
+        self, callback: Callable[[], object], reads: tuple[str, ...] = ()
+    ) -> None:
         """Call callback() at the end of every tick, after the frames went out.
 
-        For waking threads (``threading.Event.set``): it must not block or take long.
+        For waking threads (``threading.Event.set``) of the ROS edge, which then read the
+        data named in reads (they count as read for the checks): it must not block or take
+        long.
         """
         self._after_tick += (callback,)
+        if reads:
+            self._rearrange(self._components, (*self._edges, _Edge(callback, reads)))
 
     def remove_after_tick(self, callback: Callable[[], object]) -> None:
         """Stop calling callback after the ticks (no error if it was not added)."""
         self._after_tick = tuple(c for c in self._after_tick if c != callback)
+        self._edges = tuple(e for e in self._edges if e.callback != callback)
+
+    @contextlib.contextmanager
+    def compose(self) -> Iterator[None]:
+        """Check the components added inside together, at the end (a host's plugins).
+
+        A plugin's device stage writes what its plugin, added later, reads: checked one
+        by one, the first would be an unread output.
+
+        Raises:
+            LoopConfigError: at the end, an output that no component reads.
+        """
+        self._composing += 1
+        try:
+            yield
+        finally:
+            self._composing -= 1
+        if not self._composing:
+            self.check()
+
+    def check(self) -> None:
+        """Raise if a component's output is read by no component (nor the ROS edge).
+
+        Raises:
+            LoopConfigError: naming the component and the datum.
+        """
+        _check_read(self._components, self._edges)
+
+    def _rearrange(self, components: tuple[Stage, ...], edges: tuple[_Edge, ...]) -> None:
+        """Derive the order of components, check it, and make it the loop's."""
+        order = tuple(components[i] for i in derive_order(components, _OWN))
+        if not self._composing:
+            _check_read(components, edges)
+        self._components, self._edges, self._order = components, edges, order
+
+    def order(self) -> tuple[str, ...]:
+        """The components' names in the order a tick runs them."""
+        return tuple(s.name for s in self._order)
 
     def observe_ticks(self, observer: Callable[[int, int], object] | None) -> None:
         """Call observer(start_error_ns, tick_ns) after each tick of the thread; None stops.
@@ -219,23 +370,9 @@ class Scheduler:
         """
         self._observer = observer
 
-    def remove_stage(self, name: str) -> bool:
-        """Remove the stage of that name from the loop (from its next tick on).
-
-        Returns:
-            Whether there was one. A tick in progress in the loop thread may still be
-            running it: the caller must wait for it by its own means (a lock).
-        """
-        inputs = tuple(s for s in self._inputs if s.name != name)
-        outputs = tuple(s for s in self._outputs if s.name != name)
-        found = len(inputs) + len(outputs) < len(self._inputs) + len(self._outputs)
-        # Its timing stays: a tick in progress may still record into it.
-        self._inputs, self._outputs = inputs, outputs
-        return found
-
     # --- one cycle ---
     def tick(self, now_ns: int) -> int:
-        """Run one cycle: input stages, update all, output stages, pack all, send all.
+        """Run one cycle: every component in the derived order, then the after-tick calls.
 
         Args:
             now_ns: the tick time [ns] on the actuators' clock.
@@ -246,42 +383,19 @@ class Scheduler:
         last = self._last_tick_ns
         dt = (now_ns - last) / 1e9 if last is not None and now_ns > last else self._period_s
         self._last_tick_ns = now_ns
-        timer = time.perf_counter_ns  # durations are real CPU-side time, even in lockstep
-        durations = self._durations
-        t = self._run_stages(self._inputs, now_ns, dt, timer())
-        for actuator in self._actuators:
-            actuator.update(now_ns, dt)
-        t1 = timer()
-        durations[ACTUATORS].record(t1 - t)
-        t = self._run_stages(self._outputs, now_ns, dt, t1)
-        frames = self._frames
-        frames.clear()
-        for packer, send in self._packers:
-            msg = packer.pack_command()
-            if msg is not None:
-                frames.append((send, msg))
-        t1 = timer()
-        durations[PACK].record(t1 - t)
-        for send, msg in frames:
-            send(msg)
-        if self._flush is not None:
-            self._flush()
-        durations[SEND].record(timer() - t1)
-        self._ticks += 1
-        for callback in self._after_tick:
-            callback()
-        return len(frames)
-
-    def _run_stages(self, stages: tuple[Stage, ...], now_ns: int, dt: float, t: int) -> int:
-        """Run stages from timer time t [ns], recording each one that worked; return the end."""
         durations, timer = self._durations, time.perf_counter_ns
-        for stage in stages:
+        # durations are real CPU-side time, even in lockstep
+        t = timer()
+        for stage in self._order:
             worked = stage(now_ns, dt) is not False
             t1 = timer()
             if worked:
                 durations[stage.name].record(t1 - t)
             t = t1
-        return t
+        self._ticks += 1
+        for callback in self._after_tick:
+            callback()
+        return len(self._frames)
 
     # --- the thread ---
     @property
@@ -401,9 +515,8 @@ class Scheduler:
         )
 
     def component_stats(self) -> tuple[tuple[str, DurationSummary], ...]:
-        """Duration of each component since start, in loop order."""
-        order = [s.name for s in self._inputs] + [ACTUATORS]
-        order += [s.name for s in self._outputs] + [PACK, SEND, GC]
+        """Duration of each component since start, in loop order (then ``gc``)."""
+        order = [s.name for s in self._order] + [GC]
         return tuple((name, self._durations[name].total()) for name in order)
 
     def _record_start(self, error_ns: int) -> None:
