@@ -97,7 +97,8 @@ def _cell(text: str) -> str:
     return text.replace('|', '\\|').replace('\n', ' ')
 
 
-def _table(parameters: Iterable[DeclaredParameter]) -> list[str]:
+def markdown_table(parameters: Iterable[DeclaredParameter]) -> list[str]:
+    """The Markdown table of parameters, a row each (the reference's one format)."""
     lines = [
         '| parameter | type | unit | default | bounds | description |',
         '|---|---|---|---|---|---|',
@@ -154,7 +155,7 @@ def joint_types() -> list[str]:
         for classes in shared.values():
             names = ', '.join(cls.type_name for cls in classes)
             out += [f'### joints.<joint> options: {names}\n',
-                    *_table(classes[0].options_schema.declared('joints.<joint>.')), '']
+                    *markdown_table(classes[0].options_schema.declared('joints.<joint>.')), '']
     return out
 
 
@@ -165,13 +166,13 @@ def tables() -> list[str]:
     return [
         '### buses.<bus>\n',
         'One table per CAN bus; `<bus>` is its name (joints name it in `bus`).\n',
-        *_table(BUS_SCHEMA.declared('buses.<bus>.')),
+        *markdown_table(BUS_SCHEMA.declared('buses.<bus>.')),
         '',
         '### joints.<joint>\n',
         "One table per joint; `<joint>` is its name on /actuator_cmd and /joint_states. "
         "Keys beyond these are the options of the joint's type (next section). *none*: "
         "the type's own value (or no log, no PID).\n",
-        *_table(JOINT_SCHEMA.declared('joints.<joint>.')),
+        *markdown_table(JOINT_SCHEMA.declared('joints.<joint>.')),
         '',
     ]
 
@@ -191,7 +192,7 @@ def sim_tables() -> list[str]:
          "the image link's keyboard and mouse on a pty (silent until switched on)"),
     ):
         out += [f'### sim.{group}\n', f'With `sim: true`: {what}.\n',
-                *_table(schema.declared(f'sim.{group}.')), '']
+                *markdown_table(schema.declared(f'sim.{group}.')), '']
     return out + body_tables() + motor_tables()
 
 
@@ -204,7 +205,7 @@ def body_tables() -> list[str]:
         key = 'sim.body' + (f'.{table.key}' if table.key else '')
         variant = f', {table.variant}' if table.variant else ''
         out += [f'### {key}{variant}\n', f'With `sim: true`: {table.note}.\n',
-                *_table(table.schema.declared(key + '.')), '']
+                *markdown_table(table.schema.declared(key + '.')), '']
     return out
 
 
@@ -226,13 +227,13 @@ def motor_tables() -> list[str]:
         "With `sim: true`: the simulated motor of a joint. It takes the joint's name, id and "
         "protocol options; these keys override the rest. The physics default to the simulated "
         "type's model (output-shaft values).\n",
-        *_table([*common, *PHYSICS_SCHEMA.declared(prefix)]),
+        *markdown_table([*common, *PHYSICS_SCHEMA.declared(prefix)]),
         '',
     ]
     for family in families().values():
         if family.name in BUILT_IN and family.sim is not None:
             out += [f'#### joints.<joint>.sim, {family.name} family\n',
-                    *_table(family.sim.schema.declared(prefix)), '']
+                    *markdown_table(family.sim.schema.declared(prefix)), '']
     return out
 
 
@@ -276,7 +277,7 @@ def render(
         for prefix, members in groups.items():
             if prefix:
                 out.append(f'### {prefix}\n')
-            out.extend(_table(members))
+            out.extend(markdown_table(members))
             out.append('')
         if node == 'can_bridge':
             out.extend(tables())
@@ -286,7 +287,7 @@ def render(
         out.append('## rm_robot: keys of other robots\n')
         for robot, parameters in others.items():
             out += [f'### {robot}\n', f'What `{robot}.yaml` declares beyond the {ROBOT} robot.\n',
-                    *_table(parameters), '']
+                    *markdown_table(parameters), '']
     return '\n'.join(out).rstrip() + '\n'
 
 

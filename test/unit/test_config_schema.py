@@ -1,24 +1,40 @@
 """rm_base.config.schema: one declaration validates a table and gives its reference rows."""
 
+import dataclasses
+import enum
 import math
+import re
 
 import pytest
 from rm_base.config.schema import (
     OPTIONAL,
     REQUIRED,
+    InvalidValueError,
     Schema,
     boolean,
+    booleans,
+    build,
+    choice,
+    declare,
+    group,
     integer,
+    integers,
     mapping,
     number,
     numbers,
     one_of,
+    rows,
     signs,
     string,
     strings,
     tables,
 )
 from rm_base.errors import ConfigError
+
+
+class Shape(enum.Enum):
+    ROUND = 1
+    SQUARE = 2
 
 SCHEMA = Schema((
     number('radius', REQUIRED, unit='m', gt=0.0, description='wheel radius'),
@@ -140,3 +156,52 @@ def test_lists_of_names_signs_and_tables_read_as_tuples():
 def test_a_bad_list_names_its_entry(table, message):
     with pytest.raises(ConfigError, match=message):
         LISTS.read('chassis', table)
+
+
+@pytest.mark.parametrize(
+    ('key', 'value', 'expected'),
+    [
+        (integers('ids', description='d', ge=1), [1, 2], (1, 2)),
+        (integers('ids', description='d', ge=1), [1, 0], 'entry [1] must be >= 1, got 0'),
+        (numbers('gains', description='d', gt=0.0), [0.5, -1.0], 'entry [1] must be > 0.0'),
+        (booleans('flags', description='d', length=2), [True, False], (True, False)),
+        (booleans('flags', description='d', length=2), [True], 'must have 2 entries, has 1'),
+        (strings('joints', description='d', unique=True), ['a', 'b'], ('a', 'b')),
+        (strings('joints', description='d', unique=True), ['a', 'a'], 'duplicate entries: a'),
+        (choice('shape', Shape, description='d'), 'ROUND', Shape.ROUND),
+        (choice('shape', Shape, description='d'), 'oval', 'one of round, square'),
+    ],
+)
+def test_the_array_and_choice_keys_convert_or_name_the_problem(key, value, expected):
+    if isinstance(expected, str):
+        with pytest.raises(InvalidValueError, match=re.escape(expected)):
+            key.read({key.name: value})
+    else:
+        assert key.read({key.name: value}) == expected
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class Motor:
+    limit: float = declare(number, 2.0, description='effort limit', unit='N*m', gt=0.0)
+
+
+@dataclasses.dataclass(frozen=True, kw_only=True)
+class Arm:
+    joints: tuple[str, ...] = declare(strings, description='joints', unique=True)
+    motor: Motor = group(Motor)
+
+
+def test_a_declared_set_builds_with_each_key_under_its_group_prefix():
+    asked = []
+
+    def value_of(prefix, key):
+        asked.append(prefix + key.name)
+        return key.read({'joints': ['j1']} if not prefix else {})
+
+    assert build(Arm, value_of) == Arm(joints=('j1',), motor=Motor(limit=2.0))
+    assert asked == ['joints', 'motor.limit']
+    assert [(r.key, r.default, r.unit) for r in rows(Arm, 'arm.')] == [
+        ('arm.joints', None, ''), ('arm.motor.limit', 2.0, 'N*m'),
+    ]
+    with pytest.raises(TypeError, match='not a declared parameter set'):
+        build(int, value_of)

@@ -1,14 +1,14 @@
 """Typed ROS parameters under a plugin's dotted prefix (``chassis.wheel_radius``).
 
-Why one module: one typed accessor per ROS parameter type, each with its descriptor and the
-checks that name the key.
-
-Each accessor declares one parameter on the host node with a ``ParameterDescriptor``
-(description, unit, constraints, read-only), takes its value from the robot config
-(``--params-file`` or ``parameter_overrides``) or the typed default, checks type and range,
-and returns a plain Python value. A parameter without a default is *required*: a config that
-omits it fails at start-up with a ``ParameterError`` naming the plugin, the key, the expected
-type and unit; so does a value of the wrong type or out of range.
+Every parameter is a key of :mod:`rm_base.config.schema` (the one vocabulary of type,
+unit, bounds, default and description): a plugin reads a declared parameter set with
+:meth:`PluginParams.read`, or one key at a time with the typed accessors (``double``,
+``string_array``...), which build the same keys. Each key is declared on the host node
+with a ``ParameterDescriptor`` (description, unit, constraints, read-only), takes its value
+from the robot config (``--params-file`` or ``parameter_overrides``) or the default, and is
+checked and returned as a plain Python value. A parameter without a default is *required*:
+a config that omits it fails at start-up with a ``ParameterError`` naming the plugin, the
+key, the expected type and unit; so does a value of the wrong type or out of range.
 
 Parameters are read once, at init, and declared read-only so ``ros2 param set`` is refused
 with a reason instead of silently doing nothing.
@@ -25,22 +25,23 @@ from rcl_interfaces.msg import ParameterDescriptor
 
 from rm_base.config import schema
 from rm_base.config.schema import (
+    OPTIONAL,
     REQUIRED,
-    Bounds,
     DeclaredParameter,
     InvalidValueError,
     Key,
     WrongTypeError,
-    array_of,
     describe_value,
-    to_bool,
-    to_float,
-    to_int,
-    to_str,
 )
 from rm_base.plugin.errors import ParameterError
 
 E = TypeVar('E', bound=Enum)
+T = TypeVar('T')
+
+
+def _listed(default: object) -> Any:
+    """An array default as the list a ROS parameter takes (REQUIRED as it is)."""
+    return default if default is REQUIRED else list(default)  # type: ignore[call-overload]
 
 
 # Every declaration through PluginParams, per node, in declaration order.
@@ -163,34 +164,36 @@ class PluginParams:
         Matching is case-insensitive on the member name: ``mecanum`` selects
         ``Kinematics.MECANUM``.
         """
-        names = [member.name.lower() for member in options]
-        by_name = {member.name.lower(): member for member in options}
-
-        def convert(value: object) -> E:
-            text = to_str(value)
-            if text.lower() not in by_name:
-                raise InvalidValueError(f'must be one of {", ".join(names)}, got {text!r}')
-            return by_name[text.lower()]
-
-        default_text = default if default is REQUIRED else default.name.lower()
-        return cast(E, self._declare(
-            name, default=default_text, type_name='string', description=description, unit='',
-            constraint=f'one of: {", ".join(names)}', convert=convert,
+        return cast(E, self.declare_key(
+            schema.choice(name, options, default, description=description)
         ))
 
     def declare_key(self, key: Key) -> Any:
         """Declare and read a key of a config schema (:mod:`rm_base.config.schema`).
 
         The parameter takes the key's type, unit, bounds, default and description, which
-        are declared once, in the schema.
+        are declared once, in the schema. An optional key (default None) may stay unset:
+        its value is then None.
         """
-        if key.default is None:
-            raise TypeError(f'{key.name}: an optional schema key has no ROS parameter form')
         return self._declare(
             key.name, default=key.default, type_name=key.type_name,
             description=key.description, unit=key.unit, constraint=key.constraint,
             convert=key.convert,
         )
+
+    def read(self, cls: type[T]) -> T:
+        """Declare every key of the parameter set cls under the prefix; return it filled.
+
+        cls is a dataclass of :func:`rm_base.config.schema.declare` fields (groups under
+        ``<group>.``): its fields are the typed values, its keys the ROS parameters.
+        """
+        return schema.build(cls, lambda inner, key: self.nested(inner).declare_key(key))
+
+    def nested(self, inner: str) -> PluginParams:
+        """The parameters under ``<prefix><inner>`` (inner: '' or ``group.``)."""
+        if not inner:
+            return self
+        return PluginParams(self._node, self.plugin, self.plugin_type, prefix=self.key(inner))
 
     # -- arrays -------------------------------------------------------------------------
 
@@ -208,12 +211,10 @@ class PluginParams:
         le: float | None = None,
     ) -> tuple[float, ...]:
         """Declare and read an array of floats; bounds apply to every element."""
-        bounds = Bounds(gt, ge, lt, le)
-        return self._declare_array(
-            name, default=default, type_name='double[]', description=description, unit=unit,
-            length=length, constraint=bounds.text(),
-            convert_item=lambda v: bounds.check(to_float(v)),
-        )
+        return cast(tuple[float, ...], self.declare_key(schema.numbers(
+            name, _listed(default), description=description, unit=unit, length=length,
+            gt=gt, ge=ge, lt=lt, le=le,
+        )))
 
     def vector3(
         self,
@@ -244,12 +245,10 @@ class PluginParams:
         le: int | None = None,
     ) -> tuple[int, ...]:
         """Declare and read an array of integers; bounds apply to every element."""
-        bounds = Bounds(gt, ge, lt, le)
-        return self._declare_array(
-            name, default=default, type_name='integer[]', description=description, unit=unit,
-            length=length, constraint=bounds.text(),
-            convert_item=lambda v: bounds.check(to_int(v)),
-        )
+        return cast(tuple[int, ...], self.declare_key(schema.integers(
+            name, _listed(default), description=description, unit=unit, length=length,
+            gt=gt, ge=ge, lt=lt, le=le,
+        )))
 
     def string_array(
         self,
@@ -261,14 +260,10 @@ class PluginParams:
         unique: bool = False,
     ) -> tuple[str, ...]:
         """Declare and read an array of strings (e.g. joint names), optionally unique."""
-        values = self._declare_array(
-            name, default=default, type_name='string[]', description=description, unit='',
-            length=length, constraint='unique' if unique else '', convert_item=to_str,
-        )
-        if unique and len(set(values)) != len(values):
-            duplicates = sorted({v for v in values if values.count(v) > 1})
-            raise self.error(name, f'has duplicate entries: {", ".join(duplicates)}')
-        return values
+        return cast(tuple[str, ...], self.declare_key(schema.strings(
+            name, _listed(default), description=description, nonempty=False, unique=unique,
+            length=length,
+        )))
 
     def boolean_array(
         self,
@@ -279,33 +274,11 @@ class PluginParams:
         length: int | None = None,
     ) -> tuple[bool, ...]:
         """Declare and read an array of booleans."""
-        return self._declare_array(
-            name, default=default, type_name='bool[]', description=description, unit='',
-            length=length, constraint='', convert_item=to_bool,
-        )
+        return cast(tuple[bool, ...], self.declare_key(schema.booleans(
+            name, _listed(default), description=description, length=length,
+        )))
 
     # -- machinery ----------------------------------------------------------------------
-
-    def _declare_array(
-        self,
-        name: str,
-        *,
-        default: object,
-        type_name: str,
-        description: str,
-        unit: str,
-        length: int | None,
-        constraint: str,
-        convert_item: Callable[[object], Any],
-    ) -> tuple[Any, ...]:
-        constraints = [c for c in (constraint, f'length {length}' if length else '') if c]
-
-        if default is not REQUIRED:
-            default = list(default)  # type: ignore[call-overload]
-        return cast(tuple[Any, ...], self._declare(
-            name, default=default, type_name=type_name, description=description, unit=unit,
-            constraint='; '.join(constraints), convert=array_of(convert_item, length),
-        ))
 
     def _declare(
         self,
@@ -320,7 +293,7 @@ class PluginParams:
     ) -> Any:
         key = self.key(name)
         required = default is REQUIRED
-        if not required:
+        if not required and default is not None:
             # A wrong default is a bug in the plugin, not in the config.
             try:
                 convert(default)
@@ -335,10 +308,9 @@ class PluginParams:
             constraints.append(constraint)
         if required:
             constraints.append('required')
+        shown = None if required else OPTIONAL if default is None else default
         _DECLARED.setdefault(self._node, []).append(
-            DeclaredParameter(
-                key, type_name, unit, None if required else default, constraint, description
-            )
+            DeclaredParameter(key, type_name, unit, shown, constraint, description)
         )
         descriptor = ParameterDescriptor(
             name=key,
@@ -357,6 +329,8 @@ class PluginParams:
         except Exception as err:  # rclpy raises several unrelated exception types here
             raise self.error(name, f'cannot be declared: {err}') from err
         value = parameter.value
+        if value is None and not required:
+            return None  # an optional key left unset
         if value is None:
             raise self.error(
                 name,

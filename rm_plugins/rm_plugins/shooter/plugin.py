@@ -26,7 +26,7 @@ from rm_msgs.msg import (
 )
 from rm_plugins.shooter.barrel_heat import BarrelHeat
 from rm_plugins.shooter.command import ShootCommand, ShooterStage, ShootMode, parse_shoot_cmd
-from rm_plugins.shooter.config import read_config
+from rm_plugins.shooter.config import ShooterConfig
 from rm_plugins.shooter.heat import RefereeHeatInput
 from rm_plugins.shooter.jam_detector import JamDetector
 
@@ -143,7 +143,7 @@ class StandShooter(PluginBase):
 
     def on_init(self) -> None:
         """Read the config, claim the joints, subscribe the topics."""
-        self.config = read_config(self.params)
+        self.config = self.params.read(ShooterConfig)
         cfg = self.config
         self._trigger = cfg.trigger_joint
         self._joints = self.claim_joints((*cfg.friction_joints, cfg.trigger_joint))
@@ -154,11 +154,12 @@ class StandShooter(PluginBase):
         self.subscribe(GPIO_STATE_TOPIC, GpioState, self._switch.handle, qos_profile_sensor_data)
         self.state_pub = self.create_publisher(ShooterState, STATE_TOPIC, STATE_QOS_DEPTH)
         self._state_period_ns = round(_NS_PER_S / cfg.state_rate)
-        self._detector = JamDetector(cfg.jam)
+        self._detector = JamDetector(cfg.jam_detector)
         # The barrel's heat, kept under the referee's limit (kept across resets: it is
         # the barrel's, not the command's)
-        self._heat = BarrelHeat(cfg.heat) if cfg.heat is not None else None
-        self._referee = RefereeHeatInput(cfg.heat_calibre, cfg.referee_timeout)
+        barrel = cfg.heat.barrel
+        self._heat = BarrelHeat(barrel) if barrel is not None else None
+        self._referee = RefereeHeatInput(cfg.heat.calibre, cfg.heat.referee_timeout)
         if self._heat is not None:
             for topic, msg_type, handler in (
                 ('referee/robot_status', RefereeRobotStatus, self._referee.on_robot_status),

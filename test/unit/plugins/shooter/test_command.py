@@ -3,10 +3,9 @@
 import math
 
 import pytest
-from rm_base.control import LookupTable
 from rm_base.errors import ConfigError, InputRejectedError
 from rm_plugins.shooter import ShooterConfig, ShootMode, parse_shoot_cmd
-from rm_plugins.shooter.jam_detector import JamDetectorParams
+from rm_plugins.shooter.config import HeatParams, JamParams
 
 from rm_msgs.msg import ShootCmd
 
@@ -48,7 +47,8 @@ def config(**changes):
         'friction_directions': (1.0, 1.0),
         'trigger_joint': 'trigger',
         'trigger_direction': 1.0,
-        'wheel_speed': LookupTable([(15.0, 470.0), (30.0, 780.0)]),
+        'bullet_speeds': (15.0, 30.0),
+        'wheel_speeds': (470.0, 780.0),
         'friction_tolerance': 25.0,
         'slots': 8,
         'feed_speed': 4.0,
@@ -58,11 +58,12 @@ def config(**changes):
         'limit_switch': 'ball_switch',
         'switch_timeout': 0.2,
         'switch_debounce': 0.05,
-        'jam': JamDetectorParams(1.0, 0.5, 0.15),
+        'jam': JamParams(effort=1.0, speed=0.5, time=0.15),
         'reverse_angle': 0.4,
         'block_timeout': 0.3,
         'jam_retries': 3,
         'state_rate': 50.0,
+        'heat': HeatParams(),
     }
     values.update(changes)
     return ShooterConfig(**values)
@@ -79,7 +80,7 @@ def test_when_the_config_is_consistent_expect_the_slot_angle():
         ({'friction_directions': (1.0, 0.5)}, r'must be \+1 or -1'),
         ({'trigger_direction': 2.0}, r'must be \+1 or -1'),
         ({'trigger_joint': 'friction_l'}, 'also a friction joint'),
-        ({'wheel_speed': LookupTable([(15.0, 780.0), (30.0, 470.0)])}, 'must increase'),
+        ({'wheel_speeds': (780.0, 470.0)}, 'must increase'),
         # Half a slot of 2*pi/8 is 0.393 rad: a tolerance that wide could count half a step.
         ({'step_tolerance': 0.4}, 'below half a slot'),
         ({'friction_joints': (), 'friction_directions': ()}, 'at least one friction wheel'),
