@@ -312,11 +312,14 @@ def test_without_imu_data_expect_passive_and_joints_off(harness):
 @pytest.mark.parametrize(
     ('command', 'reason'),
     [
-        ({'mode': 7}, 'rejected command: unknown mode 7'),
-        ({'mode': GimbalCmd.RATE, 'rate_yaw': math.nan}, 'rejected command: rate is not finite'),
+        ({'mode': 7}, 'rejected /gimbal_cmd: unknown mode 7 (known: 0=PASSIVE, 1=RATE, 2=TRACK)'),
+        (
+            {'mode': GimbalCmd.RATE, 'rate_yaw': math.nan},
+            'rejected /gimbal_cmd: rate_yaw and rate_pitch must be finite, got (nan, 0.0)',
+        ),
         (
             {'mode': GimbalCmd.TRACK, 'frame': 'odom', 'point': (math.inf, 0.0, 0.0)},
-            'rejected command: target or bullet speed not finite',
+            'rejected /gimbal_cmd: target (inf, 0.0, 0.0) and bullet_speed 0.0 must be finite',
         ),
         (
             {'mode': GimbalCmd.TRACK, 'frame': 'map', 'point': (1.0, 0.0, 0.0)},

@@ -287,11 +287,15 @@ class PluginBase:
                 if command.watchdog and (reason := command.check(now_ns)) is not None
             ]
             if reasons:
+                lost = '; '.join(reasons)
                 if self._lost_reason is None:
                     # Falling back: nothing accumulated while commanded may carry over.
-                    self._lost_reason = '; '.join(reasons)
+                    self._lost_reason = lost
                     self.on_reset()
-                    self.transition(self.safe_state, self._lost_reason)
+                    self.transition(self.safe_state, lost)
+                elif lost != self._lost_reason:  # a new kind of "no command" (rejected)
+                    self._lost_reason = lost
+                    self.transition(self.safe_state, lost)
                 self.on_command_lost(now, dt)
             else:
                 self._lost_reason = None
@@ -378,12 +382,14 @@ class PluginBase:
         timeout: float | None = None,
         watchdog: bool = True,
         qos: Any = None,
+        parse: Callable[[Any], Any] | None = None,
     ) -> CommandInput[Any]:
         """Subscribe to a command topic; return its input (``latest(now_ns)`` in update).
 
         The command's ``header.stamp`` starts its timeout (the receive time if the message
         has no header or a zero stamp). A stamp already older than the timeout is rejected
-        as stale and logged.
+        as stale and logged; so is a message ``parse`` refuses. ``latest`` gives parse's
+        record of the last valid command: the plugin checks nothing again.
 
         Args:
             topic: topic name (relative names follow the node's namespace).
@@ -392,6 +398,8 @@ class PluginBase:
             watchdog: while this input has no command, call ``on_command_lost`` (default:
                 zero output) instead of ``update`` and go to the safe state with the reason.
             qos: subscription QoS; default best effort, depth 5 (matches any publisher).
+            parse: message -> checked record, raising InputRejectedError with the reason
+                (:class:`~rm_base.plugin.commands.CommandInput`); None: the message.
         """
         self._require_init()
         command: CommandInput[Any] = CommandInput(
@@ -399,6 +407,7 @@ class PluginBase:
             self.command_timeout if timeout is None else timeout,
             self.logger,
             watchdog=watchdog,
+            parse=parse,
         )
 
         def on_command(msg: Any, receive_ns: int) -> None:
@@ -427,6 +436,8 @@ class PluginBase:
             msg_type: message class.
             callback: takes the message and its receive time on the node's clock [ns].
             qos: subscription QoS; default best effort, depth 5 (matches any publisher).
+            parse: message -> checked record, raising InputRejectedError with the reason
+                (:class:`~rm_base.plugin.commands.CommandInput`); None: the message.
         """
         self._require_init()
         qos = qos if qos is not None else qos_profile_sensor_data

@@ -14,10 +14,14 @@ the same callback. No rclpy here: the caller passes times in nanoseconds.
 from __future__ import annotations
 
 import threading
-from enum import Enum
+from collections.abc import Callable
+from enum import Enum, IntEnum
 from typing import Any, Generic, Protocol, TypeVar
 
+from rm_base.errors import InputRejectedError
+
 M = TypeVar('M')
+C = TypeVar('C', bound=IntEnum)
 
 _NS_PER_S = 1_000_000_000
 
@@ -105,16 +109,37 @@ class LogThrottle:
         return f' ({held} more since the last report)' if held else ''
 
 
+def message_constant(kind: type[C], value: int, field: str) -> C:
+    """The member of kind that a message's constant field holds, or a rejection naming all.
+
+    Raises:
+        InputRejectedError: ``unknown <field> <value> (known: 0=PASSIVE, 1=...)``.
+    """
+    try:
+        return kind(int(value))
+    except ValueError:
+        known = ', '.join(f'{m.value}={m.name}' for m in kind)
+        raise InputRejectedError(f'unknown {field} {value} (known: {known})') from None
+
+
 class CommandInput(Generic[M]):
-    """The latest command on one topic, valid for a timeout from its stamp.
+    """The latest valid command on one topic, valid for a timeout from its stamp.
+
+    The one place a command is checked: a message is parsed once, as it is taken
+    (``parse``: finite, in range, a known mode, into a frozen record); a message that fails,
+    or is stale, is rejected, counted and logged (throttled), and never replaces the last
+    valid command, which stands until its own timeout. ``latest`` hands the plugin the
+    record, never the message.
 
     Args:
         topic: topic name, for messages.
         timeout: how long a command stays valid after its stamp [s]; > 0.
-        logger: receives the stale / no-command / resumed lines.
+        logger: receives the rejected / no-command / resumed lines.
         watchdog: whether the plugin falls back to its safe state while this input has
             no command (see ``PluginBase.subscribe_command``).
-        log_period: shortest interval between two "rejected stale" lines [s].
+        log_period: shortest interval between two "rejected" lines [s].
+        parse: the message -> its checked record; raises InputRejectedError with the
+            reason. None: the message is the record.
     """
 
     def __init__(
@@ -125,6 +150,7 @@ class CommandInput(Generic[M]):
         *,
         watchdog: bool = True,
         log_period: float = 1.0,
+        parse: Callable[[Any], M] | None = None,
     ) -> None:
         if not timeout > 0.0:
             raise ValueError(f'timeout of {topic} must be > 0 s, got {timeout}')
@@ -137,25 +163,29 @@ class CommandInput(Generic[M]):
         self._msg: M | None = None
         self._stamp_ns = 0
         self._rejected = 0
+        self._parse = parse
+        self._rejection = ''  # why the newest message was refused, if it was
         self._stale_log = LogThrottle(round(log_period * _NS_PER_S))
-        # Run-thread side: whether the current "no command" episode has been reported.
+        # Run-thread side: whether the current "no command" episode has been reported, and
+        # its kind and reason.
         self._reported_missing = False
+        self._episode: tuple[tuple[CommandStatus, bool], str] | None = None
 
     @property
     def rejected(self) -> int:
-        """Number of messages rejected as stale or from the future since start."""
+        """Number of messages rejected (stale, from the future, or invalid) since start."""
         with self._lock:
             return self._rejected
 
-    def handle(self, msg: M, receive_ns: int) -> bool:
-        """Take a message from the subscription.
+    def handle(self, msg: Any, receive_ns: int) -> bool:
+        """Take a message from the subscription: check it once and keep its record.
 
         Args:
             msg: the message; its ``header.stamp`` is used when present and non-zero.
             receive_ns: receive time on the node's clock [ns].
 
         Returns:
-            True if stored, False if rejected as stale or stamped in the future.
+            True if stored, False if rejected (stale, stamped in the future, or invalid).
         """
         stamp_ns = stamp_ns_of(msg)
         if stamp_ns is None:
@@ -178,12 +208,30 @@ class CommandInput(Generic[M]):
                     f'timeout {self.timeout:.3f} s{more}'
                 )
             return False
+        record: M = msg
+        if self._parse is not None:
+            try:
+                record = self._parse(msg)
+            except InputRejectedError as err:
+                self._reject(f'rejected {self.topic}: {err}', receive_ns)
+                return False
         with self._lock:
-            self._msg = msg
+            self._rejection = ''
+            self._msg = record
             # a stamp ahead of this clock (within the timeout: clocks a little apart) counts
             # from its receipt, so no command outlives its timeout after its last message
             self._stamp_ns = min(stamp_ns, receive_ns)
         return True
+
+    def _reject(self, reason: str, receive_ns: int) -> None:
+        with self._lock:
+            self._rejected += 1
+            self._rejection = reason
+            more = self._stale_log.due(receive_ns)
+        if more is not None:
+            self._logger.warning(
+                f'{reason}; the last valid command stands until its timeout{more}'
+            )
 
     def status(self, now_ns: int) -> tuple[CommandStatus, str]:
         """Return the status at now_ns and, unless FRESH, why there is no command."""
@@ -213,27 +261,37 @@ class CommandInput(Generic[M]):
         return msg
 
     def _evaluate(self, msg: M | None, stamp_ns: int, now_ns: int) -> tuple[CommandStatus, str]:
+        rejection = self._rejection
         if msg is None:
-            return CommandStatus.NEVER_RECEIVED, f'no command on {self.topic} yet'
+            return CommandStatus.NEVER_RECEIVED, rejection or f'no command on {self.topic} yet'
         age_ns = now_ns - stamp_ns
         if age_ns > self._timeout_ns:
+            since = f' since: {rejection}' if rejection else ''
             return (
                 CommandStatus.TIMED_OUT,
-                f'no command on {self.topic} for {age_ns / _NS_PER_S:.3f} s '
-                f'(timeout {self.timeout:.3f} s)',
+                f'no {"valid " if rejection else ""}command on {self.topic} for '
+                f'{age_ns / _NS_PER_S:.3f} s (timeout {self.timeout:.3f} s){since}',
             )
         return CommandStatus.FRESH, ''
 
     def _report(self, status: CommandStatus, reason: str) -> str | None:
+        """Log each start of a "no command" episode once; return its reason (stable text).
+
+        A rejection while there is no command starts a new episode (the reason then says
+        why the messages coming in are not commands); more rejections do not.
+        """
         if status is CommandStatus.FRESH:
             if self._reported_missing:
                 self._reported_missing = False
+                self._episode = None
                 self._logger.info(f'command on {self.topic} resumed')
             return None
-        if not self._reported_missing:
+        key = (status, bool(self._rejection))
+        if self._episode is None or self._episode[0] != key:
             self._reported_missing = True
+            self._episode = (key, reason)
             self._logger.warning(reason)
-        return reason
+        return self._episode[1]
 
     def stamp_ns(self) -> int | None:
         """Return the stamp of the stored command [ns] (receive time if it had none)."""
@@ -245,4 +303,6 @@ class CommandInput(Generic[M]):
         with self._lock:
             self._msg = None
             self._stamp_ns = 0
+            self._rejection = ''
         self._reported_missing = False
+        self._episode = None

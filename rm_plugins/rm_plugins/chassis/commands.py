@@ -11,9 +11,10 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from enum import Enum, IntEnum
-from typing import Any, TypeVar
+from typing import Any
 
 from rm_base.errors import InputRejectedError
+from rm_base.plugin.commands import message_constant
 
 
 class ChassisMode(IntEnum):
@@ -71,18 +72,6 @@ _SOURCES = {source.value: source for source in FollowSource}
 #: Largest POSITION move per axis (x [m], y [m], yaw [rad]): an arena is 28 m by 15 m and a
 #: move of more than ten turns is a mistake; beyond them a command is refused at the entry.
 MAX_MOVE = (100.0, 100.0, 20.0 * math.pi)
-_E = TypeVar('_E', bound=IntEnum)
-
-
-def _constant(kind: type[_E], value: int, field: str) -> _E:
-    """The member of kind that a message constant field holds, or a rejection naming all."""
-    try:
-        return kind(int(value))
-    except ValueError:
-        known = ', '.join(f'{m.value}={m.name}' for m in kind)
-        raise InputRejectedError(f'unknown {field} {value} (known: {known})') from None
-
-
 def parse_chassis_cmd(msg: Any) -> ChassisRequest:
     """Check an rm_msgs/ChassisCmd and return it as a ChassisRequest.
 
@@ -90,14 +79,14 @@ def parse_chassis_cmd(msg: Any) -> ChassisRequest:
         InputRejectedError: unknown mode, follow_source or speed_gear, a NaN/inf number, or
             a move beyond ``MAX_MOVE``.
     """
-    mode = _constant(ChassisMode, msg.mode, 'mode')
+    mode = message_constant(ChassisMode, msg.mode, 'mode')
     source = _SOURCES.get(msg.follow_source)
     if source is None:
         raise InputRejectedError(
             f"unknown follow_source {msg.follow_source!r} (known: '' = gimbal, 'base_link', "
             "'odom')"
         )
-    gear = _constant(SpeedGear, msg.speed_gear, 'speed_gear')
+    gear = message_constant(SpeedGear, msg.speed_gear, 'speed_gear')
     raw_accel = (msg.accel.linear.x, msg.accel.linear.y, msg.accel.angular.z)
     numbers = (*raw_accel, msg.power_limit)
     if not all(map(math.isfinite, numbers)):

@@ -167,9 +167,11 @@ class StandChassis(PluginBase):
             self._drive = self._swerve = SwerveDrive(cfg.wheels)
         else:
             self._drive = cfg.wheels
-        self._chassis_cmd = self.subscribe_command('chassis_cmd', ChassisCmd)
+        self._chassis_cmd = self.subscribe_command(
+            'chassis_cmd', ChassisCmd, parse=parse_chassis_cmd
+        )
         self._vel_cmd = self.subscribe_command(
-            'vel_cmd', Twist, timeout=cfg.vel_cmd_timeout, watchdog=False
+            'vel_cmd', Twist, timeout=cfg.vel_cmd_timeout, watchdog=False, parse=parse_vel_cmd
         )
         self._planner = MotionPlanner(
             self._drive, cfg.modes, cfg.linear_limits, cfg.angular_limits, cfg.max_wheel_speed
@@ -196,9 +198,7 @@ class StandChassis(PluginBase):
         self._next_publish_ns = 0
         self._last_odom_ns: int | None = None
         self._imu_used_ns: int | None = None
-        self._throttles = {
-            kind: LogThrottle(_LOG_PERIOD_NS) for kind in ('chassis_cmd', 'vel_cmd', 'imu')
-        }
+        self._throttles = {'imu': LogThrottle(_LOG_PERIOD_NS)}
         self._report = _Report(len(cfg.wheel_joints))
         # the last POSITION move started: kept across resets, so a move runs once
         self._started_move_id: int | None = None
@@ -206,13 +206,8 @@ class StandChassis(PluginBase):
 
     def on_reset(self) -> None:
         """Forget commands, ramps and PIDs (not the odometry: the pose stays continuous)."""
-        # Commands: never act on one from before the reset.
-        self._last_cmd_msg: Any = None
+        # Commands: never act on one from before the reset (the framework clears inputs).
         self._request: ChassisRequest | None = None
-        self._request_ns = 0
-        self._last_vel_msg: Any = None
-        self._vel = (0.0, 0.0, 0.0)
-        self._vel_ns: int | None = None
         # Control: restarted from the measured motion when a motion state is entered.
         self._active = False
         self._held_heading: float | None = None
@@ -244,46 +239,15 @@ class StandChassis(PluginBase):
 
     # -- commands -----------------------------------------------------------------------
 
-    def _take_chassis_cmd(self, now_ns: int) -> None:
-        msg = self._chassis_cmd.latest(now_ns)
-        if msg is None or msg is self._last_cmd_msg:
-            return
-        self._last_cmd_msg = msg
-        try:
-            request = parse_chassis_cmd(msg)
-        except InputRejectedError as err:
-            more = self._throttles['chassis_cmd'].due(now_ns)
-            if more is not None:
-                self.logger.warning(
-                    f'rejected /chassis_cmd: {err}; keeping {self.state.name} until the last '
-                    f'valid command times out{more}'
-                )
-            return
-        self._request = request
-        self._request_ns = stamp_ns_of(msg) or now_ns
-
     def _take_vel_cmd(self, now_ns: int) -> tuple[float, float, float]:
-        msg = self._vel_cmd.latest(now_ns)
-        if msg is not None and msg is not self._last_vel_msg:
-            self._last_vel_msg = msg
-            try:
-                self._vel = parse_vel_cmd(msg)
-                self._vel_ns = now_ns
-            except InputRejectedError as err:
-                more = self._throttles['vel_cmd'].due(now_ns)
-                if more is not None:
-                    self.logger.warning(f'rejected /vel_cmd: {err}{more}')
-        timeout_ns = self.config.vel_cmd_timeout * _NS_PER_S
-        if self._vel_ns is None or now_ns - self._vel_ns > timeout_ns:
-            return (0.0, 0.0, 0.0)  # brake to a stop on the ramp, not PASSIVE
-        return self._vel
+        # without one within vel_cmd_timeout: brake to a stop on the ramp, not PASSIVE
+        vel: tuple[float, float, float] | None = self._vel_cmd.latest(now_ns)
+        return (0.0, 0.0, 0.0) if vel is None else vel
 
     def _decide(self, now_ns: int, wheel_problem: str | None) -> _Decision:
         """Return the state, its reason, and the request to act on (None: PASSIVE)."""
-        self._take_chassis_cmd(now_ns)
-        request = self._request
-        if request is not None and now_ns - self._request_ns > self.command_timeout * _NS_PER_S:
-            self._request = request = None
+        request: ChassisRequest | None = self._chassis_cmd.latest(now_ns)
+        self._request = request
         if request is None:
             return _Decision(
                 ChassisMode.PASSIVE, 'no valid /chassis_cmd within command_timeout', None

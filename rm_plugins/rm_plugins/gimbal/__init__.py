@@ -1,5 +1,6 @@
 """Yaw/pitch gimbal plugin stabilised by its IMU (``rm_plugins/StandGimbal``)."""
 
+from rm_plugins.gimbal.commands import GimbalMode, GimbalRequest, parse_gimbal_cmd
 from rm_plugins.gimbal.config import AxisConfig, GimbalConfig, read_config
 from rm_plugins.gimbal.control import (
     AxisLoop,
@@ -9,7 +10,7 @@ from rm_plugins.gimbal.control import (
     clamp,
     sight_rates,
 )
-from rm_plugins.gimbal.plugin import GimbalMode, Measurement, StandGimbal
+from rm_plugins.gimbal.plugin import Measurement, StandGimbal
 
 __all__ = [
     'AxisConfig',
@@ -17,11 +18,13 @@ __all__ = [
     'AxisOutput',
     'GimbalConfig',
     'GimbalMode',
+    'GimbalRequest',
     'Measurement',
     'PlanarPose',
     'Smoother',
     'StandGimbal',
     'clamp',
+    'parse_gimbal_cmd',
     'read_config',
     'sight_rates',
 ]

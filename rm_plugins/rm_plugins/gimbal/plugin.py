@@ -47,7 +47,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from enum import IntEnum
 
 from nav_msgs.msg import Odometry
 from rclpy.qos import qos_profile_sensor_data
@@ -60,26 +59,12 @@ from rm_base.plugin import JointTarget, LatestMessage, PluginBase
 from sensor_msgs.msg import Imu
 
 from rm_msgs.msg import GimbalCmd, GimbalState
+from rm_plugins.gimbal.commands import GimbalMode, GimbalRequest, parse_gimbal_cmd
 from rm_plugins.gimbal.config import GimbalConfig, read_config
 from rm_plugins.gimbal.control import AxisLoop, PlanarPose, Smoother, clamp, sight_rates
 from rm_plugins.gimbal.frames import joint_links, mount_links
 
 _NS_PER_S = 1_000_000_000
-#: A TRACK target further than this on any axis [m], or a bullet speed beyond this [m/s],
-#: is refused at the entry (no arena is that big; no launcher that fast): the ballistics
-#: would overflow on it every tick.
-MAX_TARGET_DISTANCE = 1000.0
-MAX_BULLET_SPEED = 100.0
-
-
-class GimbalMode(IntEnum):
-    """States of the gimbal plugin; values are GimbalCmd's modes."""
-
-    PASSIVE = GimbalCmd.PASSIVE
-    RATE = GimbalCmd.RATE
-    TRACK = GimbalCmd.TRACK
-
-
 @dataclass(frozen=True)
 class Measurement:
     """The gimbal now: IMU values brought forward to this tick with their rates.
@@ -157,7 +142,9 @@ class StandGimbal(PluginBase):
         self.config: GimbalConfig = read_config(self.params)
         cfg = self.config
         self.claim_joints([cfg.yaw.joint, cfg.pitch.joint])
-        self.command = self.subscribe_command(cfg.command_topic, GimbalCmd)
+        self.command = self.subscribe_command(
+            cfg.command_topic, GimbalCmd, parse=parse_gimbal_cmd
+        )
         self._imu = LatestMessage()
         self._odom = LatestMessage()
         self.subscribe(cfg.imu_topic, Imu, self._imu.put, qos_profile_sensor_data)
@@ -182,7 +169,7 @@ class StandGimbal(PluginBase):
         )
         # A TRACK target in another frame of the tree, put in odom (or base_link) once per
         # command, with the transforms of the moment it arrived: (command, frame, point).
-        self._placed: tuple[GimbalCmd, str, tuple[float, float, float]] | None = None
+        self._placed: tuple[GimbalRequest, str, tuple[float, float, float]] | None = None
         self._published_mode: GimbalMode | None = None
         self.on_reset()
 
@@ -208,7 +195,7 @@ class StandGimbal(PluginBase):
         if not dt > 0.0:
             return
         self._send_frames(now_ns)
-        cmd = self.command.latest(now_ns)
+        cmd: GimbalRequest | None = self.command.latest(now_ns)
         measurement = self._measure(now_ns)
         odom = self._odom_pose(now_ns)
         if isinstance(measurement, Measurement) and not isinstance(odom, str):
@@ -216,7 +203,7 @@ class StandGimbal(PluginBase):
             self._odom_offset.update(wrap_to_pi(measurement.base_yaw - odom.pose.yaw), dt)
         mode, reason, aim = self._decide(cmd, measurement, odom)
         self.transition(mode, reason)
-        if mode is GimbalMode.PASSIVE or not isinstance(measurement, Measurement):
+        if mode is GimbalMode.PASSIVE or cmd is None or not isinstance(measurement, Measurement):
             self._go_limp()
         else:
             self._control(mode, cmd, measurement, aim, dt)
@@ -237,42 +224,27 @@ class StandGimbal(PluginBase):
 
     def _decide(
         self,
-        cmd: GimbalCmd | None,
+        cmd: GimbalRequest | None,
         measurement: Measurement | str,
         odom: _Odom | str,
     ) -> tuple[GimbalMode, str, _Aim | None]:
         """The one place that chooses the state: (state, reason, TRACK aim or None)."""
         if cmd is None:
             return GimbalMode.PASSIVE, 'no command', None
-        if cmd.mode == GimbalCmd.PASSIVE:
+        if cmd.mode is GimbalMode.PASSIVE:
             return GimbalMode.PASSIVE, 'commanded', None
-        if cmd.mode not in (GimbalCmd.RATE, GimbalCmd.TRACK):
-            return GimbalMode.PASSIVE, f'rejected command: unknown mode {cmd.mode}', None
-        if cmd.mode == GimbalCmd.RATE:
-            if not (math.isfinite(cmd.rate_yaw) and math.isfinite(cmd.rate_pitch)):
-                return GimbalMode.PASSIVE, 'rejected command: rate is not finite', None
         if isinstance(measurement, str):
             return GimbalMode.PASSIVE, measurement, None
-        if cmd.mode == GimbalCmd.RATE:
+        if cmd.mode is GimbalMode.RATE:
             return GimbalMode.RATE, 'rates held in the world frame', None
         return self._decide_track(cmd, measurement, odom)
 
     def _decide_track(
-        self, cmd: GimbalCmd, m: Measurement, odom: _Odom | str
+        self, cmd: GimbalRequest, m: Measurement, odom: _Odom | str
     ) -> tuple[GimbalMode, str, _Aim | None]:
         cfg = self.config
-        point = cmd.target.point
-        frame = cmd.target.header.frame_id
-        if not all(map(math.isfinite, (point.x, point.y, point.z, cmd.bullet_speed))):
-            return GimbalMode.PASSIVE, 'rejected command: target or bullet speed not finite', None
-        far = max(abs(point.x), abs(point.y), abs(point.z))
-        if far > MAX_TARGET_DISTANCE or abs(cmd.bullet_speed) > MAX_BULLET_SPEED:
-            return GimbalMode.PASSIVE, (
-                f'rejected command: target ({point.x:g}, {point.y:g}, {point.z:g}) m or bullet '
-                f'speed {cmd.bullet_speed:g} m/s beyond {MAX_TARGET_DISTANCE:g} m / '
-                f'{MAX_BULLET_SPEED:g} m/s'), None
+        frame, target = cmd.frame, cmd.target
         px, py, pz = cfg.pivot
-        target = (point.x, point.y, point.z)
         if frame not in cfg.base_frames and frame not in cfg.world_frames:
             placed = self._place(cmd, frame, target)
             if isinstance(placed, str):
@@ -312,7 +284,7 @@ class StandGimbal(PluginBase):
         )
 
     def _place(
-        self, cmd: GimbalCmd, frame: str, point: tuple[float, float, float]
+        self, cmd: GimbalRequest, frame: str, point: tuple[float, float, float]
     ) -> tuple[str, tuple[float, float, float]] | str:
         """A point given in another frame of the TF tree, in odom (else base_link).
 
@@ -383,7 +355,7 @@ class StandGimbal(PluginBase):
     # -- control ----------------------------------------------------------------------------
 
     def _control(
-        self, mode: GimbalMode, cmd: GimbalCmd, m: Measurement, aim: _Aim | None, dt: float
+        self, mode: GimbalMode, cmd: GimbalRequest, m: Measurement, aim: _Aim | None, dt: float
     ) -> None:
         cfg = self.config
         held_yaw, held_pitch = self._yaw_target, self._pitch_target
@@ -400,8 +372,8 @@ class StandGimbal(PluginBase):
         yaw_rate = cfg.yaw.angle_pid.output_limit
         pitch_rate = cfg.pitch.angle_pid.output_limit
         if mode is GimbalMode.RATE:
-            yaw_ff = clamp(cmd.rate_yaw, -yaw_rate, yaw_rate)
-            pitch_ff = clamp(cmd.rate_pitch, -pitch_rate, pitch_rate)
+            yaw_ff = clamp(cmd.rates[0], -yaw_rate, yaw_rate)
+            pitch_ff = clamp(cmd.rates[1], -pitch_rate, pitch_rate)
             # Integrate, but never lead the barrel by more than max_target_lead: a gimbal
             # held back (blocked, or its loop starved) must not wind the target up.
             lead = cfg.max_target_lead

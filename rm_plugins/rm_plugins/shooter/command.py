@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from enum import IntEnum
 
 from rm_base.errors import InputRejectedError
+from rm_base.plugin.commands import message_constant
 
 from rm_msgs.msg import ShootCmd, ShooterState
 
@@ -55,11 +56,7 @@ def parse_shoot_cmd(msg: ShootCmd) -> ShootCommand:
         InputRejectedError: unknown mode, NaN/inf speed or rate, speed <= 0 for READY or
             PUSH, rate <= 0 for PUSH, or a negative speed or rate.
     """
-    try:
-        mode = ShootMode(msg.mode)
-    except ValueError:
-        known = ', '.join(f'{m.value} ({m.name})' for m in ShootMode)
-        raise InputRejectedError(f'unknown mode {msg.mode} (known: {known})') from None
+    mode = message_constant(ShootMode, msg.mode, 'mode')
     speed, hz = float(msg.speed), float(msg.hz)
     for name, value, unit in (('speed', speed, 'm/s'), ('hz', hz, 'shots/s')):
         if not math.isfinite(value):

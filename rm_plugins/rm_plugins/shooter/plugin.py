@@ -13,7 +13,6 @@ from typing import Any, NamedTuple
 
 from rclpy.qos import qos_profile_sensor_data
 from rclpy.time import Time
-from rm_base.errors import InputRejectedError
 from rm_base.plugin import JointState, JointTarget, PluginBase
 
 from rm_msgs.msg import (
@@ -147,7 +146,7 @@ class StandShooter(PluginBase):
         cfg = self.config
         self._trigger = cfg.trigger_joint
         self._joints = self.claim_joints((*cfg.friction_joints, cfg.trigger_joint))
-        self._cmd_input = self.subscribe_command(COMMAND_TOPIC, ShootCmd)
+        self._cmd_input = self.subscribe_command(COMMAND_TOPIC, ShootCmd, parse=parse_shoot_cmd)
         self._switch = _SwitchInput(
             cfg.limit_switch, round(cfg.switch_timeout * _NS_PER_S), self.logger
         )
@@ -193,10 +192,6 @@ class StandShooter(PluginBase):
 
     def on_reset(self) -> None:
         """Forget the command, the burst, the trigger's targets and the jam timer."""
-        self._command: ShootCommand | None = None
-        self._command_stamp_ns = 0
-        self._last_msg: ShootCmd | None = None
-        self._rejection: str | None = None
         self._burst: _Burst | None = None
         self._jam_count = 0
         self._attempts = 0  # BLOCK recoveries since the trigger last got past a jam
@@ -245,29 +240,9 @@ class StandShooter(PluginBase):
     # -- commands -----------------------------------------------------------------------------
 
     def _valid_command(self, now_ns: int) -> ShootCommand | None:
-        """Return the newest valid command still within its timeout, or None."""
-        msg = self._cmd_input.latest(now_ns)
-        if msg is not None and msg is not self._last_msg:
-            self._last_msg = msg
-            try:
-                command = parse_shoot_cmd(msg)
-            except InputRejectedError as err:
-                self._rejection = f'rejected /shoot_cmd: {err}'
-                self._log_rejection(self._rejection, now_ns)
-            else:
-                self._command = command
-                self._command_stamp_ns = self._cmd_input.stamp_ns() or now_ns
-                self._rejection = None
-        if self._command is None:
-            return None
-        if now_ns - self._command_stamp_ns > round(self._cmd_input.timeout * _NS_PER_S):
-            return None
-        return self._command
-
-    def _log_rejection(self, text: str, now_ns: int) -> None:
-        if now_ns >= self._next_reject_log_ns:
-            self._next_reject_log_ns = now_ns + _LOG_PERIOD_NS
-            self.logger.warning(text)
+        """The last valid command still within its timeout (checked once, as it came)."""
+        command: ShootCommand | None = self._cmd_input.latest(now_ns)
+        return command
 
     def _follow_command(self, command: ShootCommand) -> None:
         """Track mode changes and new bursts (which also clear a fault)."""
@@ -343,7 +318,7 @@ class StandShooter(PluginBase):
         self, command: ShootCommand | None, joints: Mapping[str, JointState], now_ns: int
     ) -> str | None:
         if command is None:
-            return self._rejection or 'no valid command on /shoot_cmd'
+            return 'no valid command on /shoot_cmd'
         if command.mode is ShootMode.PASSIVE:
             return 'commanded PASSIVE'
         if self._fault:

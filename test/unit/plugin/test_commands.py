@@ -2,6 +2,7 @@
 
 import pytest
 from geometry_msgs.msg import Twist
+from rm_base.errors import InputRejectedError
 from rm_base.plugin import CommandInput, CommandStatus, LatestMessage, LogThrottle
 
 from rm_msgs.msg import ChassisCmd
@@ -164,3 +165,45 @@ def test_log_throttle_lets_one_line_through_per_period_and_counts_the_rest():
     assert throttle.due(10) is None and throttle.due(999) is None
     assert throttle.due(1_000) == ' (2 more since the last report)'
     assert throttle.due(2_000) == ''
+
+
+def test_a_message_is_parsed_once_and_an_invalid_one_never_replaces_the_last_valid(log):
+    parsed = []
+
+    def parse(msg):
+        parsed.append(msg)
+        if msg.mode > ChassisCmd.POSITION:
+            raise InputRejectedError(f'unknown mode {msg.mode}')
+        return ('request', msg.mode)
+
+    command = CommandInput('/chassis_cmd', 0.1, log, parse=parse)
+    assert command.handle(chassis_cmd(T0), receive_ns=T0)
+    for i in range(1, 4):  # a flood of invalid ones: one line, every one counted
+        assert not command.handle(chassis_cmd(T0 + i * MS, mode=9), receive_ns=T0 + i * MS)
+    assert len(parsed) == 4 and command.rejected == 3
+    rejected = [line for line in log.lines if 'rejected' in line[1]]
+    assert rejected == [('warning', 'rejected /chassis_cmd: unknown mode 9; the last valid '
+                         'command stands until its timeout')]
+    # the record, not the message, and taking it parses nothing again
+    assert command.latest(T0 + 50 * MS) == ('request', ChassisCmd.RAW)
+    assert len(parsed) == 4
+    # the last valid one times out from its own stamp; the reason says what came since
+    assert command.latest(T0 + 101 * MS) is None
+    assert command.check(T0 + 101 * MS) == (
+        'no valid command on /chassis_cmd for 0.101 s (timeout 0.100 s) since: rejected '
+        '/chassis_cmd: unknown mode 9'
+    )
+
+
+def test_a_rejection_while_there_is_no_command_gives_the_episode_its_reason(log):
+    def parse(msg):
+        raise InputRejectedError('never valid')
+
+    command = CommandInput('/chassis_cmd', 0.1, log, parse=parse)
+    assert command.check(T0) == 'no command on /chassis_cmd yet'
+    command.handle(chassis_cmd(T0), receive_ns=T0)
+    assert command.check(T0 + MS) == 'rejected /chassis_cmd: never valid'
+    command.handle(chassis_cmd(T0 + 2 * MS), receive_ns=T0 + 2 * MS)
+    assert command.check(T0 + 3 * MS) == 'rejected /chassis_cmd: never valid'  # no new one
+    warnings = [m for kind, m in log.lines if kind == 'warning' and 'rejected' not in m[:9]]
+    assert warnings == ['no command on /chassis_cmd yet']

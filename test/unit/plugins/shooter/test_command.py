@@ -27,7 +27,7 @@ def test_when_passive_expect_speed_and_rate_not_needed():
 @pytest.mark.parametrize(
     ('fields', 'match'),
     [
-        ({'mode': 3}, r'unknown mode 3 \(known: 0 \(PASSIVE\), 1 \(READY\), 2 \(PUSH\)\)'),
+        ({'mode': 3}, r'unknown mode 3 \(known: 0=PASSIVE, 1=READY, 2=PUSH\)'),
         ({'mode': ShootCmd.READY, 'speed': math.nan}, 'speed must be a finite number'),
         ({'mode': ShootCmd.PASSIVE, 'speed': math.inf}, 'speed must be a finite number'),
         ({'mode': ShootCmd.READY, 'speed': -1.0}, 'speed must be >= 0'),
