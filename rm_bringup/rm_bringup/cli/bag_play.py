@@ -299,10 +299,10 @@ def _play_once(
     t0 = time.monotonic_ns()
     next_tick = t0
 
-    def tick(now: int) -> int:
-        """Publish the clock if due; return when it is next due."""
+    def tick(now: int, force: bool = False) -> int:
+        """Publish the clock if due (or forced); return when it is next due."""
         nonlocal next_tick
-        if now >= next_tick:
+        if force or now >= next_tick:
             clock.publish(start_ns + round((now - t0) * rate))
             next_tick = max(next_tick + clock.period_ns, now)
         return next_tick
@@ -319,8 +319,8 @@ def _play_once(
                 return count
             if time.monotonic_ns() >= due_ns:
                 break
-        if clock is not None:
-            tick(time.monotonic_ns())
+        if clock is not None:  # the clock reaches a message's time before it goes out
+            tick(time.monotonic_ns(), force=True)
         conversion = converted.get(connection.id)
         data = bytes(raw) if conversion is None else conversion(raw)
         stamp = restamp.get(connection.topic)
