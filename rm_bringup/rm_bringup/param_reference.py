@@ -33,7 +33,11 @@ Every parameter that can_bridge, rm_robot and rm_manual (the operator's commande
 declare, as declared in the code: type, SI
 unit, default (or *required*: the robot config must set it), the bounds a value must keep
 and what it is. A value that breaks them stops the node at start-up with a message naming
-the key. Parameters are read once, at start-up, and are read-only. The plugins' parameters
+the key. A parameter marked *live* may be set while the robot runs (`ros2 param set`,
+through the parameter services): it is checked as at start-up, the values of one call are
+applied together between two runs of the plugin, and a refusal names the key and the
+bound. The others are read once, at start-up: setting one is refused with "needs a
+restart". The plugins' parameters
 are listed for the plugins the `{ROBOT}` robot loads, under their instance names; the keys
 only another robot's config declares (a swerve chassis' steering joints) close the page.
 
@@ -100,13 +104,13 @@ def _cell(text: str) -> str:
 def markdown_table(parameters: Iterable[DeclaredParameter]) -> list[str]:
     """The Markdown table of parameters, a row each (the reference's one format)."""
     lines = [
-        '| parameter | type | unit | default | bounds | description |',
-        '|---|---|---|---|---|---|',
+        '| parameter | type | unit | default | bounds | live | description |',
+        '|---|---|---|---|---|---|---|',
     ]
     for p in parameters:
         lines.append(
             f'| `{p.key}` | {p.type_name} | {p.unit} | {_value(p.default)} | '
-            f'{_cell(p.constraint)} | {_cell(p.description)} |'
+            f'{_cell(p.constraint)} | {"yes" if p.tunable else ""} | {_cell(p.description)} |'
         )
     return lines
 

@@ -42,6 +42,7 @@ class DeclaredParameter(NamedTuple):
         default: the default, None if required.
         constraint: bounds, choices, length; '' if none.
         description: what it is.
+        tunable: may be set while running.
     """
 
     key: str
@@ -50,6 +51,7 @@ class DeclaredParameter(NamedTuple):
     default: Any
     constraint: str
     description: str
+    tunable: bool = False
 
 
 class _Required:
@@ -213,6 +215,8 @@ class Key:
         default: value when absent; REQUIRED: must be given; None: optional (absent, or
             given as null, is None: "the type's default", "none").
         constraint: bounds or choices as the reference shows them.
+        tunable: may change while the robot runs (a gain, a limit); else it is read at
+            start-up and a change needs a restart (a joint name, a topic).
     """
 
     name: str
@@ -222,6 +226,7 @@ class Key:
     unit: str = ''
     default: Any = REQUIRED
     constraint: str = ''
+    tunable: bool = False
 
     def read(self, data: Mapping[str, Any]) -> Any:
         """This key's typed value in data (or the default).
@@ -253,7 +258,7 @@ class Key:
             default = OPTIONAL if self.default is None else self.default
         return DeclaredParameter(
             prefix + self.name, self.type_name, self.unit, default, self.constraint,
-            self.description,
+            self.description, self.tunable,
         )
 
 
@@ -549,13 +554,16 @@ _KEY = 'rm_ros2.key'
 _GROUP = 'rm_ros2.group'
 
 
-def declare(make: Callable[..., Key], default: Any = REQUIRED, **options: Any) -> Any:
+def declare(
+    make: Callable[..., Key], default: Any = REQUIRED, *, tunable: bool = False, **options: Any
+) -> Any:
     """A field of a parameter set: the key ``make(<field name>, default=default, **options)``.
 
     In a ``@dataclass(frozen=True, kw_only=True)`` class, each field declared so is one
     key: its name, the field's; its type, unit, bounds, default and description, the
     key's. :func:`build` fills the class, :func:`rows` documents it, and a ROS node
-    declares it (``PluginParams.read``): one declaration, four uses.
+    declares it (``PluginParams.read``): one declaration, four uses. ``tunable`` keys may
+    change while the robot runs (:func:`with_values`).
 
     Example:
         >>> @dataclasses.dataclass(frozen=True, kw_only=True)
@@ -565,7 +573,7 @@ def declare(make: Callable[..., Key], default: Any = REQUIRED, **options: Any) -
         Wheel(radius=0.07)
     """
     extra = {} if default is REQUIRED else {'default': default}
-    return dataclasses.field(metadata={_KEY: (make, default, options)}, **extra)
+    return dataclasses.field(metadata={_KEY: (make, default, tunable, options)}, **extra)
 
 
 def group(cls: type) -> Any:
@@ -580,8 +588,9 @@ def _fields(cls: type) -> list[tuple[str, Key | type]]:
     out: list[tuple[str, Key | type]] = []
     for field in dataclasses.fields(cls):
         if _KEY in field.metadata:
-            make, default, options = field.metadata[_KEY]
-            out.append((field.name, make(field.name, default=default, **options)))
+            make, default, tunable, options = field.metadata[_KEY]
+            key = make(field.name, default=default, **options)
+            out.append((field.name, dataclasses.replace(key, tunable=tunable)))
         elif _GROUP in field.metadata:
             out.append((field.name, field.metadata[_GROUP]))
     return out
@@ -616,3 +625,44 @@ def keys(cls: type, prefix: str = '') -> list[tuple[str, Key]]:
 def rows(cls: type, prefix: str = '') -> list[DeclaredParameter]:
     """The reference rows of every key of cls under prefix (``chassis.``)."""
     return [key.declared(prefix + inner) for inner, key in keys(cls)]
+
+
+def with_values(instance: T, changes: Mapping[str, object]) -> T:
+    """A copy of the parameter set instance with the keys changes names set, checked.
+
+    Args:
+        instance: a filled parameter set (:func:`build`).
+        changes: ``{inner key: raw value}``, inner keys as :func:`keys` names them
+            (``heat.margin``); all applied together.
+
+    Raises:
+        InvalidValueError: a key that is not the set's, not tunable, or whose value its key
+            refuses; the text starts with the key. ConfigError: the values do not fit
+            together (the set's own checks).
+    """
+    declared = {prefix + key.name: key for prefix, key in keys(type(instance))}
+    nested: dict[str, Any] = {}
+    for name, raw in changes.items():
+        key = declared.get(name)
+        if key is None:
+            raise InvalidValueError(f'{name} is not a parameter of {type(instance).__name__}')
+        if not key.tunable:
+            raise InvalidValueError(f'{name} is read at start-up: a change needs a restart')
+        try:
+            value = key.read({key.name: raw})
+        except InvalidValueError as err:
+            raise InvalidValueError(f'{name} {err}') from None
+        *groups, leaf = name.split('.')
+        level = nested
+        for group_name in groups:
+            level = level.setdefault(group_name, {})
+        level[leaf] = value
+    return _replace(instance, nested)
+
+
+def _replace(instance: T, nested: Mapping[str, Any]) -> T:
+    values = {
+        name: _replace(getattr(instance, name), value) if isinstance(value, dict) else value
+        for name, value in nested.items()
+    }
+    return dataclasses.replace(instance, **values)  # type: ignore[type-var]

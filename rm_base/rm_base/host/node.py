@@ -9,10 +9,14 @@ from enum import Enum
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray
+from rcl_interfaces.msg import SetParametersResult
 from rclpy.duration import Duration
 from rclpy.node import Node
+from rclpy.parameter import Parameter
 from std_srvs.srv import SetBool
 
+from rm_base.config.schema import InvalidValueError
+from rm_base.errors import ConfigError
 from rm_base.hardware import CanHardware
 from rm_base.host.command_sources import read_command_sources
 from rm_base.host.plugin_task import PluginTask, TickInputs
@@ -315,10 +319,44 @@ class RobotHost(Node):
                 loop.add_stage(task)
         # derived from what each component reads and writes (rm_base.loop.order)
         self.get_logger().info(f'loop order: {" -> ".join(loop.order())}')
+        # after every declaration: rclpy calls it for the declarations too
+        self.add_on_set_parameters_callback(self._on_set_parameters)
         if self._own_loop:
             loop.start()
 
     # -- callbacks (executor thread) ----------------------------------------------------
+
+    def _on_set_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
+        """``ros2 param set``: tunable plugin keys, all of one call together, or none.
+
+        Each plugin checks its keys against its parameter set (bounds, and the set's own
+        checks) and takes the new set at the start of its next run, so the values of one
+        call (a loop's kp, ki and kd) are never used torn.
+        """
+        changes: dict[str, dict[str, object]] = {}
+        for parameter in parameters:
+            if parameter.name == 'use_sim_time':  # rclpy's own, switched live by its clock
+                continue
+            plugin, _, inner = parameter.name.partition('.')
+            if plugin not in self._tasks or not inner:
+                return SetParametersResult(
+                    successful=False,
+                    reason=f'{parameter.name} is read at start-up: a change needs a restart',
+                )
+            changes.setdefault(plugin, {})[inner] = parameter.value
+        proposed = {}
+        for plugin, values in changes.items():
+            try:
+                proposed[plugin] = self._tasks[plugin].plugin.propose_config(values)
+            except (InvalidValueError, ConfigError) as err:
+                return SetParametersResult(successful=False, reason=f'{plugin}.{err}')
+        for plugin, config in proposed.items():
+            self._tasks[plugin].plugin.set_config(config)
+        self.get_logger().info(
+            'set ' + ', '.join(f'{p.name} = {p.value!r}' for p in parameters)
+            + ' (from the next run on)'
+        )
+        return SetParametersResult(successful=True)
 
     def _on_enable(
         self, task: PluginTask, request: SetBool.Request, response: SetBool.Response

@@ -39,12 +39,14 @@ import time
 import traceback
 from collections.abc import Callable, Iterable, Mapping
 from enum import Enum
-from typing import Any, ClassVar
+from typing import Any, ClassVar, TypeVar
 
 from rclpy.qos import DurabilityPolicy, QoSProfile, qos_profile_sensor_data
 from rclpy.time import Time
 from tf2_msgs.msg import TFMessage
 
+from rm_base.config import schema
+from rm_base.config.schema import InvalidValueError
 from rm_base.errors import ConfigError
 from rm_base.geometry.frame_tree import FrameTree
 from rm_base.joints import JointTarget
@@ -69,6 +71,7 @@ STATE_QOS = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
 _FRAMEWORK_METHODS = ('init', 'run', 'enable', 'disable', 'reset', 'transition', 'zero_output')
 
 _ERROR_LOG_PERIOD_NS = _NS_PER_S
+T = TypeVar('T')
 
 
 class PluginBase:
@@ -121,6 +124,9 @@ class PluginBase:
         self.error_count = 0
         self._io: NodeIO | None = None
         self.loop_reads: tuple[str, ...] = ()  # its devices' data the loop reads for it
+        self.config: Any = None  # what on_config keeps: the plugin's parameter set
+        self._config: Any = None  # its declared parameter set (read_config), if it has one
+        self._pending_config: Any = None  # set live, taken at the start of the next run
         self._machine: StateMachine[Any] | None = None
         self._state_pub: Any = None
         self._inputs: list[CommandInput[Any]] = []
@@ -266,6 +272,8 @@ class PluginBase:
                 nominal period on the first tick after enable/reset or after the clock went
                 back. With the default, a ``now`` equal to the previous one runs nothing.
         """
+        if self._pending_config is not None:
+            self._take_config()
         if not self._enabled:
             return
         now_ns = now.nanoseconds
@@ -651,6 +659,52 @@ class PluginBase:
     def _require_init(self) -> None:
         if self._machine is None:
             raise RuntimeError(f'{type(self).__name__}: call init() first')
+
+    # -- framework: parameters ------------------------------------------------------------
+
+    def read_config(self, cls: type[T]) -> T:
+        """Declare and read the plugin's parameter set cls (``<name>.<key>``); return it.
+
+        cls is a dataclass of :func:`rm_base.config.schema.declare` fields. Its keys marked
+        ``tunable`` may then be set while the plugin runs (``propose_config``): the new set
+        reaches ``on_config`` at the start of a run, never in the middle of one.
+        """
+        config = self.params.read(cls)
+        self._config = config
+        return config
+
+    def propose_config(self, changes: Mapping[str, object]) -> Any:
+        """The parameter set with changes (``{key below <name>.: value}``), checked; not applied.
+
+        Raises:
+            InvalidValueError: a key that is read at start-up only, or a value its key
+                refuses (the text starts with the key); ConfigError: values that do not fit
+                together.
+        """
+        base = self._pending_config if self._pending_config is not None else self._config
+        known = set() if base is None else {
+            prefix + key.name for prefix, key in schema.keys(type(base))
+        }
+        for name in changes:
+            if name not in known:
+                raise InvalidValueError(f'{name} is read at start-up: a change needs a restart')
+        return schema.with_values(base, changes)
+
+    def set_config(self, config: Any) -> None:
+        """Apply a set from ``propose_config`` at the start of the next run (any thread)."""
+        self._pending_config = config
+
+    def on_config(self, config: Any) -> None:
+        """Hook: the parameter set changed (between runs); the default keeps it as config.
+
+        Override to rebuild what the plugin derives from its parameters, calling this too.
+        """
+        self.config = config
+
+    def _take_config(self) -> None:
+        config, self._pending_config = self._pending_config, None
+        self._config = config
+        self.on_config(config)
 
     @property
     def params(self) -> PluginParams:

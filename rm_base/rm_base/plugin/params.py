@@ -4,14 +4,15 @@ Every parameter is a key of :mod:`rm_base.config.schema` (the one vocabulary of 
 unit, bounds, default and description): a plugin reads a declared parameter set with
 :meth:`PluginParams.read`, or one key at a time with the typed accessors (``double``,
 ``string_array``...), which build the same keys. Each key is declared on the host node
-with a ``ParameterDescriptor`` (description, unit, constraints, read-only), takes its value
+with a ``ParameterDescriptor`` (description, unit, constraints, when it may change), takes its value
 from the robot config (``--params-file`` or ``parameter_overrides``) or the default, and is
 checked and returned as a plain Python value. A parameter without a default is *required*:
 a config that omits it fails at start-up with a ``ParameterError`` naming the plugin, the
 key, the expected type and unit; so does a value of the wrong type or out of range.
 
-Parameters are read once, at init, and declared read-only so ``ros2 param set`` is refused
-with a reason instead of silently doing nothing.
+A key the schema marks ``tunable`` may be set while the robot runs (the host takes it
+through the parameter services, ``ros2 param set``, and hands it to the plugin between two
+runs); the others are read once, at init, and declared read-only: a set is refused.
 """
 
 from __future__ import annotations
@@ -178,7 +179,7 @@ class PluginParams:
         return self._declare(
             key.name, default=key.default, type_name=key.type_name,
             description=key.description, unit=key.unit, constraint=key.constraint,
-            convert=key.convert,
+            convert=key.convert, tunable=key.tunable,
         )
 
     def read(self, cls: type[T]) -> T:
@@ -290,6 +291,7 @@ class PluginParams:
         unit: str,
         constraint: str,
         convert: Callable[[object], Any],
+        tunable: bool = False,
     ) -> Any:
         key = self.key(name)
         required = default is REQUIRED
@@ -308,9 +310,12 @@ class PluginParams:
             constraints.append(constraint)
         if required:
             constraints.append('required')
+        constraints.append(
+            'set while running' if tunable else 'read at start-up: a change needs a restart'
+        )
         shown = None if required else OPTIONAL if default is None else default
         _DECLARED.setdefault(self._node, []).append(
-            DeclaredParameter(key, type_name, unit, shown, constraint, description)
+            DeclaredParameter(key, type_name, unit, shown, constraint, description, tunable)
         )
         descriptor = ParameterDescriptor(
             name=key,
@@ -319,8 +324,9 @@ class PluginParams:
             # Typed by convert() below, so an int given for a double is accepted and every
             # type error gets a message naming the plugin and key.
             dynamic_typing=True,
-            # Read once at init; refuse `ros2 param set` rather than ignore it.
-            read_only=True,
+            # Start-up keys refuse `ros2 param set` rather than ignore it; the host's
+            # set-parameters callback takes the tunable ones to the plugin.
+            read_only=not tunable,
         )
         try:
             parameter = self._node.declare_parameter(

@@ -152,6 +152,7 @@ class StandChassis(PluginBase):
     """Mecanum/omni/swerve chassis; see the module docstring. Parameters: ``config.read_config``."""
 
     State = ChassisMode
+    config: ChassisConfig
 
     # -- hooks --------------------------------------------------------------------------
 

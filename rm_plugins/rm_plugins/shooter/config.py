@@ -29,13 +29,21 @@ class JamParams:
     """When the trigger counts as jammed (``shooter.jam.*``)."""
 
     effort: float = declare(
-        number, description='trigger effort above which it may be jammed', unit='N*m', gt=0.0
+        number,
+        tunable=True,
+        description='trigger effort above which it may be jammed',
+        unit='N*m',
+        gt=0.0,
     )
     speed: float = declare(
-        number, description='trigger speed below which it may be jammed', unit='rad/s', gt=0.0
+        number,
+        tunable=True,
+        description='trigger speed below which it may be jammed',
+        unit='rad/s',
+        gt=0.0,
     )
     time: float = declare(
-        number, description='how long both must hold to be a jam', unit='s', gt=0.0
+        number, tunable=True, description='how long both must hold to be a jam', unit='s', gt=0.0
     )
 
 
@@ -44,26 +52,41 @@ class HeatParams:
     """How the barrel's heat is kept under the referee's limit (``shooter.heat.*``)."""
 
     calibre: int = declare(
-        one_of, 0, choices=(0, 17, 42),
+        one_of,
+        0,
+        choices=(0, 17, 42),
         description='keep the heat of this barrel under the referee limit: 17 or 42 (mm); '
         '0: no heat limit (no referee system)',
     )
     margin: float | None = declare(
-        number, None, ge=0.0,
+        number,
+        None,
+        tunable=True,
+        ge=0.0,
         description='heat kept free under the limit for shots the referee has not counted yet '
         '(unset: one shot)',
     )
     fallback_limit: float | None = declare(
-        number, None, gt=0.0,
+        number,
+        None,
+        tunable=True,
+        gt=0.0,
         description='heat limit while the referee is silent: conservative, never none '
         '(unset: five shots)',
     )
     fallback_cooling: float | None = declare(
-        number, None, ge=0.0, unit='1/s',
+        number,
+        None,
+        tunable=True,
+        ge=0.0,
+        unit='1/s',
         description='cooling per second assumed while the referee is silent (unset: one shot)',
     )
     referee_timeout: float = declare(
-        number, 1.0, gt=0.0, unit='s',
+        number,
+        1.0,
+        gt=0.0,
+        unit='s',
         description='no /referee/robot_status this long -> the fallback limits',
     )
 
@@ -99,57 +122,83 @@ class ShooterConfig:
         'launches a ball',
     )
     bullet_speeds: tuple[float, ...] = declare(
-        numbers, description='bullet speeds of the lookup table (x, increasing)', unit='m/s',
+        numbers,
+        tunable=True,
+        description='bullet speeds of the lookup table (x, increasing)',
+        unit='m/s',
         gt=0.0,
     )
     wheel_speeds: tuple[float, ...] = declare(
-        numbers, description='friction wheel speed giving each of bullet_speeds',
-        unit='rad/s', gt=0.0,
+        numbers,
+        tunable=True,
+        description='friction wheel speed giving each of bullet_speeds',
+        unit='rad/s',
+        gt=0.0,
     )
     trigger_joint: str = declare(string, description='trigger (loader) joint')
     trigger_direction: float = declare(
         number, 1.0, description='sign (+1/-1) of the trigger motion that feeds balls'
     )
     friction_tolerance: float = declare(
-        number, description='a friction wheel is at speed within this of its target',
-        unit='rad/s', gt=0.0,
+        number,
+        tunable=True,
+        description='a friction wheel is at speed within this of its target',
+        unit='rad/s',
+        gt=0.0,
     )
     slots: int = declare(integer, description='trigger pockets per turn', ge=1)
     feed_speed: float = declare(
-        number, description='trigger speed while feeding', unit='rad/s', gt=0.0
+        number, tunable=True, description='trigger speed while feeding', unit='rad/s', gt=0.0
     )
     step_speed: float = declare(
-        number, description='trigger speed of a slot step (setpoint ramp and feed-forward)',
-        unit='rad/s', gt=0.0,
-    )
-    step_tolerance: float = declare(
-        number, description='a slot step or the reverse is done within this', unit='rad',
+        number,
+        tunable=True,
+        description='trigger speed of a slot step (setpoint ramp and feed-forward)',
+        unit='rad/s',
         gt=0.0,
     )
-    max_hz: float = declare(number, description='highest firing rate', unit='shots/s', gt=0.0)
+    step_tolerance: float = declare(
+        number,
+        tunable=True,
+        description='a slot step or the reverse is done within this',
+        unit='rad',
+        gt=0.0,
+    )
+    max_hz: float = declare(
+        number, tunable=True, description='highest firing rate', unit='shots/s', gt=0.0
+    )
     limit_switch: str = declare(string, description='name of the ball switch on /gpio_state')
     switch_timeout: float = declare(
         number, 0.2, description='an older limit switch state is unknown', unit='s', gt=0.0
     )
     switch_debounce: float = declare(
-        number, 0.05,
+        number,
+        0.05,
+        tunable=True,
         description='between shots, the switch must read "no ball" this long before the '
         'trigger feeds again',
-        unit='s', ge=0.0,
+        unit='s',
+        ge=0.0,
     )
     jam: JamParams = group(JamParams)
     reverse_angle: float = declare(
-        number, description='how far the trigger turns back after a jam', unit='rad', gt=0.0
+        number,
+        tunable=True,
+        description='how far the trigger turns back after a jam',
+        unit='rad',
+        gt=0.0,
     )
     block_timeout: float = declare(
-        number, description='longest reverse before feeding again', unit='s', gt=0.0
+        number, tunable=True, description='longest reverse before feeding again', unit='s', gt=0.0
     )
     jam_retries: int = declare(
-        integer, description='recoveries tried after jams in a row before giving up (fault)',
+        integer,
+        tunable=True,
+        description='recoveries tried after jams in a row before giving up (fault)',
         ge=0,
     )
     state_rate: float = declare(
-        number, 50.0, description='rate of /shooter_state', unit='Hz', gt=0.0
+        number, 50.0, tunable=True, description='rate of /shooter_state', unit='Hz', gt=0.0
     )
     heat: HeatParams = group(HeatParams)
 

@@ -130,6 +130,7 @@ class StandShooter(PluginBase):
     """
 
     State = ShooterStage
+    config: ShooterConfig
     TRANSITIONS = {  # noqa: RUF012 (read-only table of the framework's)
         S.PASSIVE: (S.FEED,),
         S.FEED: (S.READY, S.BLOCK),
@@ -142,7 +143,7 @@ class StandShooter(PluginBase):
 
     def on_init(self) -> None:
         """Read the config, claim the joints, subscribe the topics."""
-        self.config = self.params.read(ShooterConfig)
+        self.config = self.read_config(ShooterConfig)
         cfg = self.config
         self._trigger = cfg.trigger_joint
         self._joints = self.claim_joints((*cfg.friction_joints, cfg.trigger_joint))
@@ -206,6 +207,15 @@ class StandShooter(PluginBase):
         self._friction_target = [0.0] * len(self.config.friction_joints)
         self._friction_ready = False
         self._speed = 0.0
+
+    def on_config(self, config: ShooterConfig) -> None:
+        """Parameters set while running: what the shooter derives from them follows."""
+        super().on_config(config)
+        self._state_period_ns = round(_NS_PER_S / config.state_rate)
+        self._detector = JamDetector(config.jam_detector)  # a jam timer restarts
+        barrel = config.heat.barrel
+        if self._heat is not None and barrel is not None:
+            self._heat.params = barrel  # the heat so far stays
 
     def on_enable(self) -> None:
         """A fault does not survive an explicit disable/enable."""

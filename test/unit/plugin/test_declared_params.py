@@ -28,7 +28,9 @@ class Lamp:
 class FictionalParams:
     gain: float = declare(number, description='how hard it pushes', unit='N*m/rad', gt=0.0)
     # the parameter this test adds: nothing but this line declares it
-    reach: float = declare(number, 0.25, description='how far it reaches', unit='m', le=1.0)
+    reach: float = declare(
+        number, 0.25, tunable=True, description='how far it reaches', unit='m', le=1.0
+    )
     steps: tuple[float, ...] = declare(numbers, (0.1, 0.2), description='steps', unit='m')
     lamp: Lamp = group(Lamp)
 
@@ -107,7 +109,8 @@ def test_the_new_parameter_has_its_docs_row_from_the_class_and_from_the_node(ros
         'fictional.gain', 'fictional.reach', 'fictional.steps', 'fictional.lamp.colour',
     ]
     markdown = markdown_table(rows)
-    assert '| `fictional.reach` | double | m | `0.25` | <= 1.0 | how far it reaches |' in markdown
+    assert '| `fictional.reach` | double | m | `0.25` | <= 1.0 | yes | how far it reaches |' in (
+        markdown)
     node, _ = _init(ros_context, gain=2.0)
     try:
         # what the running node declared is what the class says, row for row

@@ -156,7 +156,9 @@ def test_declared_parameter_has_description_unit_and_is_read_only(make_params):
     radius(params)
     descriptor = params._node.describe_parameter('chassis.wheel_radius')
     assert descriptor.description == 'wheel radius [m]'
-    assert descriptor.additional_constraints == 'type: double; unit: m; > 0.0; required'
+    assert descriptor.additional_constraints == (
+        'type: double; unit: m; > 0.0; required; read at start-up: a change needs a restart'
+    )
     assert descriptor.read_only
     result = params._node.set_parameters([Parameter('chassis.wheel_radius', value=0.1)])[0]
     assert not result.successful

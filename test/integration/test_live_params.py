@@ -1,0 +1,60 @@
+"""Tunable parameters set on the running robot: checked, all of a call or none, between runs.
+
+Through the host node's parameter services' own path (``Node.set_parameters`` runs the
+set-parameters callback exactly as ``ros2 param set`` does), in lockstep.
+"""
+
+from __future__ import annotations
+
+import pytest
+from rclpy.parameter import Parameter
+from support.lockstep import LockstepRobot
+
+from rm_msgs.msg import ShootCmd
+
+pytestmark = [pytest.mark.ros]
+
+HZ = 20.0
+
+
+def _set(r, **values):
+    """Set host parameters (``heat__margin`` for ``shooter.heat.margin``); one result."""
+    params = [Parameter(k.replace('__', '.'), value=v) for k, v in values.items()]
+    return r.host.set_parameters_atomically(params)
+
+
+def test_a_tunable_key_changes_between_runs_and_the_others_refuse_with_the_reason():
+    with LockstepRobot('standard', plugins=('shooter',)) as r:
+        shooter = r.plugin('shooter')
+        r.publish('/shoot_cmd', ShootCmd(mode=ShootCmd.READY, speed=15.0), rate_hz=HZ)
+        r.run(0.5)
+        assert shooter.config.max_hz != 7.5
+
+        result = _set(r, shooter__max_hz=7.5, shooter__jam__time=0.3)
+        assert result.successful, result.reason
+        # not in the middle of a run: the plugin has the old set until its next run
+        assert shooter.config.max_hz != 7.5
+        r.run(0.05)
+        assert (shooter.config.max_hz, shooter.config.jam.time) == (7.5, 0.3)
+        assert r.host.get_parameter('shooter.max_hz').value == 7.5
+
+        # out of bounds: refused, naming key and bound; nothing of the call applied
+        result = _set(r, shooter__max_hz=9.0, shooter__jam__effort=-1.0)
+        assert not result.successful
+        assert result.reason == 'shooter.jam.effort must be > 0.0, got -1.0'
+        r.run(0.05)
+        assert shooter.config.max_hz == 7.5
+        assert r.host.get_parameter('shooter.max_hz').value == 7.5
+
+        # the set's own checks: a step tolerance over half a slot
+        result = _set(r, shooter__step_tolerance=3.0)
+        assert not result.successful and 'below half a slot' in result.reason
+
+        # start-up keys are read-only: refused, and their description says why
+        for key, value in (('shooter.trigger_joint', 'x'), ('shooter.rate', 50.0),
+                           ('plugins', ['shooter'])):
+            result = r.host.set_parameters_atomically([Parameter(key, value=value)])
+            assert not result.successful
+            assert result.reason == f'Trying to set a read-only parameter: {key}.'
+            assert r.host.describe_parameter(key).additional_constraints.endswith(
+                'read at start-up: a change needs a restart')
