@@ -11,7 +11,9 @@ from __future__ import annotations
 import fcntl
 import os
 import subprocess
+import sys
 import tempfile
+import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
@@ -194,3 +196,26 @@ def stop_process(proc: subprocess.Popen, timeout: float = 10.0) -> tuple[str, st
     except subprocess.TimeoutExpired:
         proc.kill()
         return proc.communicate()
+
+
+def run_rmcli(*args: str, timeout: float = 30.0) -> tuple[int, str, str]:
+    """Run ``rmcli args...`` in a child process (this session's domain); its code, out, err."""
+    proc = start_process([sys.executable, '-m', 'rm_bringup.cli', *args])
+    out, err = proc.communicate(timeout=timeout)
+    return proc.returncode, out, err
+
+
+@contextmanager
+def spinning(node: Any) -> Iterator[Any]:
+    """Spin node in a thread of its own while the block runs (a node others call)."""
+    from rclpy.executors import SingleThreadedExecutor
+
+    executor = SingleThreadedExecutor(context=node.context)
+    executor.add_node(node)
+    thread = threading.Thread(target=executor.spin, daemon=True)
+    thread.start()
+    try:
+        yield node
+    finally:
+        executor.shutdown()
+        thread.join(5.0)

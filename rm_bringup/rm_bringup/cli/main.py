@@ -1,6 +1,7 @@
-"""``rmcli``: the project's thin, faithful stand-in for ros2 topic, service call and bag.
+"""``rmcli``: the project's thin, faithful stand-in for ros2cli's everyday commands.
 
-ros2cli and rosbag2 are not on PyPI, so the virtualenv has this instead. Exit codes: 0 ok
+topic, service, param, node, interface and bag: ros2cli and rosbag2 are not on PyPI, so
+the virtualenv has this instead. Exit codes: 0 ok
 (also when stopped with Ctrl-C, the normal way to end echo/hz/record), 1 a runtime error
 (one line on stderr), 2 a usage error.
 """
@@ -11,7 +12,7 @@ import argparse
 import os
 import sys
 from collections.abc import Sequence
-from types import ModuleType
+from typing import Any
 
 from . import (
     bag_info,
@@ -19,6 +20,8 @@ from . import (
     bag_plot,
     bag_record,
     bag_reindex,
+    graph,
+    param,
     service_call,
     topic_echo,
     topic_hz,
@@ -30,16 +33,21 @@ from .errors import CliError, UsageError
 PROG = 'rmcli'
 
 # group -> verb -> (module with add_arguments(parser) and run(args), one-line help)
-VERBS: dict[str, dict[str, tuple[ModuleType, str]]] = {
+VERBS: dict[str, dict[str, tuple[Any, str]]] = {
     'topic': {
         'echo': (topic_echo, 'Output messages from a topic'),
         'hz': (topic_hz, 'Print the average receiving rate to screen'),
         'list': (topic_list, 'Output a list of available topics'),
         'pub': (topic_pub, 'Publish a message to a topic'),
+        **graph.TOPIC_VERBS,
     },
     'service': {
         'call': (service_call, 'Call a service'),
+        **graph.SERVICE_VERBS,
     },
+    'param': param.VERBS,
+    'node': graph.NODE_VERBS,
+    'interface': graph.INTERFACE_VERBS,
     'bag': {
         'info': (bag_info, 'Print information about a bag to the screen'),
         'play': (bag_play, 'Play back ROS data from a bag'),
@@ -51,6 +59,9 @@ VERBS: dict[str, dict[str, tuple[ModuleType, str]]] = {
 GROUP_HELP = {
     'topic': 'Various topic related sub-commands',
     'service': 'Various service related sub-commands',
+    'param': 'Various param related sub-commands',
+    'node': 'Various node related sub-commands',
+    'interface': 'Show information about ROS interfaces',
     'bag': 'Various rosbag related sub-commands',
 }
 
@@ -59,7 +70,8 @@ def build_parser() -> argparse.ArgumentParser:
     """Return the parser of every group and verb."""
     parser = argparse.ArgumentParser(
         prog=PROG,
-        description='rm_ros2 command-line tool: ros2 topic, service call and bag, without ros2cli.',
+        description='rm_ros2 command-line tool: ros2 topic, service, param, node, interface '
+        'and bag, without ros2cli.',
         epilog=f'Call `{PROG} <command> -h` for more detailed usage.',
     )
     parser.set_defaults(help_parser=parser)
