@@ -179,6 +179,31 @@ def test_hz_reports_the_publishing_rate(graph):
     assert proc.returncode == 0
 
 
+def test_bw_reports_the_message_sizes_and_a_rate(graph):
+    node, executor = graph
+    publisher = node.create_publisher(String, '/cli_test/bw', 10)
+    # a 100-character string is 112 bytes serialised: 4 of CDR header, 4 of length, 101,
+    # padded to 4
+    node.create_timer(0.05, lambda: publisher.publish(String(data='x' * 100)))
+    proc = rmcli('topic', 'bw', '/cli_test/bw')
+    lines = []
+    reader = threading.Thread(target=lambda: lines.extend(proc.stdout), daemon=True)
+    reader.start()
+    try:
+        wait_until(lambda: sum('Message size' in line for line in lines) >= 2, TIMEOUT_S,
+                   spin=executor.spin_once)
+    finally:
+        proc.send_signal(signal.SIGINT)
+        reader.join(timeout=TIMEOUT_S)
+        proc.wait(timeout=TIMEOUT_S)
+    assert lines[0] == 'Subscribed to [/cli_test/bw]\n', lines
+    sizes = [line for line in lines if 'Message size' in line]
+    assert sizes and sizes[-1] == '\tMessage size mean: 112 B min: 112 B max: 112 B\n', lines
+    rates = [line for line in lines if '/s from ' in line]
+    assert rates and float(rates[-1].split()[0]) > 0, lines
+    assert proc.returncode == 0
+
+
 def test_echo_ends_cleanly_on_sigint(graph):
     node, executor = graph
     proc = rmcli('topic', 'echo', '/cli_test/silent', 'std_msgs/msg/String')

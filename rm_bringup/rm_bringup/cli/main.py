@@ -23,6 +23,7 @@ from . import (
     graph,
     param,
     service_call,
+    topic_bw,
     topic_echo,
     topic_hz,
     topic_list,
@@ -35,6 +36,7 @@ PROG = 'rmcli'
 # group -> verb -> (module with add_arguments(parser) and run(args), one-line help)
 VERBS: dict[str, dict[str, tuple[Any, str]]] = {
     'topic': {
+        'bw': (topic_bw, 'Display bandwidth used by topic'),
         'echo': (topic_echo, 'Output messages from a topic'),
         'hz': (topic_hz, 'Print the average receiving rate to screen'),
         'list': (topic_list, 'Output a list of available topics'),
