@@ -5,6 +5,7 @@
     bringup --config my_robot.yaml --sim  # any robot config file
     bringup --sim --params-file extra.yaml  # and overrides, loaded last
     bringup --sim --sim-time              # every node on /clock (`rmcli bag play --clock`)
+    bringup --sim --foxglove              # and the robot live in Foxglove (ws://127.0.0.1:8765)
 
 The robot config is a ROS parameter file with a ``can_bridge`` and an ``rm_robot``
 section (rm_bringup/config/<robot>.yaml). ``--sim`` starts rm_sim, the simulated motors
@@ -101,6 +102,11 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     parser.add_argument(
         '--sim-time', action='store_true',
         help='every node runs on /clock (use_sim_time), e.g. replayed by `rmcli bag play --clock`',
+    )
+    parser.add_argument(
+        '--foxglove', type=int, nargs='?', const=8765, default=None, metavar='PORT',
+        help='serve the topics and parameters to Foxglove on ws://127.0.0.1:PORT (8765; 0: '
+        'any free port); loopback only',
     )
     parser.add_argument('--no-status', action='store_true', help='no live status line')
     parser.add_argument(
@@ -225,6 +231,23 @@ def has_section(files: list[pathlib.Path], node: str) -> bool:
     return False
 
 
+def _start_view(executor: Any, nodes: list[Any], host: RobotHost, port: int) -> Any:
+    """The Foxglove view of the robot, its node spun by executor; says where it listens."""
+    from rm_bringup.foxglove_view import NODE_NAME, FoxgloveView
+    from rm_bringup.robot_description import describe_host
+
+    node = rclpy.create_node(NODE_NAME)
+    executor.add_node(node)
+    try:
+        view = FoxgloveView(node, nodes, description=describe_host(host), port=port)
+    except RuntimeError as err:  # the port given is taken: the robot runs on, unseen
+        print(f'[bringup] no Foxglove view: {err}', file=sys.stderr)
+        return None
+    print(f'[bringup] Foxglove: ws://127.0.0.1:{view.port} (Foxglove app: Open connection)',
+          flush=True)
+    return view
+
+
 def _run(args: argparse.Namespace, files: list[pathlib.Path], console: Console | None) -> int:
     bridge = host = manual = None
     try:
@@ -267,9 +290,15 @@ def _run(args: argparse.Namespace, files: list[pathlib.Path], console: Console |
         guard.check()
         return deadline is None or time.monotonic() < deadline
 
+    view = None
     try:
+        if args.foxglove is not None:  # in the try: a failure still stops the robot cleanly
+            view = _start_view(executor, [n for n in (bridge, host, manual) if n is not None],
+                               host, args.foxglove)
         spin_until_shutdown(executor, on_tick=tick, timeout_sec=_SPIN_TIMEOUT)
     finally:
+        if view is not None:
+            view.close()
         # Plugins first (zero targets on their joints), then the bridge's zero frames.
         if manual is not None:
             manual.shutdown()
