@@ -58,3 +58,29 @@ def test_a_tunable_key_changes_between_runs_and_the_others_refuse_with_the_reaso
             assert result.reason == f'Trying to set a read-only parameter: {key}.'
             assert r.host.describe_parameter(key).additional_constraints.endswith(
                 'read at start-up: a change needs a restart')
+
+
+def test_a_joints_loop_gains_change_at_the_next_tick_and_the_rest_of_its_table_refuses():
+    with LockstepRobot('standard', plugins=('chassis',)) as r:
+        wheel = r.bridge.hardware.actuators['wheel_fl']
+        velocity, _ = wheel.loop_gains
+        result = r.bridge.set_parameters_atomically([
+            Parameter('joints.wheel_fl.velocity_pid.kp', value=velocity.kp * 2),
+            Parameter('joints.wheel_fl.velocity_pid.ki', value=0.0),
+        ])
+        assert result.successful, result.reason
+        assert wheel.loop_gains[0] == velocity  # not before a tick
+        r.step()
+        new, _ = wheel.loop_gains
+        assert (new.kp, new.ki, new.output_limit) == (velocity.kp * 2, 0.0, velocity.output_limit)
+        bad = r.bridge.set_parameters_atomically(
+            [Parameter('joints.wheel_fl.velocity_pid.kp', value=-1.0)])
+        assert not bad.successful and 'joints.wheel_fl.velocity_pid' in bad.reason
+        fixed = r.bridge.set_parameters_atomically([Parameter('joints.wheel_fl.id', value=3)])
+        assert not fixed.successful
+        assert fixed.reason.startswith(
+            'joints.wheel_fl.id: read at start-up: a change needs a restart'), fixed.reason
+        flat = r.bridge.set_parameters_atomically([Parameter('publish_rate', value=50.0)])
+        assert flat.reason == 'Trying to set a read-only parameter: publish_rate.'
+        r.step()
+        assert wheel.loop_gains[0] == new

@@ -26,6 +26,7 @@ from rm_base.bridge.command_input import ActuatorCmdInput
 from rm_base.bridge.diagnostics import CommandStats, DiagnosticsReporter
 from rm_base.bridge.errors import BridgeConfigError, PowerLimitRejectedError
 from rm_base.bridge.frames import FrameTap
+from rm_base.bridge.live_gains import LiveGains
 from rm_base.bridge.messages import (
     actuator_state_msg,
     can_frame_msg,
@@ -39,6 +40,7 @@ from rm_base.bridge.power_limits import RemotePowerLimits, parse_power_limit
 from rm_base.bridge.sim_config import world_config
 from rm_base.bridge.sim_services import SimFaultServices
 from rm_base.config.calibration import CalibrationError
+from rm_base.config.schema import InvalidValueError
 from rm_base.hardware import CanHardware
 from rm_base.hardware.bus import BusFactory
 from rm_base.hardware.errors import CommandRejectedError, ValueRangeError
@@ -203,6 +205,12 @@ class CanBridgeNode(Node):
             )
             hw.scheduler.add_stage(self._inbox)
         self._inbox_report = InboxReport(self.get_name())
+        # joints.<joint>.<loop>.kp ... set while running, taken at the start of a tick
+        self._live_gains = LiveGains(hw.actuators, {
+            joint.name: {'velocity_pid': joint.velocity_pid, 'position_pid': joint.position_pid}
+            for joint in settings.hardware_config.joints
+        })
+        hw.scheduler.add_stage(self._live_gains)
         # rm_robot in a process of its own asks for its power stages here (rare: executor)
         self._power_limits = RemotePowerLimits(hw)
         self.power_limit_rejections = 0
@@ -286,12 +294,25 @@ class CanBridgeNode(Node):
             )
 
     def _on_set_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
-        names = ', '.join(p.name for p in parameters)
-        return SetParametersResult(
-            successful=False,
-            reason=f'{NODE_NAME} reads its parameters once at start-up; restart it to change '
-            f'{names}',
+        """``ros2 param set``: a joint's loop gains live (all of a call or none); else refused."""
+        fixed = [p.name for p in parameters
+                 if not LiveGains.takes(p.name) and p.name != 'use_sim_time']
+        if fixed:
+            return SetParametersResult(
+                successful=False,
+                reason=f'{", ".join(fixed)}: read at start-up: a change needs a restart '
+                f'(live: joints.<joint>.velocity_pid.* and position_pid.*)',
+            )
+        try:
+            self._live_gains.propose({p.name: p.value for p in parameters
+                                      if LiveGains.takes(p.name)})
+        except InvalidValueError as err:
+            return SetParametersResult(successful=False, reason=str(err))
+        self.get_logger().info(
+            'set ' + ', '.join(f'{p.name} = {p.value!r}' for p in parameters)
+            + ' (from the next tick on)'
         )
+        return SetParametersResult(successful=True)
 
     # --- lockstep ---------------------------------------------------------------------------
     def step(self, ticks: int = 1) -> None:

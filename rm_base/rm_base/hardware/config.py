@@ -134,9 +134,11 @@ JOINT_SCHEMA = Schema(
         number('temperature_limit', None, unit='degC',
                description="above it the joint is held at zero; default: the type's"),
         mapping('velocity_pid', None,
-                description='velocity loop (rad/s -> N·m): PidGains fields, or form: incremental'),
+                description='velocity loop (rad/s -> N·m): PidGains fields, or form: incremental; '
+                "a positional loop's gains and limits may be set while running"),
         mapping('position_pid', None,
-                description='position loop (rad -> rad/s): PidGains fields, or form: incremental'),
+                description='position loop (rad -> rad/s): PidGains fields, or form: incremental; '
+                "a positional loop's gains and limits may be set while running"),
     ),
     open=True,
 )

@@ -10,6 +10,9 @@ JOINT_STATES = 'joint states'
 JOINT_TARGETS = 'joint targets'
 """The joints' setpoints (plugins, or the bridge's /actuator_cmd, write them)."""
 
+JOINT_GAINS = 'joint gains'
+"""The joints' loop gains (set while running, between two ticks)."""
+
 JOINT_EFFORTS = 'joint efforts'
 """The actuators' outputs this tick (their update writes them; power limits scale them)."""
 

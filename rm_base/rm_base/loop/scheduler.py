@@ -45,7 +45,7 @@ from typing import Protocol
 import can
 
 from rm_base.loop import garbage
-from rm_base.loop.data import FRAMES, JOINT_EFFORTS, JOINT_STATES, JOINT_TARGETS
+from rm_base.loop.data import FRAMES, JOINT_EFFORTS, JOINT_GAINS, JOINT_STATES, JOINT_TARGETS
 from rm_base.loop.errors import LoopConfigError
 from rm_base.loop.order import Declared, derive_order, unread_outputs
 from rm_base.loop.timing import (
@@ -95,7 +95,7 @@ class _Update:
     """The loop's ``actuators`` component: every actuator's update."""
 
     name = ACTUATORS
-    reads = (JOINT_TARGETS, JOINT_STATES)
+    reads = (JOINT_TARGETS, JOINT_STATES, JOINT_GAINS)
     writes = (JOINT_EFFORTS,)
 
     def __init__(self, actuators: tuple[Updatable, ...]) -> None:

@@ -49,7 +49,7 @@ import can
 from mypy_extensions import mypyc_attr
 
 from rm_base.config.schema import Schema, unknown_keys_message
-from rm_base.control import build_pid
+from rm_base.control import Pid, PidGains, build_pid
 from rm_base.hardware.config import JOINT_SCHEMA, JointConfig, SafetyConfig
 from rm_base.hardware.errors import CommandRejectedError, HardwareConfigError, ProtocolError
 from rm_base.joints import InvalidTargetError, JointState, JointTarget, Mode, check_target
@@ -578,6 +578,31 @@ class Actuator:
     def effort_out(self) -> float:
         """The effort this tick's update commands [N·m] (0 while held at zero)."""
         return self._effort_out
+
+    @property
+    def loop_gains(self) -> tuple[PidGains | None, PidGains | None]:
+        """The velocity and position loops' gains now; None for a loop that is not positional."""
+        velocity, position = self._velocity_pid, self._position_pid
+        return (velocity.gains if isinstance(velocity, Pid) else None,
+                position.gains if isinstance(position, Pid) else None)
+
+    def set_loop_gains(
+        self, velocity: PidGains | None = None, position: PidGains | None = None
+    ) -> None:
+        """New gains for the positional velocity and position loops; their state stays.
+
+        For live tuning, between two updates (the loop's thread). None keeps a loop as it is.
+
+        Raises:
+            TypeError: the loop is not a positional PID (its form is read at start-up).
+        """
+        for loop, pid, gains in (('velocity', self._velocity_pid, velocity),
+                                 ('position', self._position_pid, position)):
+            if gains is None:
+                continue
+            if not isinstance(pid, Pid):
+                raise TypeError(f'{self.name}: the {loop} loop is not a positional PID')
+            pid.gains = gains
 
     def scale_output(self, factor: float) -> None:
         """Scale this tick's output by factor in [0, 1] (a group stage after the update).
