@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import pytest
 from rclpy.parameter import Parameter
+from rm_plugins.chassis.commands import SpeedGear
 from support.lockstep import LockstepRobot
 
 from rm_msgs.msg import ShootCmd
@@ -84,3 +85,40 @@ def test_a_joints_loop_gains_change_at_the_next_tick_and_the_rest_of_its_table_r
         assert flat.reason == 'Trying to set a read-only parameter: publish_rate.'
         r.step()
         assert wheel.loop_gains[0] == new
+
+
+def test_the_gimbals_loop_gains_are_live_and_its_frames_are_not():
+    with LockstepRobot('standard', plugins=('imu', 'gimbal')) as r:
+        gimbal = r.plugin('gimbal')
+        kp = gimbal.config.yaw.angle_pid.kp
+        result = r.host.set_parameters_atomically([
+            Parameter('gimbal.yaw_pid.kp', value=kp + 5.0),
+            Parameter('gimbal.pitch_pid.max_rate', value=4.0),
+        ])
+        assert result.successful, result.reason
+        r.run(0.05)
+        assert gimbal.config.yaw.angle_pid.kp == kp + 5.0
+        assert gimbal.config.pitch.angle_pid.output_limit == 4.0
+        assert gimbal.config.yaw.angle_pid.angle_mode  # the loop's own settings stay
+        refused = r.host.set_parameters_atomically([Parameter('gimbal.yaw_pid.kp', value=-1.0)])
+        assert refused.reason == 'gimbal.yaw_pid.kp must be >= 0.0, got -1.0'
+        frames = r.host.set_parameters_atomically([Parameter('gimbal.pitch_joint', value='x')])
+        assert frames.reason == 'Trying to set a read-only parameter: gimbal.pitch_joint.'
+
+
+def test_the_chassis_gears_and_default_power_limit_are_live():
+    with LockstepRobot('standard', plugins=('chassis',)) as r:
+        chassis = r.plugin('chassis')
+        result = r.host.set_parameters_atomically([
+            Parameter('chassis.gears.slow.linear', value=0.3),
+            Parameter('chassis.power.default_limit', value=45.0),
+        ])
+        assert result.successful, result.reason
+        r.run(0.05)
+        assert chassis.config.gears[SpeedGear.SLOW][0] == 0.3
+        assert chassis.config.power_limit == 45.0
+        refused = r.host.set_parameters_atomically(
+            [Parameter('chassis.gears.fast.angular', value=0.0)])
+        assert refused.reason == 'chassis.gears.fast.angular must be > 0.0, got 0.0'
+        wheels = r.host.set_parameters_atomically([Parameter('chassis.wheel_radius', value=0.1)])
+        assert wheels.reason == 'Trying to set a read-only parameter: chassis.wheel_radius.'

@@ -697,7 +697,8 @@ class PluginBase:
     def on_config(self, config: Any) -> None:
         """Hook: the parameter set changed (between runs); the default keeps it as config.
 
-        Override to rebuild what the plugin derives from its parameters, calling this too.
+        Override to rebuild what the plugin derives from its parameters (calling this too
+        when config is the whole set; a plugin whose set is only its live part merges it).
         """
         self.config = config
 

@@ -12,10 +12,11 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, make_dataclass
 from enum import Enum
 from typing import Any
 
+from rm_base.config.schema import declare, group, number
 from rm_base.control import ChassisPowerModel, PidGains, RampLimits
 from rm_base.errors import ConfigError
 from rm_base.geometry import (
@@ -257,18 +258,59 @@ def _pid(p: PluginParams, group: str, unit_in: str, unit_out: str, *, angle: boo
     )
 
 
-def _gears(p: PluginParams) -> dict[SpeedGear, tuple[float, float]]:
-    gears = {}
-    for gear, (linear, angular) in _GEAR_DEFAULTS.items():
-        name = gear.name.lower()
-        gears[gear] = (
-            p.double(f'gears.{name}.linear', linear, unit='1', gt=0.0,
-                     description=f'{name} gear (ChassisCmd.speed_gear): factor on /vel_cmd vx, '
-                     'vy (the wheel speed limit still applies)'),
-            p.double(f'gears.{name}.angular', angular, unit='1', gt=0.0,
-                     description=f"{name} gear: factor on /vel_cmd wz (RAW's rotation)"),
-        )
-    return gears
+def _gear_tuning(gear: SpeedGear) -> type:
+    """One speed gear's live factors (``gears.<gear>.*``), with SRML's defaults."""
+    name = gear.name.lower()
+    linear, angular = _GEAR_DEFAULTS[gear]
+    return make_dataclass(f'{gear.name.title()}Gear', [
+        ('linear', float, declare(
+            number, linear, tunable=True, unit='1', gt=0.0,
+            description=f'{name} gear (ChassisCmd.speed_gear): factor on /vel_cmd vx, vy (the '
+            'wheel speed limit still applies)')),
+        ('angular', float, declare(
+            number, angular, tunable=True, unit='1', gt=0.0,
+            description=f"{name} gear: factor on /vel_cmd wz (RAW's rotation)")),
+    ], frozen=True, kw_only=True)
+
+
+@dataclass(frozen=True, kw_only=True)
+class GearTuning:
+    """The speed gears' factors on /vel_cmd (``gears.*``)."""
+
+    slow: Any = group(_gear_tuning(SpeedGear.SLOW))
+    normal: Any = group(_gear_tuning(SpeedGear.NORMAL))
+    fast: Any = group(_gear_tuning(SpeedGear.FAST))
+
+
+@dataclass(frozen=True, kw_only=True)
+class PowerTuning:
+    """The live part of ``power.*``: the limit the chassis keeps by default."""
+
+    default_limit: float = declare(
+        number, 60.0, tunable=True, unit='W', gt=0.0,
+        description='chassis power limit when /chassis_cmd gives none (with from_referee: '
+        'while the referee is silent)',
+    )
+
+
+@dataclass(frozen=True, kw_only=True)
+class ChassisTuning:
+    """What may change while the chassis runs: the gears and the default power limit."""
+
+    gears: GearTuning = group(GearTuning)
+    power: PowerTuning = group(PowerTuning)
+
+
+def _gears(tuning: ChassisTuning) -> dict[SpeedGear, tuple[float, float]]:
+    return {gear: (factors.linear, factors.angular) for gear, factors in (
+        (SpeedGear.SLOW, tuning.gears.slow), (SpeedGear.NORMAL, tuning.gears.normal),
+        (SpeedGear.FAST, tuning.gears.fast))}
+
+
+def with_tuning(config: ChassisConfig, tuning: ChassisTuning) -> ChassisConfig:
+    """The config with the gears and the default power limit of tuning (set while running)."""
+    return dataclasses.replace(config, gears=_gears(tuning),
+                               power_limit=tuning.power.default_limit)
 
 
 def _where(p: PluginParams) -> str:
@@ -276,8 +318,8 @@ def _where(p: PluginParams) -> str:
     return f"plugin '{p.plugin}'{kind}"
 
 
-def read_config(p: PluginParams) -> ChassisConfig:
-    """Declare and read every StandChassis parameter.
+def read_config(p: PluginParams, tuning: ChassisTuning) -> ChassisConfig:
+    """Declare and read every start-up StandChassis parameter; the live ones come in tuning.
 
     Raises:
         ParameterError: a parameter is missing, of the wrong type or out of range; the
@@ -381,10 +423,7 @@ def read_config(p: PluginParams) -> ChassisConfig:
         linear_limits=_ramp(p, 'linear', 'm/s', (4.0, 6.0, 8.0, 0.3)),
         angular_limits=_ramp(p, 'angular', 'rad/s', (20.0, 30.0, 40.0, 1.0)),
         power_model=power_model,
-        power_limit=p.double('power.default_limit', 60.0,
-                             description='chassis power limit when /chassis_cmd gives none '
-                             '(with from_referee: while the referee is silent)',
-                             unit='W', gt=0.0),
+        power_limit=tuning.power.default_limit,
         **_referee_power(p),
         imu_mount=p.choice('imu.mount', ImuMount, ImuMount.GIMBAL,
                            description='body the IMU is fixed to: gimbal, chassis or none'),
@@ -404,7 +443,7 @@ def read_config(p: PluginParams) -> ChassisConfig:
         publish_rate=p.double('publish_rate', 100.0,
                               description='rate of /chassis_state and /odom', unit='Hz',
                               gt=0.0),
-        gears=_gears(p),
+        gears=_gears(tuning),
         position=_position(p),
     )
 

@@ -97,7 +97,13 @@ from rm_plugins.chassis.commands import (
     parse_chassis_cmd,
     parse_vel_cmd,
 )
-from rm_plugins.chassis.config import ChassisConfig, ImuMount, read_config
+from rm_plugins.chassis.config import (
+    ChassisConfig,
+    ChassisTuning,
+    ImuMount,
+    read_config,
+    with_tuning,
+)
 from rm_plugins.chassis.drive import Drive, SwerveDrive
 from rm_plugins.chassis.modes import ChassisMotionMode
 from rm_plugins.chassis.motion import (
@@ -158,7 +164,7 @@ class StandChassis(PluginBase):
 
     def on_init(self) -> None:
         """Read the parameters, claim the wheels, subscribe, create publishers."""
-        cfg: ChassisConfig = read_config(self.params)
+        cfg: ChassisConfig = read_config(self.params, self.read_config(ChassisTuning))
         self.config = cfg
         self.claim_joints(cfg.wheel_joints + cfg.steer_joints)
         # swerve: the steering targets and angles live between ticks in the drive
@@ -204,6 +210,10 @@ class StandChassis(PluginBase):
         # the last POSITION move started: kept across resets, so a move runs once
         self._started_move_id: int | None = None
         self.on_reset()
+
+    def on_config(self, config: ChassisTuning) -> None:
+        """Gears and the default power limit set while running: read from config at use."""
+        self.config = with_tuning(self.config, config)
 
     def on_reset(self) -> None:
         """Forget commands, ramps and PIDs (not the odometry: the pose stays continuous)."""

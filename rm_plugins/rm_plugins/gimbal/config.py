@@ -1,10 +1,14 @@
-"""StandGimbal configuration: one frozen dataclass read from the plugin's parameters."""
+"""StandGimbal configuration: the live tuning (declared once) and the start-up config."""
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import dataclasses
+from dataclasses import dataclass, make_dataclass
+from typing import Any
 
-from rm_base.control import PidConfig, PidGains
+from rm_base.config.schema import declare, group, number
+from rm_base.control import IncrementalPidConfig, PidConfig, PidGains
+from rm_base.control.pid_form import incremental_like
 from rm_base.geometry.ballistics import STANDARD_GRAVITY, ProjectileModel
 from rm_base.plugin import PluginConfigError, PluginParams
 from rm_base.plugin.pid_params import loop_pid
@@ -81,98 +85,90 @@ class GimbalConfig:
     state_rate: float
 
 
-def _axis(p: PluginParams, name: str, default_joint: str, defaults: dict[str, float]) -> AxisConfig:
-    joint = p.string(f'{name}_joint', default_joint, description=f'{name} joint name')
-    key = f'{name}_pid'
-    positional = PidGains(
-        kp=p.double(
-            f'{key}.kp',
-            defaults['kp'],
-            ge=0.0,
-            unit='1/s',
-            description=f'{name} angle loop: world rate per rad of error',
-        ),
-        ki=p.double(
-            f'{key}.ki',
-            defaults['ki'],
-            ge=0.0,
-            unit='1/s^2',
-            description=f'{name} angle loop integral gain',
-        ),
-        kd=p.double(
-            f'{key}.kd',
-            defaults['kd'],
-            ge=0.0,
-            unit='1',
-            description=f'{name} angle loop derivative gain (on the measurement)',
-        ),
-        integral_limit=p.double(
-            f'{key}.integral_limit',
-            defaults['integral_limit'],
-            ge=0.0,
-            unit='rad/s',
-            description=f'{name} angle loop I-term clamp',
-        ),
-        output_limit=p.double(
-            f'{key}.max_rate',
-            defaults['max_rate'],
-            gt=0.0,
-            unit='rad/s',
-            description=f'largest {name} rate in the world frame',
-        ),
-        derivative_tau_s=p.double(
-            f'{key}.derivative_tau',
-            0.0,
-            ge=0.0,
-            unit='s',
-            description=f'{name} angle loop D-term low-pass',
-        ),
-        angle_mode=True,
-    )
-    gains = loop_pid(p, key, positional, setpoint_unit='rad')
-    max_velocity = p.double(
-        f'{name}_max_joint_velocity',
-        defaults['max_joint_velocity'],
-        gt=0.0,
-        unit='rad/s',
-        description=f'largest {name} joint velocity target',
-    )
-    return AxisConfig(joint, gains, max_velocity)
+def _axis_tuning(axis: str, max_rate: float) -> type:
+    """The live keys of one axis' angle loop (``<axis>_pid.*``), with the axis' defaults."""
+    def gain(default: float, unit: str, what: str, **bounds: float) -> Any:
+        return declare(number, default, tunable=True, unit=unit,
+                       description=f'{axis} angle loop {what}', **bounds)
+
+    return make_dataclass(f'{axis.title()}Pid', [
+        ('kp', float, gain(20.0, '1/s', 'gain: world rate per rad of error', ge=0.0)),
+        ('ki', float, gain(0.0, '1/s^2', 'integral gain', ge=0.0)),
+        ('kd', float, gain(0.0, '1', 'derivative gain (on the measurement)', ge=0.0)),
+        ('integral_limit', float, gain(1.0, 'rad/s', 'I-term clamp', ge=0.0)),
+        ('max_rate', float, gain(max_rate, 'rad/s', 'output: the largest world rate', gt=0.0)),
+        ('derivative_tau', float, gain(0.0, 's', 'D-term low-pass', ge=0.0)),
+    ], frozen=True, kw_only=True)
 
 
-def read_config(p: PluginParams) -> GimbalConfig:
-    """Declare and read every parameter of the plugin.
+YawPid = _axis_tuning('yaw', 15.0)
+PitchPid = _axis_tuning('pitch', 10.0)
+
+
+@dataclass(frozen=True, kw_only=True)
+class GimbalTuning:
+    """What may change while the gimbal runs: its loops' gains and limits."""
+
+    yaw_pid: Any = group(YawPid)
+    pitch_pid: Any = group(PitchPid)
+    yaw_max_joint_velocity: float = declare(
+        number, 25.0, tunable=True, gt=0.0, unit='rad/s',
+        description='largest yaw joint velocity target',
+    )
+    pitch_max_joint_velocity: float = declare(
+        number, 20.0, tunable=True, gt=0.0, unit='rad/s',
+        description='largest pitch joint velocity target',
+    )
+    limit_gain: float = declare(
+        number, 10.0, tunable=True, gt=0.0, unit='1/s',
+        description='joint velocity per rad of distance to a pitch limit',
+    )
+    max_target_lead: float = declare(
+        number, 0.5, tunable=True, gt=0.0, unit='rad',
+        description='RATE target kept within this of the measured angle',
+    )
+
+
+def _gains(tuning: Any) -> PidGains:
+    return PidGains(
+        kp=tuning.kp, ki=tuning.ki, kd=tuning.kd, integral_limit=tuning.integral_limit,
+        output_limit=tuning.max_rate, derivative_tau_s=tuning.derivative_tau, angle_mode=True,
+    )
+
+
+def _axis(p: PluginParams, name: str, tuning: Any, max_joint_velocity: float) -> AxisConfig:
+    joint = p.string(f'{name}_joint', name, description=f'{name} joint name')
+    gains = loop_pid(p, f'{name}_pid', _gains(tuning), setpoint_unit='rad')
+    return AxisConfig(joint, gains, max_joint_velocity)
+
+
+def _retuned(loop: PidConfig, tuning: Any) -> PidConfig:
+    """The loop config with the gains of tuning, in its own form (positional or incremental)."""
+    gains = _gains(tuning)
+    if isinstance(loop, IncrementalPidConfig):
+        return incremental_like(gains, loop.setpoint_td)
+    return gains
+
+
+def with_tuning(config: GimbalConfig, tuning: GimbalTuning) -> GimbalConfig:
+    """The config with the loops' gains and limits of tuning (set while running)."""
+    yaw = AxisConfig(config.yaw.joint, _retuned(config.yaw.angle_pid, tuning.yaw_pid),
+                     tuning.yaw_max_joint_velocity)
+    pitch = AxisConfig(config.pitch.joint, _retuned(config.pitch.angle_pid, tuning.pitch_pid),
+                       tuning.pitch_max_joint_velocity)
+    return dataclasses.replace(config, yaw=yaw, pitch=pitch, limit_gain=tuning.limit_gain,
+                               max_target_lead=tuning.max_target_lead)
+
+
+def read_config(p: PluginParams, tuning: GimbalTuning) -> GimbalConfig:
+    """Declare and read every start-up parameter; the live ones come in tuning.
 
     Raises:
         ParameterError: a parameter is missing, of the wrong type or out of range.
         PluginConfigError: parameters contradict each other.
     """
-    yaw = _axis(
-        p,
-        'yaw',
-        'yaw',
-        {
-            'kp': 20.0,
-            'ki': 0.0,
-            'kd': 0.0,
-            'integral_limit': 1.0,
-            'max_rate': 15.0,
-            'max_joint_velocity': 25.0,
-        },
-    )
-    pitch = _axis(
-        p,
-        'pitch',
-        'pitch',
-        {
-            'kp': 20.0,
-            'ki': 0.0,
-            'kd': 0.0,
-            'integral_limit': 1.0,
-            'max_rate': 10.0,
-            'max_joint_velocity': 20.0,
-        },
-    )
+    yaw = _axis(p, 'yaw', tuning.yaw_pid, tuning.yaw_max_joint_velocity)
+    pitch = _axis(p, 'pitch', tuning.pitch_pid, tuning.pitch_max_joint_velocity)
     if yaw.joint == pitch.joint:
         raise PluginConfigError(f'yaw_joint and pitch_joint are both {yaw.joint!r}')
     pitch_min = p.double(
@@ -222,20 +218,8 @@ def read_config(p: PluginParams) -> GimbalConfig:
         pitch=pitch,
         pitch_min=pitch_min,
         pitch_max=pitch_max,
-        limit_gain=p.double(
-            'limit_gain',
-            10.0,
-            gt=0.0,
-            unit='1/s',
-            description='joint velocity per rad of distance to a pitch limit',
-        ),
-        max_target_lead=p.double(
-            'max_target_lead',
-            0.5,
-            gt=0.0,
-            unit='rad',
-            description='RATE target kept within this of the measured angle',
-        ),
+        limit_gain=tuning.limit_gain,
+        max_target_lead=tuning.max_target_lead,
         command_topic=p.string('command_topic', 'gimbal_cmd', description='GimbalCmd input'),
         state_topic=p.string('state_topic', 'gimbal_state', description='GimbalState output'),
         imu_topic=p.string('imu_topic', 'imu', description='sensor_msgs/Imu of the gimbal IMU'),

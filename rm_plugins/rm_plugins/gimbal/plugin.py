@@ -60,7 +60,7 @@ from sensor_msgs.msg import Imu
 
 from rm_msgs.msg import GimbalCmd, GimbalState
 from rm_plugins.gimbal.commands import GimbalMode, GimbalRequest, parse_gimbal_cmd
-from rm_plugins.gimbal.config import GimbalConfig, read_config
+from rm_plugins.gimbal.config import GimbalConfig, GimbalTuning, read_config, with_tuning
 from rm_plugins.gimbal.control import AxisLoop, PlanarPose, Smoother, clamp, sight_rates
 from rm_plugins.gimbal.frames import joint_links, mount_links
 
@@ -139,7 +139,7 @@ class StandGimbal(PluginBase):
 
     def on_init(self) -> None:
         """Read the config, claim the joints, subscribe and create the state publisher."""
-        self.config: GimbalConfig = read_config(self.params)
+        self.config: GimbalConfig = read_config(self.params, self.read_config(GimbalTuning))
         cfg = self.config
         self.claim_joints([cfg.yaw.joint, cfg.pitch.joint])
         self.command = self.subscribe_command(
@@ -208,6 +208,12 @@ class StandGimbal(PluginBase):
         else:
             self._control(mode, cmd, measurement, aim, dt)
         self._publish_state(now, measurement)
+
+    def on_config(self, config: GimbalTuning) -> None:
+        """Gains and limits set while running: the angle loops restart with them."""
+        self.config = cfg = with_tuning(self.config, config)
+        self._yaw_loop = AxisLoop(cfg.yaw.angle_pid, cfg.yaw.max_joint_velocity)
+        self._pitch_loop = AxisLoop(cfg.pitch.angle_pid, cfg.pitch.max_joint_velocity)
 
     def on_command_lost(self, now: Time, dt: float) -> None:
         """No command: joints off (the framework is already in PASSIVE with the reason)."""
