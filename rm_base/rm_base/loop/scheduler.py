@@ -58,6 +58,7 @@ from rm_base.runtime.realtime import loop_thread, set_fifo_priority
 
 _log = logging.getLogger(__name__)
 
+
 class Updatable(Protocol):
     """Anything updated once per tick (an actuator)."""
 
