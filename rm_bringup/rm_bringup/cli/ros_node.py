@@ -6,9 +6,9 @@ import os
 import signal
 import threading
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from rm_base.ros.env import prepare_ros_process
 
@@ -150,3 +150,29 @@ def stop_on_signals() -> Iterator[threading.Event]:
     finally:
         for sig, old in previous.items():
             signal.signal(sig, old)
+
+
+def spin_reporting(node: Node, received: Callable[[], int], stats: Callable[[int], Any],
+                   period_ns: int = 1_000_000_000) -> None:
+    """Spin node until its context ends, printing ``stats(now_ns).format()`` once a period.
+
+    Only while messages arrive (``received()`` grew since the last line), as ros2's topic hz
+    and bw print; stats may return None (nothing to say yet).
+    """
+    from rclpy.executors import SingleThreadedExecutor
+
+    executor = SingleThreadedExecutor(context=node.context)
+    executor.add_node(node)
+    printed_at, printed_count = time.monotonic_ns(), 0
+    try:
+        while node.context.ok():
+            executor.spin_once(timeout_sec=0.1)
+            now = time.monotonic_ns()
+            if now - printed_at < period_ns or received() == printed_count:
+                continue
+            window = stats(now)
+            if window is not None:
+                print(window.format(), flush=True)
+                printed_at, printed_count = now, received()
+    finally:
+        executor.shutdown()

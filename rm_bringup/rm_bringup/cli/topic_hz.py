@@ -17,11 +17,9 @@ from dataclasses import dataclass
 from .errors import CliError
 from .interfaces import get_message_class
 from .options import positive_int
-from .ros_node import cli_node, expand_topic, wait_for_topic_types
+from .ros_node import cli_node, expand_topic, spin_reporting, wait_for_topic_types
 
 DEFAULT_WINDOW_SIZE = 10000
-_PRINT_PERIOD_NS = 1_000_000_000
-_SPIN_PERIOD_S = 0.1
 
 
 @dataclass(frozen=True)
@@ -93,7 +91,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
 def run(args: argparse.Namespace) -> int:
     """Print the rate about once a second until Ctrl-C."""
-    from rclpy.executors import SingleThreadedExecutor
     from rclpy.qos import qos_profile_sensor_data
 
     from .qos import adapt_to_publishers
@@ -111,20 +108,5 @@ def run(args: argparse.Namespace) -> int:
         node.create_subscription(
             msg_class, topic, lambda _raw: window.add(time.monotonic_ns()), qos, raw=True
         )
-        executor = SingleThreadedExecutor(context=node.context)
-        executor.add_node(node)
-        printed_at = time.monotonic_ns()
-        printed_count = 0
-        try:
-            while node.context.ok():
-                executor.spin_once(timeout_sec=_SPIN_PERIOD_S)
-                now = time.monotonic_ns()
-                if now - printed_at < _PRINT_PERIOD_NS or window.received == printed_count:
-                    continue
-                stats = window.stats()
-                if stats is not None:
-                    print(stats.format(), flush=True)
-                    printed_at, printed_count = now, window.received
-        finally:
-            executor.shutdown()
+        spin_reporting(node, lambda: window.received, lambda now: window.stats())
     return 0
