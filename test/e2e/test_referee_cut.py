@@ -20,7 +20,10 @@ hz: 20.0, num: 20, burst_id: 1}' -r 20 -p 0 &
 
 def test_a_locked_launcher_is_said_once_and_the_reset_service_revives_the_robot(tmp_path):
     overrides = tmp_path / 'no_heat_limit.yaml'
-    overrides.write_text('rm_robot:\n  ros__parameters:\n    shooter.heat.calibre: 0\n')
+    # command_timeout 1 s: a stall of the publisher (0.3 s seen under CPU steal) must not
+    # end the burst, which a blip never restarts; the referee's cut is what is tested here
+    overrides.write_text('rm_robot:\n  ros__parameters:\n    shooter.heat.calibre: 0\n'
+                         '    shooter.command_timeout: 1.0\n')
     command = ['scripts/with_env.sh', 'bringup', '--robot', 'standard', '--sim',
                '--params-file', str(overrides)]
     with UserSession(tmp_path, command=command) as user:
