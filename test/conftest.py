@@ -17,6 +17,20 @@ def ros_context():
         yield context
 
 
+@pytest.fixture
+def test_node(ros_context, request):
+    """A node of the test's own (named after its module) and an executor to spin it."""
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+
+    node = rclpy.create_node(request.module.__name__.rpartition('.')[2], context=ros_context)
+    executor = SingleThreadedExecutor(context=ros_context)
+    executor.add_node(node)
+    yield node, executor
+    executor.shutdown()
+    node.destroy_node()
+
+
 def _loop_lines_within(phase):
     """Run a test phase with the control loops' lines written only while it runs.
 

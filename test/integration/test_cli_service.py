@@ -3,8 +3,6 @@
 import sys
 
 import pytest
-import rclpy
-from rclpy.executors import SingleThreadedExecutor
 from std_srvs.srv import SetBool
 from support.ros import start_process, wait_until
 
@@ -17,18 +15,8 @@ def rmcli(*args):
     return start_process([sys.executable, '-m', 'rm_bringup.cli', 'service', *args])
 
 
-@pytest.fixture
-def graph(ros_context):
-    node = rclpy.create_node('cli_service_test', context=ros_context)
-    executor = SingleThreadedExecutor(context=ros_context)
-    executor.add_node(node)
-    yield node, executor
-    executor.shutdown()
-    node.destroy_node()
-
-
-def test_call_sends_the_request_and_prints_the_response(graph):
-    node, executor = graph
+def test_call_sends_the_request_and_prints_the_response(test_node):
+    node, executor = test_node
     requests = []
 
     def handle(request, response):

@@ -6,9 +6,7 @@ import threading
 import time
 
 import pytest
-import rclpy
 import yaml
-from rclpy.executors import SingleThreadedExecutor
 from std_msgs.msg import String
 from support.ros import start_process, stop_process, wait_until
 
@@ -28,18 +26,8 @@ def finish(proc):
     return proc.returncode, out, err
 
 
-@pytest.fixture
-def graph(ros_context):
-    node = rclpy.create_node('cli_topic_test', context=ros_context)
-    executor = SingleThreadedExecutor(context=ros_context)
-    executor.add_node(node)
-    yield node, executor
-    executor.shutdown()
-    node.destroy_node()
-
-
-def test_pub_once_with_a_mode_name_reaches_a_subscriber(graph):
-    node, executor = graph
+def test_pub_once_with_a_mode_name_reaches_a_subscriber(test_node):
+    node, executor = test_node
     received = []
     node.create_subscription(ChassisCmd, '/chassis_cmd', received.append, 10)
     proc = rmcli('topic', 'pub', '--once', '/chassis_cmd', 'rm_msgs/msg/ChassisCmd', '{mode: GYRO}')
@@ -55,8 +43,8 @@ def test_pub_once_with_a_mode_name_reaches_a_subscriber(graph):
     assert len(received) == 1
 
 
-def test_pub_takes_the_type_from_the_graph_and_stamps_header_auto(graph):
-    node, executor = graph
+def test_pub_takes_the_type_from_the_graph_and_stamps_header_auto(test_node):
+    node, executor = test_node
     received = []
     node.create_subscription(ChassisCmd, '/cli_test/inferred', received.append, 10)
     proc = rmcli(
@@ -79,8 +67,8 @@ def test_pub_takes_the_type_from_the_graph_and_stamps_header_auto(graph):
     assert abs(stamp_s - time.time()) < 60.0  # stamped now, not left at 0
 
 
-def test_pub_times_publishes_that_many_messages(graph):
-    node, executor = graph
+def test_pub_times_publishes_that_many_messages(test_node):
+    node, executor = test_node
     received = []
     node.create_subscription(String, '/cli_test/times', received.append, 10)
     proc = rmcli(
@@ -115,8 +103,8 @@ def test_pub_to_an_unknown_topic_without_type_is_one_clear_error():
     assert "topic '/cli_test/nobody' is not on the ROS graph" in lines[0]
 
 
-def test_echo_once_prints_what_a_publisher_sends(graph):
-    node, executor = graph
+def test_echo_once_prints_what_a_publisher_sends(test_node):
+    node, executor = test_node
     publisher = node.create_publisher(ChassisCmd, '/cli_test/echo', 10)
     msg = ChassisCmd(mode=ChassisCmd.FOLLOW, follow_source='gimbal')
     msg.accel.linear.x = 1.25
@@ -140,8 +128,8 @@ def test_echo_once_prints_what_a_publisher_sends(graph):
     assert echoed['accel']['linear'] == {'x': 1.25, 'y': 0.0, 'z': 0.0}
 
 
-def test_list_shows_topics_with_their_types(graph):
-    node, _ = graph
+def test_list_shows_topics_with_their_types(test_node):
+    node, _ = test_node
     node.create_publisher(String, '/cli_test/listed', 10)
     # A new process can need one discovery announcement period (~3 s) to see this node;
     # list again instead of waiting the worst case every time.
@@ -153,8 +141,8 @@ def test_list_shows_topics_with_their_types(graph):
     assert '/cli_test/listed [std_msgs/msg/String]' in out.splitlines()
 
 
-def test_hz_reports_the_publishing_rate(graph):
-    node, executor = graph
+def test_hz_reports_the_publishing_rate(test_node):
+    node, executor = test_node
     publisher = node.create_publisher(String, '/cli_test/hz', 10)
     node.create_timer(0.05, lambda: publisher.publish(String(data='x')))  # 20 Hz
     proc = rmcli('topic', 'hz', '/cli_test/hz')
@@ -179,8 +167,8 @@ def test_hz_reports_the_publishing_rate(graph):
     assert proc.returncode == 0
 
 
-def test_bw_reports_the_message_sizes_and_a_rate(graph):
-    node, executor = graph
+def test_bw_reports_the_message_sizes_and_a_rate(test_node):
+    node, executor = test_node
     publisher = node.create_publisher(String, '/cli_test/bw', 10)
     # a 100-character string is 112 bytes serialised: 4 of CDR header, 4 of length, 101,
     # padded to 4
@@ -204,8 +192,8 @@ def test_bw_reports_the_message_sizes_and_a_rate(graph):
     assert proc.returncode == 0
 
 
-def test_echo_ends_cleanly_on_sigint(graph):
-    node, executor = graph
+def test_echo_ends_cleanly_on_sigint(test_node):
+    node, executor = test_node
     proc = rmcli('topic', 'echo', '/cli_test/silent', 'std_msgs/msg/String')
 
     def subscribed():

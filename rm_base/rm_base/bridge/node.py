@@ -38,6 +38,7 @@ from rm_base.bridge.node_params import read_parameters
 from rm_base.bridge.params import with_sim_world
 from rm_base.bridge.power_limits import RemotePowerLimits, parse_power_limit
 from rm_base.bridge.sim_config import world_config
+from rm_base.bridge.sim_remote import SimRemoteInput
 from rm_base.bridge.sim_services import SimFaultServices
 from rm_base.config.calibration import CalibrationError
 from rm_base.config.schema import InvalidValueError
@@ -222,6 +223,8 @@ class CanBridgeNode(Node):
                 self, self.sim_world, self.hardware.joint_names,
                 {b.name: str(b.channel) for b in settings.hardware_config.buses}, prefix='~/sim/',
             )
+            if self.sim_world.remote is not None:
+                self._sim_remote = SimRemoteInput(self, self.sim_world, prefix='~/sim/')
         self._zero_services = [
             self.create_service(
                 Trigger, f'~/{joint}/set_zero', functools.partial(self._on_set_zero, joint)

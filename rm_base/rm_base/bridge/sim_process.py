@@ -9,7 +9,8 @@ channels on an AF_UNIX socket (:mod:`rm_base.sim.server`), where can_bridge's bu
 time on its own physics thread; the simulated Hi220 writes to its pty as on a robot; a
 node ``rm_sim`` serves the fault services (``/rm_sim/<joint>/offline``, ``.../jam``,
 ``.../over_temperature``, ``.../garbage``, ``/rm_sim/<bus>/bus_off``;
-:mod:`rm_base.bridge.sim_services`). Runs until SIGINT/SIGTERM (or ``--duration``).
+:mod:`rm_base.bridge.sim_services`) and takes the operator's remote on ``/rm_sim/remote``
+(:mod:`rm_base.bridge.sim_remote`). Runs until SIGINT/SIGTERM (or ``--duration``).
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ from rclpy.node import Node
 
 from rm_base.bridge.params import settings_from_parameters
 from rm_base.bridge.sim_config import world_config
+from rm_base.bridge.sim_remote import SimRemoteInput
 from rm_base.bridge.sim_services import SimFaultServices
 from rm_base.config.param_files import load_parameters
 from rm_base.errors import ConfigError
@@ -111,8 +113,10 @@ def main(argv: list[str] | None = None) -> int:
         node, world, [j.name for j in settings.hardware_config.joints],
         {b.name: str(b.channel) for b in settings.hardware_config.buses}, prefix='~/',
     )
-    # Only the fault services run on this executor; the physics and the sockets have
-    # threads of their own.
+    if world.remote is not None:  # the node keeps its subscription and timer
+        SimRemoteInput(node, world, prefix='~/')
+    # Only the fault services and the remote's input run on this executor; the physics and
+    # the sockets have threads of their own.
     executor = SingleThreadedExecutor()
     executor.add_node(node)
     deadline = None if args.duration is None else time.monotonic() + args.duration

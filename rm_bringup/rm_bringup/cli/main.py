@@ -1,6 +1,6 @@
 """``rmcli``: the project's thin, faithful stand-in for ros2cli's everyday commands.
 
-topic, service, param, node, interface and bag: ros2cli and rosbag2 are not on PyPI, so
+topic, service, param, node, interface and bag, and teleop: ros2cli and rosbag2 are not on PyPI, so
 the virtualenv has this instead. Exit codes: 0 ok
 (also when stopped with Ctrl-C, the normal way to end echo/hz/record), 1 a runtime error
 (one line on stderr), 2 a usage error.
@@ -23,6 +23,7 @@ from . import (
     graph,
     param,
     service_call,
+    teleop,
     topic_bw,
     topic_echo,
     topic_hz,
@@ -58,6 +59,10 @@ VERBS: dict[str, dict[str, tuple[Any, str]]] = {
         'reindex': (bag_reindex, "Rebuild a killed recording's end and metadata.yaml"),
     },
 }
+# commands without verbs: name -> (module, one-line help)
+TOOLS: dict[str, tuple[Any, str]] = {
+    'teleop': (teleop, "Drive the robot from the keyboard, as the operator's remote does"),
+}
 GROUP_HELP = {
     'topic': 'Various topic related sub-commands',
     'service': 'Various service related sub-commands',
@@ -86,6 +91,10 @@ def build_parser() -> argparse.ArgumentParser:
             verb_parser = verb_parsers.add_parser(verb, help=help_text, description=f'{help_text}.')
             module.add_arguments(verb_parser)
             verb_parser.set_defaults(run=module.run, help_parser=verb_parser)
+    for name, (module, help_text) in TOOLS.items():
+        tool_parser = groups.add_parser(name, help=help_text, description=f'{help_text}.')
+        module.add_arguments(tool_parser)
+        tool_parser.set_defaults(run=module.run, help_parser=tool_parser)
     return parser
 
 

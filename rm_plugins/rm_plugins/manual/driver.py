@@ -10,7 +10,10 @@ toggle on each press, so :class:`ManualDriver` remembers the keys held at the la
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import Twist
 from rm_base.hardware.protocols.dbus import CHANNEL_RANGE, DbusFrame, Key, Switch
 
 from rm_msgs.msg import ChassisCmd, GimbalCmd, ShootCmd
@@ -86,6 +89,20 @@ class Commands:
     hz: float = 0.0
     burst_id: int = 0
     speed_gear: int = ChassisCmd.GEAR_NORMAL
+
+
+def command_messages(c: Commands, stamp: Time) -> dict[str, Any]:
+    """The messages of c, stamped, by topic name (``chassis_cmd``, ``vel_cmd``, ...)."""
+    chassis = ChassisCmd(mode=c.chassis_mode, speed_gear=c.speed_gear)
+    chassis.header.stamp = stamp
+    vel = Twist()
+    vel.linear.x, vel.linear.y = c.vx, c.vy
+    gimbal = GimbalCmd(mode=c.gimbal_mode, rate_yaw=c.yaw_rate, rate_pitch=c.pitch_rate)
+    gimbal.header.stamp = stamp
+    shoot = ShootCmd(mode=c.shoot_mode, speed=c.bullet_speed, hz=c.hz, num=0,
+                     burst_id=c.burst_id)
+    shoot.header.stamp = stamp
+    return {'chassis_cmd': chassis, 'vel_cmd': vel, 'gimbal_cmd': gimbal, 'shoot_cmd': shoot}
 
 
 def passive(burst_id: int = 0) -> Commands:

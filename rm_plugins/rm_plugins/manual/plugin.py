@@ -37,7 +37,13 @@ from rm_base.hardware.protocols import referee as ref
 from rm_base.plugin import PluginBase
 
 from rm_msgs.msg import ChassisCmd, GimbalCmd, ShootCmd
-from rm_plugins.manual.driver import Commands, Keyboard, ManualDriver, OperatorInput
+from rm_plugins.manual.driver import (
+    Commands,
+    Keyboard,
+    ManualDriver,
+    OperatorInput,
+    command_messages,
+)
 from rm_plugins.manual.mapping import load_mapping
 from rm_plugins.serial.device import DeviceLink, LinkState, link_status, read_serial_settings
 from rm_plugins.serial.reader import ReaderStats
@@ -220,16 +226,5 @@ class ManualControl(PluginBase):
             self._diagnostics.publish(msg)
 
     def _publish(self, c: Commands, now: Time) -> None:
-        stamp = now.to_msg()
-        chassis = ChassisCmd(mode=c.chassis_mode, speed_gear=c.speed_gear)
-        chassis.header.stamp = stamp
-        vel = Twist()
-        vel.linear.x, vel.linear.y = c.vx, c.vy
-        gimbal = GimbalCmd(mode=c.gimbal_mode, rate_yaw=c.yaw_rate, rate_pitch=c.pitch_rate)
-        gimbal.header.stamp = stamp
-        shoot = ShootCmd(mode=c.shoot_mode, speed=c.bullet_speed, hz=c.hz, num=0,
-                         burst_id=c.burst_id)
-        shoot.header.stamp = stamp
-        for topic, msg in (('chassis_cmd', chassis), ('vel_cmd', vel), ('gimbal_cmd', gimbal),
-                           ('shoot_cmd', shoot)):
+        for topic, msg in command_messages(c, now.to_msg()).items():
             self._publishers[topic].publish(msg)
