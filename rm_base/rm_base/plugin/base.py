@@ -35,6 +35,7 @@ Example:
 
 from __future__ import annotations
 
+import math
 import time
 import traceback
 from collections.abc import Callable, Iterable, Mapping
@@ -63,6 +64,7 @@ from rm_base.ros.log import FastLogger
 from rm_msgs.msg import PluginState
 
 _NS_PER_S = 1_000_000_000
+_UNLIMITED = (-math.inf, math.inf)
 
 # Latched: a tool or test that subscribes late still gets the current state at once.
 STATE_QOS = QoSProfile(depth=1, durability=DurabilityPolicy.TRANSIENT_LOCAL)
@@ -134,6 +136,7 @@ class PluginBase:
         # run_on_command is set: the host's loop runs the plugin at its next tick.
         self.command_listener: Callable[[], None] | None = None
         self._joints: tuple[str, ...] = ()
+        self._joint_limits: dict[str, tuple[float, float]] = {}
         self._enabled = False
         self._lost_reason: str | None = None
         self._last_run_ns: int | None = None
@@ -374,6 +377,9 @@ class PluginBase:
         msg.state = int(state.value)
         msg.state_name = state.name
         msg.reason = reason
+        msg.joints = list(self._joints)
+        msg.joint_min = [self._joint_limits.get(j, _UNLIMITED)[0] for j in self._joints]
+        msg.joint_max = [self._joint_limits.get(j, _UNLIMITED)[1] for j in self._joints]
         return msg
 
     def publish_state(self) -> None:
@@ -551,10 +557,13 @@ class PluginBase:
             )
         return self._nio.power_limit(self.name, joints, model)
 
-    def claim_joints(self, joints: Iterable[str]) -> tuple[str, ...]:
+    def claim_joints(
+        self, joints: Iterable[str], limits: Mapping[str, tuple[float, float]] | None = None
+    ) -> tuple[str, ...]:
         """Declare the joints this plugin drives (zero output turns them off).
 
-        May be called more than once; joints add up.
+        May be called more than once; joints add up. limits: a joint's position range
+        [rad] where the plugin keeps it (PluginState tells tools, e.g. ``rmcli tune``).
 
         Raises:
             JointClaimError: a joint is already driven by another plugin.
@@ -562,6 +571,7 @@ class PluginBase:
         self._require_init()
         claimed = self._nio.claim(self.name, joints)
         self._joints = tuple(dict.fromkeys(self._joints + claimed))
+        self._joint_limits.update(limits or {})
         return claimed
 
     def send_joint_targets(self, targets: Mapping[str, JointTarget]) -> None:

@@ -141,7 +141,8 @@ class StandGimbal(PluginBase):
         """Read the config, claim the joints, subscribe and create the state publisher."""
         self.config: GimbalConfig = read_config(self.params, self.read_config(GimbalTuning))
         cfg = self.config
-        self.claim_joints([cfg.yaw.joint, cfg.pitch.joint])
+        self.claim_joints([cfg.yaw.joint, cfg.pitch.joint],
+                          limits={cfg.pitch.joint: (cfg.pitch_min, cfg.pitch_max)})
         self.command = self.subscribe_command(
             cfg.command_topic, GimbalCmd, parse=parse_gimbal_cmd
         )
