@@ -29,6 +29,7 @@ from . import (
     topic_hz,
     topic_list,
     topic_pub,
+    tune_step,
 )
 from .errors import CliError, UsageError
 
@@ -51,6 +52,10 @@ VERBS: dict[str, dict[str, tuple[Any, str]]] = {
     'param': param.VERBS,
     'node': graph.NODE_VERBS,
     'interface': graph.INTERFACE_VERBS,
+    'tune': {
+        'step': (tune_step, 'Step one joint; print rise time, overshoot, settling time and '
+                 'steady-state error; plot it'),
+    },
     'bag': {
         'info': (bag_info, 'Print information about a bag to the screen'),
         'play': (bag_play, 'Play back ROS data from a bag'),
@@ -69,6 +74,7 @@ GROUP_HELP = {
     'param': 'Various param related sub-commands',
     'node': 'Various node related sub-commands',
     'interface': 'Show information about ROS interfaces',
+    'tune': 'Tuning aids',
     'bag': 'Various rosbag related sub-commands',
 }
 
