@@ -7,11 +7,12 @@ set-parameters callback exactly as ``ros2 param set`` does), in lockstep.
 from __future__ import annotations
 
 import pytest
+from geometry_msgs.msg import Twist, Vector3
 from rclpy.parameter import Parameter
 from rm_plugins.chassis.commands import SpeedGear
 from support.lockstep import LockstepRobot
 
-from rm_msgs.msg import ShootCmd
+from rm_msgs.msg import ChassisCmd, ShootCmd
 
 pytestmark = [pytest.mark.ros]
 
@@ -122,3 +123,31 @@ def test_the_chassis_gears_and_default_power_limit_are_live():
         assert refused.reason == 'chassis.gears.fast.angular must be > 0.0, got 0.0'
         wheels = r.host.set_parameters_atomically([Parameter('chassis.wheel_radius', value=0.1)])
         assert wheels.reason == 'Trying to set a read-only parameter: chassis.wheel_radius.'
+
+
+def _speed_after(r, seconds):
+    """The body's forward speed [m/s] seconds after a RAW 2 m/s command from rest."""
+    r.publish('/chassis_cmd', ChassisCmd(mode=ChassisCmd.RAW), rate_hz=HZ)
+    r.publish('/vel_cmd', Twist(linear=Vector3(x=2.0)), rate_hz=HZ)
+    r.run(seconds)
+    return r.world.body.twist[0]
+
+
+def test_the_chassis_ramps_and_power_model_are_live():
+    with LockstepRobot('standard', plugins=('chassis',)) as r:
+        # the default ramp (launch 4, normal 6 m/s^2): 0.82 m/s after 0.3 s (lockstep)
+        assert _speed_after(r, 0.3) > 0.7
+    with LockstepRobot('standard', plugins=('chassis',)) as r:
+        result = r.host.set_parameters_atomically([
+            Parameter(f'chassis.ramp.linear.{key}_acceleration', value=1.0)
+            for key in ('launch', 'normal')
+        ] + [Parameter('chassis.power.k1', value=3.5),
+             Parameter('chassis.power.static_power', value=4.0)])
+        assert result.successful, result.reason
+        assert _speed_after(r, 0.3) < 0.3  # 1 m/s^2 for 0.3 s, and the wheels' lag
+        stage = r.bridge.hardware.power_limits['chassis']
+        assert (stage.model.k1, stage.model.k2, stage.model.static_power_w) == (3.5, 3.08e-3,
+                                                                                 4.0)
+        refused = r.host.set_parameters_atomically(
+            [Parameter('chassis.power.k2', value=-1.0)])
+        assert refused.reason == 'chassis.power.k2 must be >= 0.0, got -1.0'

@@ -49,6 +49,20 @@ class RemotePowerStage:
         self._publisher.publish(self._msg)
 
     @property
+    def model(self) -> ChassisPowerModel:
+        """The group's power model; a new one goes out to the bridge."""
+        return self._model
+
+    @model.setter
+    def model(self, model: ChassisPowerModel) -> None:
+        self._model = model
+        self._msg = PowerLimit(
+            group=self._msg.group, joints=self._msg.joints, k1=model.k1, k2=model.k2,
+            static_power_w=model.static_power_w, limit_w=self._msg.limit_w,
+        )
+        self._publisher.publish(self._msg)
+
+    @property
     def limit_w(self) -> float:
         """The allowed power [W] (inf: no limit)."""
         return float(self._msg.limit_w)

@@ -18,7 +18,6 @@ from typing import Any
 
 from rm_base.config.schema import declare, group, number
 from rm_base.control import ChassisPowerModel, PidGains, RampLimits
-from rm_base.errors import ConfigError
 from rm_base.geometry import (
     MECANUM_ROLLER_SIGNS,
     SwerveKinematics,
@@ -212,28 +211,38 @@ def _steer_joints(p: PluginParams, kind: Kinematics, wheels: tuple[str, ...]) ->
     return joints
 
 
-def _ramp(p: PluginParams, axis: str, unit: str, defaults: tuple[float, ...]) -> RampLimits:
+def _ramp_tuning(axis: str, unit: str, defaults: tuple[float, ...]) -> type:
+    """One axis' live acceleration limits (``ramp.<axis>.*``)."""
     launch, normal, brake, launch_speed = defaults
+    return make_dataclass(f'{axis.title()}Ramp', [
+        ('launch_acceleration', float, declare(
+            number, launch, tunable=True, unit=f'{unit}/s', gt=0.0,
+            description=f'{axis} acceleration limit from standstill (below launch_speed)')),
+        ('normal_acceleration', float, declare(
+            number, normal, tunable=True, unit=f'{unit}/s', gt=0.0,
+            description=f'{axis} acceleration limit when already moving')),
+        ('brake_acceleration', float, declare(
+            number, brake, tunable=True, unit=f'{unit}/s', gt=0.0,
+            description=f'{axis} deceleration limit (slowing down, reversing, no /vel_cmd)')),
+        ('launch_speed', float, declare(
+            number, launch_speed, tunable=True, unit=unit, ge=0.0,
+            description=f'{axis} speed below which the launch limit applies')),
+    ], frozen=True, kw_only=True)
+
+
+@dataclass(frozen=True, kw_only=True)
+class RampTuning:
+    """The acceleration limits of /vel_cmd (``ramp.*``)."""
+
+    linear: Any = group(_ramp_tuning('linear', 'm/s', (4.0, 6.0, 8.0, 0.3)))
+    angular: Any = group(_ramp_tuning('angular', 'rad/s', (20.0, 30.0, 40.0, 1.0)))
+
+
+def _ramp_limits(axis: Any) -> RampLimits:
     return RampLimits(
-        launch_acceleration=p.double(
-            f'ramp.{axis}.launch_acceleration', launch,
-            description=f'{axis} acceleration limit from standstill (below launch_speed)',
-            unit=f'{unit}/s', gt=0.0,
-        ),
-        normal_acceleration=p.double(
-            f'ramp.{axis}.normal_acceleration', normal,
-            description=f'{axis} acceleration limit when already moving', unit=f'{unit}/s',
-            gt=0.0,
-        ),
-        brake_acceleration=p.double(
-            f'ramp.{axis}.brake_acceleration', brake,
-            description=f'{axis} deceleration limit (slowing down, reversing, no /vel_cmd)',
-            unit=f'{unit}/s', gt=0.0,
-        ),
-        launch_speed=p.double(
-            f'ramp.{axis}.launch_speed', launch_speed,
-            description=f'{axis} speed below which the launch limit applies', unit=unit, ge=0.0,
-        ),
+        launch_acceleration=axis.launch_acceleration,
+        normal_acceleration=axis.normal_acceleration,
+        brake_acceleration=axis.brake_acceleration, launch_speed=axis.launch_speed,
     )
 
 
@@ -284,20 +293,27 @@ class GearTuning:
 
 @dataclass(frozen=True, kw_only=True)
 class PowerTuning:
-    """The live part of ``power.*``: the limit the chassis keeps by default."""
+    """The live part of ``power.*``: the default limit and the wheels' power model."""
 
     default_limit: float = declare(
         number, 60.0, tunable=True, unit='W', gt=0.0,
         description='chassis power limit when /chassis_cmd gives none (with from_referee: '
         'while the referee is silent)',
     )
+    k1: float = declare(number, 2.96, tunable=True, unit='W/(N*m)^2', ge=0.0,
+                        description='copper-loss coefficient per wheel motor')
+    k2: float = declare(number, 3.08e-3, tunable=True, unit='W/(rad/s)^2', ge=0.0,
+                        description='speed-loss coefficient per wheel motor')
+    static_power: float = declare(number, 2.8, tunable=True, unit='W', ge=0.0,
+                                  description='chassis rail power at rest')
 
 
 @dataclass(frozen=True, kw_only=True)
 class ChassisTuning:
-    """What may change while the chassis runs: the gears and the default power limit."""
+    """What may change while the chassis runs: gears, ramps, default power limit, model."""
 
     gears: GearTuning = group(GearTuning)
+    ramp: RampTuning = group(RampTuning)
     power: PowerTuning = group(PowerTuning)
 
 
@@ -307,10 +323,18 @@ def _gears(tuning: ChassisTuning) -> dict[SpeedGear, tuple[float, float]]:
         (SpeedGear.FAST, tuning.gears.fast))}
 
 
+def _power_model(tuning: ChassisTuning) -> ChassisPowerModel:
+    power = tuning.power
+    return ChassisPowerModel(k1=power.k1, k2=power.k2, static_power_w=power.static_power)
+
+
 def with_tuning(config: ChassisConfig, tuning: ChassisTuning) -> ChassisConfig:
-    """The config with the gears and the default power limit of tuning (set while running)."""
-    return dataclasses.replace(config, gears=_gears(tuning),
-                               power_limit=tuning.power.default_limit)
+    """The config with the live values of tuning (set while running)."""
+    return dataclasses.replace(
+        config, gears=_gears(tuning), power_limit=tuning.power.default_limit,
+        linear_limits=_ramp_limits(tuning.ramp.linear),
+        angular_limits=_ramp_limits(tuning.ramp.angular), power_model=_power_model(tuning),
+    )
 
 
 def _where(p: PluginParams) -> str:
@@ -387,19 +411,6 @@ def read_config(p: PluginParams, tuning: ChassisTuning) -> ChassisConfig:
                            description='command-to-wheel latency the gimbal-frame rotation '
                            'looks ahead by', unit='s', ge=0.0, le=0.5),
     )
-    try:
-        power_model = ChassisPowerModel(
-            k1=p.double('power.k1', 2.96,
-                        description='copper-loss coefficient per wheel motor', unit='W/(N*m)^2',
-                        ge=0.0),
-            k2=p.double('power.k2', 3.08e-3,
-                        description='speed-loss coefficient per wheel motor', unit='W/(rad/s)^2',
-                        ge=0.0),
-            static_power_w=p.double('power.static_power', 2.8,
-                                    description='chassis rail power at rest', unit='W', ge=0.0),
-        )
-    except ConfigError as err:  # the bounds above make this unreachable; keep one line
-        raise ParameterError(f'{_where(p)}: {err}', plugin=p.plugin) from err
     return ChassisConfig(
         kinematics=kind,
         wheel_joints=joints,
@@ -420,9 +431,9 @@ def read_config(p: PluginParams, tuning: ChassisTuning) -> ChassisConfig:
                           description='yaw joint position with the gimbal along chassis x',
                           unit='rad'),
         modes=modes,
-        linear_limits=_ramp(p, 'linear', 'm/s', (4.0, 6.0, 8.0, 0.3)),
-        angular_limits=_ramp(p, 'angular', 'rad/s', (20.0, 30.0, 40.0, 1.0)),
-        power_model=power_model,
+        linear_limits=_ramp_limits(tuning.ramp.linear),
+        angular_limits=_ramp_limits(tuning.ramp.angular),
+        power_model=_power_model(tuning),
         power_limit=tuning.power.default_limit,
         **_referee_power(p),
         imu_mount=p.choice('imu.mount', ImuMount, ImuMount.GIMBAL,

@@ -239,6 +239,12 @@ class MotionPlanner:
         self._chassis_linear = (out.vx, out.vy)
         return MotionOutput(out, limited, k)
 
+    def set_default_limits(self, linear_limits: RampLimits, angular_limits: RampLimits) -> None:
+        """New default acceleration limits (set while running), from the next update on."""
+        self._defaults = (linear_limits, linear_limits, angular_limits)
+        accel, self._accel = self._accel, (math.nan,) * 3  # unlike any accel: rebuilt
+        self._set_accel(accel)
+
     def _set_accel(self, accel: tuple[float | None, ...]) -> None:
         if accel == self._accel:
             return

@@ -212,8 +212,10 @@ class StandChassis(PluginBase):
         self.on_reset()
 
     def on_config(self, config: ChassisTuning) -> None:
-        """Gears and the default power limit set while running: read from config at use."""
-        self.config = with_tuning(self.config, config)
+        """Live values set while running: gears and limit read at use, ramps and model here."""
+        self.config = cfg = with_tuning(self.config, config)
+        self._planner.set_default_limits(cfg.linear_limits, cfg.angular_limits)
+        self._power_stage.model = cfg.power_model
 
     def on_reset(self) -> None:
         """Forget commands, ramps and PIDs (not the odometry: the pose stays continuous)."""
