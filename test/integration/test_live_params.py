@@ -151,3 +151,26 @@ def test_the_chassis_ramps_and_power_model_are_live():
         refused = r.host.set_parameters_atomically(
             [Parameter('chassis.power.k2', value=-1.0)])
         assert refused.reason == 'chassis.power.k2 must be >= 0.0, got -1.0'
+
+
+def test_the_chassis_modes_loops_are_live_gyro_spins_at_the_new_rate():
+    with LockstepRobot('standard', plugins=('chassis',)) as r:
+        chassis = r.plugin('chassis')
+        r.publish('/chassis_cmd', ChassisCmd(mode=ChassisCmd.GYRO, follow_source='base_link'),
+                  rate_hz=HZ)
+        r.publish('/vel_cmd', Twist(), rate_hz=HZ)
+        r.run(1.5)
+        assert r.world.body.twist[2] > 4.5  # 6 rad/s asked, within the default 60 W
+        result = r.host.set_parameters_atomically([
+            Parameter('chassis.gyro.spin_rate', value=3.0),
+            Parameter('chassis.follow.pid.kp', value=6.0),
+            Parameter('chassis.twist.amplitude', value=0.4),
+        ])
+        assert result.successful, result.reason
+        r.run(1.5)
+        assert r.world.body.twist[2] == pytest.approx(3.0, abs=0.3)
+        modes = chassis.config.modes
+        assert (modes.follow.gains.kp, modes.twist.amplitude) == (6.0, 0.4)
+        waveform = r.host.set_parameters_atomically(
+            [Parameter('chassis.twist.waveform', value='triangle')])
+        assert waveform.reason == 'Trying to set a read-only parameter: chassis.twist.waveform.'

@@ -18,6 +18,7 @@ from typing import Any
 
 from rm_base.config.schema import declare, group, number
 from rm_base.control import ChassisPowerModel, PidGains, RampLimits
+from rm_base.control.pid_form import IncrementalPidConfig, PidConfig, incremental_like
 from rm_base.geometry import (
     MECANUM_ROLLER_SIGNS,
     SwerveKinematics,
@@ -246,24 +247,64 @@ def _ramp_limits(axis: Any) -> RampLimits:
     )
 
 
-def _pid(p: PluginParams, group: str, unit_in: str, unit_out: str, *, angle: bool,
-         defaults: dict[str, float]) -> PidGains:
-    def number(key: str, description: str, unit: str, **bounds: float) -> float:
-        return p.double(f'{group}.{key}', defaults[key], description=description, unit=unit,
-                        **bounds)
+def _live(default: float, unit: str, description: str, **bounds: float) -> Any:
+    return declare(number, default, tunable=True, unit=unit, description=description,
+                   **bounds)
 
+
+@dataclass(frozen=True, kw_only=True)
+class FollowPidTuning:
+    """FOLLOW's (and TWIST's) heading PID, heading error [rad] -> wz [rad/s]."""
+
+    kp: float = _live(10.0, 'rad/s/(rad)', 'follow.pid proportional gain', ge=0.0)
+    ki: float = _live(0.0, 'rad/s/(rad*s)', 'follow.pid integral gain', ge=0.0)
+    kd: float = _live(0.0, 'rad/s/(rad/s)', 'follow.pid derivative gain', ge=0.0)
+    output_limit: float = _live(8.0, 'rad/s', 'follow.pid output limit', gt=0.0)
+    integral_limit: float = _live(1.0, 'rad/s', 'follow.pid integral term limit', ge=0.0)
+    integral_separation: float = _live(
+        0.3, 'rad', 'follow.pid: integrate only while |error| is below this', gt=0.0)
+
+
+@dataclass(frozen=True, kw_only=True)
+class FollowTuning:
+    """The live part of ``follow.*``."""
+
+    pid: FollowPidTuning = group(FollowPidTuning)
+
+
+@dataclass(frozen=True, kw_only=True)
+class TwistTuning:
+    """TWIST's swing (``twist.*``; the waveform is read at start-up)."""
+
+    amplitude: float = _live(0.6, 'rad', 'TWIST swing either side of the gimbal heading',
+                             ge=0.0, lt=math.pi)
+    period: float = _live(1.2, 's', 'TWIST period of one full swing', gt=0.0)
+
+
+@dataclass(frozen=True, kw_only=True)
+class HeadingTuning:
+    """GYRO's heading loop (``gyro.heading.*``)."""
+
+    gain: float = _live(5.0, '1/s', 'GYRO heading loop: spin-rate correction per rad the '
+                        'odometry heading strays from the spin asked for; 0: open loop', ge=0.0)
+    max_error: float = _live(0.5, 'rad', 'GYRO heading loop: largest heading error it acts '
+                             'on (the correction is at most gain * max_error)', gt=0.0)
+
+
+@dataclass(frozen=True, kw_only=True)
+class GyroTuning:
+    """GYRO's spin (``gyro.*``; the translating reduction is read at start-up)."""
+
+    spin_rate: float = _live(6.0, 'rad/s',
+                             'GYRO spin rate at standstill (> 0 counter-clockwise)')
+    heading: HeadingTuning = group(HeadingTuning)
+
+
+def _follow_gains(tuning: FollowPidTuning) -> PidGains:
     return PidGains(
-        kp=number('kp', f'{group} proportional gain', f'{unit_out}/({unit_in})', ge=0.0),
-        ki=number('ki', f'{group} integral gain', f'{unit_out}/({unit_in}*s)', ge=0.0),
-        kd=number('kd', f'{group} derivative gain', f'{unit_out}/({unit_in}/s)', ge=0.0),
-        output_limit=number('output_limit', f'{group} output limit', unit_out, gt=0.0),
-        integral_limit=number('integral_limit', f'{group} integral term limit', unit_out,
-                              ge=0.0),
-        integral_separation=number(
-            'integral_separation', f'{group}: integrate only while |error| is below this',
-            unit_in, gt=0.0,
-        ),
-        angle_mode=angle,
+        kp=tuning.kp, ki=tuning.ki, kd=tuning.kd, output_limit=tuning.output_limit,
+        integral_limit=tuning.integral_limit, integral_separation=tuning.integral_separation,
+        angle_mode=True,
     )
 
 
@@ -310,11 +351,14 @@ class PowerTuning:
 
 @dataclass(frozen=True, kw_only=True)
 class ChassisTuning:
-    """What may change while the chassis runs: gears, ramps, default power limit, model."""
+    """What may change while the chassis runs: gears, ramps, power, the modes' loops."""
 
     gears: GearTuning = group(GearTuning)
     ramp: RampTuning = group(RampTuning)
     power: PowerTuning = group(PowerTuning)
+    follow: FollowTuning = group(FollowTuning)
+    twist: TwistTuning = group(TwistTuning)
+    gyro: GyroTuning = group(GyroTuning)
 
 
 def _gears(tuning: ChassisTuning) -> dict[SpeedGear, tuple[float, float]]:
@@ -328,10 +372,28 @@ def _power_model(tuning: ChassisTuning) -> ChassisPowerModel:
     return ChassisPowerModel(k1=power.k1, k2=power.k2, static_power_w=power.static_power)
 
 
+def _modes(modes: ChassisModeParams, tuning: ChassisTuning) -> ChassisModeParams:
+    """The mode parameters with the live values of tuning (the form of the PID kept)."""
+    positional = _follow_gains(tuning.follow.pid)
+    gains: PidConfig = positional
+    if isinstance(modes.follow.gains, IncrementalPidConfig):
+        gains = incremental_like(positional, modes.follow.gains.setpoint_td)
+    gyro = tuning.gyro
+    return dataclasses.replace(
+        modes,
+        follow=dataclasses.replace(modes.follow, gains=gains),
+        twist=dataclasses.replace(modes.twist, amplitude=tuning.twist.amplitude,
+                                  period_s=tuning.twist.period),
+        gyro=dataclasses.replace(modes.gyro, spin_rate=gyro.spin_rate, heading=SpinHeadingParams(
+            gyro.heading.gain, gyro.heading.max_error)),
+    )
+
+
 def with_tuning(config: ChassisConfig, tuning: ChassisTuning) -> ChassisConfig:
     """The config with the live values of tuning (set while running)."""
     return dataclasses.replace(
         config, gears=_gears(tuning), power_limit=tuning.power.default_limit,
+        modes=_modes(config.modes, tuning),
         linear_limits=_ramp_limits(tuning.ramp.linear),
         angular_limits=_ramp_limits(tuning.ramp.angular), power_model=_power_model(tuning),
     )
@@ -364,46 +426,27 @@ def read_config(p: PluginParams, tuning: ChassisTuning) -> ChassisConfig:
     max_wheel_speed = p.double(
         'max_wheel_speed', description='largest wheel speed target', unit='rad/s', gt=0.0
     )
-    follow_gains = _pid(
-        p, 'follow.pid', 'rad', 'rad/s', angle=True,
-        defaults={'kp': 10.0, 'ki': 0.0, 'kd': 0.0, 'output_limit': 8.0,
-                  'integral_limit': 1.0, 'integral_separation': 0.3},
-    )
     follow = FollowParams(
-        loop_pid(p, 'follow.pid', follow_gains, setpoint_unit='rad'),
+        loop_pid(p, 'follow.pid', _follow_gains(tuning.follow.pid), setpoint_unit='rad'),
         p.double('follow.offset', 0.0,
                  description='yaw joint angle held in FOLLOW (gimbal left of chassis > 0)',
                  unit='rad', ge=-math.pi, le=math.pi),
     )
     twist = TwistParams(
-        p.double('twist.amplitude', 0.6,
-                 description='TWIST swing either side of the gimbal heading', unit='rad',
-                 ge=0.0, lt=math.pi),
-        p.double('twist.period', 1.2, description='TWIST period of one full swing', unit='s',
-                 gt=0.0),
+        tuning.twist.amplitude, tuning.twist.period,
         p.choice('twist.waveform', TwistWaveform, TwistWaveform.SINE,
                  description='TWIST wave: sine or triangle'),
     )
-    spin = p.double('gyro.spin_rate', 6.0,
-                    description='GYRO spin rate at standstill (> 0 counter-clockwise)',
-                    unit='rad/s')
+    spin = tuning.gyro.spin_rate
     gyro = GyroParams(
         spin,
         p.double('gyro.translating_spin_rate', abs(spin),
-                 description='GYRO |spin rate| once translating at gyro.translating_speed',
-                 unit='rad/s', ge=0.0),
+                 description='GYRO |spin rate| once translating at gyro.translating_speed '
+                 '(default: |spin_rate| at start-up)', unit='rad/s', ge=0.0),
         p.double('gyro.translating_speed', 1.0,
                  description='translation speed at which GYRO spins at translating_spin_rate',
                  unit='m/s', gt=0.0),
-        SpinHeadingParams(
-            p.double('gyro.heading.gain', 5.0,
-                     description='GYRO heading loop: spin-rate correction per rad the '
-                     'odometry heading strays from the spin asked for; 0: open loop',
-                     unit='1/s', ge=0.0),
-            p.double('gyro.heading.max_error', 0.5,
-                     description='GYRO heading loop: largest heading error it acts on '
-                     '(the correction is at most gain * max_error)', unit='rad', gt=0.0),
-        ),
+        SpinHeadingParams(tuning.gyro.heading.gain, tuning.gyro.heading.max_error),
     )
     modes = ChassisModeParams(
         follow, twist, gyro,

@@ -254,6 +254,18 @@ class ChassisModeController:
         """Yaw joint angle phi the last FOLLOW/TWIST update steered to [rad], else None."""
         return self._target_yaw_joint
 
+    def set_params(self, params: ChassisModeParams) -> None:
+        """New parameters (set while running); new gains restart the PID from rest.
+
+        Raises:
+            ConfigError: If params is not a ChassisModeParams.
+        """
+        if not isinstance(params, ChassisModeParams):
+            raise ConfigError(f'params must be a ChassisModeParams, got {params!r}')
+        if params.follow.gains != self._params.follow.gains:
+            self._pid = build_pid(params.follow.gains)
+        self._params = params
+
     def reset(self) -> None:
         """Forget the PID state, the swing phase and the mode (call on enable and disable)."""
         self._pid.reset()

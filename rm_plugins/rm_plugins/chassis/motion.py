@@ -239,6 +239,11 @@ class MotionPlanner:
         self._chassis_linear = (out.vx, out.vy)
         return MotionOutput(out, limited, k)
 
+    def set_mode_params(self, mode_params: ChassisModeParams) -> None:
+        """New FOLLOW/TWIST/GYRO parameters (set while running), from the next update on."""
+        self._modes.set_params(mode_params)
+        self._spin_heading.set_params(mode_params.gyro.heading)
+
     def set_default_limits(self, linear_limits: RampLimits, angular_limits: RampLimits) -> None:
         """New default acceleration limits (set while running), from the next update on."""
         self._defaults = (linear_limits, linear_limits, angular_limits)

@@ -212,9 +212,10 @@ class StandChassis(PluginBase):
         self.on_reset()
 
     def on_config(self, config: ChassisTuning) -> None:
-        """Live values set while running: gears and limit read at use, ramps and model here."""
+        """Live values set while running: gears and limit read at use, the rest handed on."""
         self.config = cfg = with_tuning(self.config, config)
         self._planner.set_default_limits(cfg.linear_limits, cfg.angular_limits)
+        self._planner.set_mode_params(cfg.modes)
         self._power_stage.model = cfg.power_model
 
     def on_reset(self) -> None:

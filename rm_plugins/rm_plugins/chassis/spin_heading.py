@@ -65,6 +65,10 @@ class SpinHeadingLoop:
         """The heading error of the last update [rad] (reference minus measured)."""
         return self._error
 
+    def set_params(self, params: SpinHeadingParams) -> None:
+        """New gain and error bound (set while running), from the next update on."""
+        self._params = params
+
     def reset(self) -> None:
         """Forget the reference: the next update takes the measured heading as its start."""
         self._reference: float | None = None
