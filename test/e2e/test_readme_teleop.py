@@ -39,9 +39,9 @@ def test_teleop_drives_the_simulated_robot_forward_spins_it_and_fires(tmp_path):
         keyboard = Terminal(f'source scripts/env.sh && exec {block.strip()}', user.env)
         try:
             assert keyboard.wait_for('Ctrl-C quits'), keyboard.screen
-            keyboard.hold(b'w', 3.0)
+            keyboard.hold(b'w', 2.0)
             line = status.wait_for(
-                lambda s: (p := pose(s)) is not None and p[0] - start[0] > 1.0, WAIT_S)
+                lambda s: (p := pose(s)) is not None and p[0] - start[0] > 0.8, WAIT_S)
             assert line and 'cmd manual' in line, (status.lines[-3:], keyboard.screen[-500:])
             assert 'right UP keys W mouse +0,+0 -> chassis FOLLOW NORMAL v +2.0 +0.0' \
                 in keyboard.screen, keyboard.screen[-1000:]

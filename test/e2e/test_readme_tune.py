@@ -1,6 +1,13 @@
-"""README's "Tune it live", typed as written: a live key changes, the others refuse, the
-dump starts the next run with the tuned value.
+"""README's "Tune it live" and "Measure a step", typed as written into one `make run`.
+
+Tune it live: a live key changes, the others refuse, the dump starts the next run with the
+tuned value. Measure a step: the simulated yaw on its position loop (kp 15); a kp of 5 for
+one run rises slower, a kp of 30 kept with `param set` overshoots more on the next step;
+then what the command refuses: a joint whose plugin drives it, a target beyond the
+plugin's limits.
 """
+
+import re
 
 import pytest
 import yaml
@@ -8,9 +15,20 @@ from support.user_session import UserSession, readme_blocks
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow, pytest.mark.realtime]
 
+FIGURES = re.compile(
+    r'rise time \(10-90 %\) +(?P<rise>[\d.]+) s\n'
+    r'overshoot +(?P<overshoot>[\d.]+) %\n'
+    r'settling time \(2 %\) +(?P<settling>[\d.]+) s\n'
+    r'steady-state error +(?P<error>[-+][\d.]+) rad\n')
 
-def test_a_live_key_is_set_the_others_refuse_and_the_dump_starts_the_next_run(tmp_path):
+
+def figures(said: str) -> list[dict[str, float]]:
+    return [{k: float(v) for k, v in m.groupdict().items()} for m in FIGURES.finditer(said)]
+
+
+def test_a_live_key_is_set_a_step_is_measured_and_the_dump_starts_the_next_run(tmp_path):
     tune, restart = readme_blocks('Tune it live')
+    (step,) = readme_blocks('Measure a step')
     with UserSession(tmp_path) as user:
         user.wait_for_robot()
         said = user.type(tune, wait=True, cwd=user.workdir(), timeout=120.0)
@@ -25,6 +43,7 @@ def test_a_live_key_is_set_the_others_refuse_and_the_dump_starts_the_next_run(tm
         assert 'set shooter.max_hz = 8.0 (from the next run on)' in user.log
         dumped = yaml.safe_load((user.workdir() / 'tuned.yaml').read_text())
         assert dumped['/rm_robot']['ros__parameters']['shooter']['max_hz'] == 8.0
+        _measure_steps(user, step)
     # the next run, from the dump: README's own line, in the same folder
     again = tmp_path / 'again'
     again.mkdir()
@@ -33,3 +52,35 @@ def test_a_live_key_is_set_the_others_refuse_and_the_dump_starts_the_next_run(tm
         user.wait_for_robot()
         said = user.type('rmcli param get /rm_robot shooter.max_hz', wait=True)
         assert said == 'Double value is: 8.0\n', said
+
+
+def _measure_steps(user, step):
+    """README's step block, and the two refusals."""
+    said = user.type(step, wait=True, cwd=user.workdir(), timeout=120.0)
+    first, soft, kept = figures(said)
+    assert 'step yaw position +0.000 -> +0.500 (kp 15, ki 0, kd 0), owner gimbal' in said
+    assert '(kp 5, ki 0, kd 0)' in said and '(kp 30, ki 0, kd 0)' in said, said
+    # the simulated turret: kp 15 rises in ~0.14 s, kp 5 in ~0.4 s; kp 30 overshoots
+    # ~50 % against ~17 % (measured); the bounds leave room for a loaded machine
+    assert soft['rise'] > 1.5 * first['rise'], said
+    assert kept['overshoot'] > first['overshoot'] + 10.0, said
+    for f in (first, soft, kept):
+        assert abs(f['error']) < 0.01, said
+    for name in ('step_yaw', 'soft', 'kp30'):
+        assert (user.workdir() / f'{name}.png').read_bytes()[:4] == b'\x89PNG'
+        rows = (user.workdir() / f'{name}.csv').read_text().splitlines()
+        assert rows[0] == 't_s,target,response' and len(rows) > 100
+    # the gimbal is back, enabled and PASSIVE
+    state = user.type('rmcli topic echo --once /rm_robot/gimbal/state', wait=True)
+    assert 'enabled: true' in state and 'state_name: PASSIVE' in state, state
+
+    beyond = user.type('rmcli tune step pitch 1.0; echo "exit $?"', wait=True)
+    assert "target 1 is outside pitch's limits [-0.45, 0.3] (plugin 'gimbal')" in beyond, beyond
+    assert beyond.endswith('exit 1\n'), beyond
+    driven = user.type(
+        "rmcli topic pub -r 20 /gimbal_cmd rm_msgs/msg/GimbalCmd "
+        "'{header: auto, mode: RATE}' > /dev/null &\n"
+        'sleep 2; rmcli tune step yaw 0.2; echo "exit $?"; kill %1', wait=True)
+    assert "joint 'yaw' is driven by plugin 'gimbal', now RATE: command it PASSIVE " \
+        'first' in driven, driven
+    assert 'exit 1' in driven, driven
