@@ -1,14 +1,17 @@
 """rm_sim: the simulated motors, IMU and faults of a robot, in a process of their own.
 
     rm_sim --params-file standard.yaml --params-file standard_sim.yaml [--socket PATH]
+    rm_sim --params-file robot_on_vcan.yaml --interface socketcan    # on vcan0, vcan1 ...
 
 Reads the ``can_bridge`` section of the robot's parameter files (the same ``buses``,
 ``joints``, ``sim.*`` keys can_bridge reads), builds the simulated world and serves its
 channels on an AF_UNIX socket (:mod:`rm_base.sim.server`), where can_bridge's buses with
-``interface: rm_sim_socket`` connect as they would to socketcan. The world runs in real
-time on its own physics thread; the simulated Hi220 writes to its pty as on a robot; a
-node ``rm_sim`` serves the fault services (``/rm_sim/<joint>/offline``, ``.../jam``,
-``.../over_temperature``, ``.../garbage``, ``/rm_sim/<bus>/bus_off``;
+``interface: rm_sim_socket`` connect as they would to socketcan; or, with ``--interface``,
+on the python-can buses of that interface named as the channels (``socketcan``: the
+kernel's vcan0 ..., where the robot's own socketcan buses are; :mod:`rm_base.sim.bus_peer`).
+The world runs in real time on its own physics thread; the simulated Hi220 writes to its
+pty as on a robot; a node ``rm_sim`` serves the fault services (``/rm_sim/<joint>/offline``,
+``.../jam``, ``.../over_temperature``, ``.../garbage``, ``/rm_sim/<bus>/bus_off``;
 :mod:`rm_base.bridge.sim_services`) and takes the operator's remote on ``/rm_sim/remote``
 (:mod:`rm_base.bridge.sim_remote`). Runs until SIGINT/SIGTERM (or ``--duration``).
 """
@@ -22,6 +25,7 @@ from collections.abc import Iterable, Mapping
 from pathlib import Path
 from typing import Any
 
+import can
 import rclpy
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
@@ -36,6 +40,7 @@ from rm_base.hardware.config import SAFETY_SCHEMA
 from rm_base.ros.env import die_with_parent
 from rm_base.ros.node_main import init_ros, spin_until_shutdown
 from rm_base.sim import SimWorld
+from rm_base.sim.bus_peer import BusPeer
 from rm_base.sim.server import SimServer
 from rm_base.sim.socket_bus import default_socket_path
 
@@ -77,6 +82,25 @@ def build_world(params: Mapping[str, Any]) -> tuple[SimWorld, Any]:
     return world, settings
 
 
+def _serve(world: SimWorld, interface: str | None, path: str) -> SimServer | BusPeer:
+    """The socket server, or the world's channels on python-can buses of interface.
+
+    Raises:
+        can.CanError: a bus cannot be opened (no such channel: OSError 19 in socketcan).
+    """
+    if interface is None:
+        return SimServer(world, path)
+    buses: dict[str, can.BusABC] = {}
+    try:
+        for name in sorted(world.channels):
+            buses[name] = can.Bus(interface=interface, channel=name)
+    except (can.CanError, OSError) as err:
+        for bus in buses.values():
+            bus.shutdown()
+        raise can.CanInitializationError(str(err)) from err
+    return BusPeer(world, buses)
+
+
 def parse_args(argv: list[str]) -> argparse.Namespace:
     """The command line (see the module docstring)."""
     parser = argparse.ArgumentParser(prog=NODE_NAME, description=__doc__.split('\n\n')[0])
@@ -85,6 +109,11 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     parser.add_argument(
         '--socket', default=None,
         help='socket path (default $RM_SIM_SOCKET, else /tmp/rm_sim_<domain>/can.sock)',
+    )
+    parser.add_argument(
+        '--interface', default=None,
+        help='serve each channel on the python-can bus of this interface named as it '
+        '(e.g. socketcan: vcan0) instead of the socket',
     )
     parser.add_argument('--duration', type=float, default=None, help='stop after seconds [s]')
     parser.add_argument('--parent-pid', type=int, default=None,
@@ -103,7 +132,12 @@ def main(argv: list[str] | None = None) -> int:
         print(f'[{NODE_NAME}] configuration error: {err}', file=sys.stderr)
         return 1
     path = args.socket or default_socket_path()
-    server = SimServer(world, path)
+    try:
+        server = _serve(world, args.interface, path)
+    except can.CanError as err:
+        world.close()
+        print(f'[{NODE_NAME}] cannot open {args.interface}: {err}', file=sys.stderr)
+        return 1
     if not init_ros(NODE_NAME, [NODE_NAME]):
         server.stop()
         world.close()
@@ -123,7 +157,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         world.start()
         server.start()
-        print(f'[{NODE_NAME}] {", ".join(sorted(world.channels))} at {path}', flush=True)
+        where = f'on {args.interface}' if args.interface else f'at {path}'
+        print(f'[{NODE_NAME}] {", ".join(sorted(world.channels))} {where}', flush=True)
         spin_until_shutdown(
             executor, on_tick=lambda: deadline is None or time.monotonic() < deadline
         )
