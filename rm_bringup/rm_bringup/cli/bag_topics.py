@@ -99,7 +99,15 @@ def not_live(node, connections, remaps: dict[str, str], path: Path) -> list:
         return any(not info.node_name.startswith('_')
                    for info in node.get_publishers_info_by_topic(topic))
 
-    settled(node.get_topic_names_and_types, DISCOVERY_S)
+    played = {remaps.get(c.topic, c.topic) for c in connections}
+
+    def graph() -> list:
+        # endpoints are discovered one by one: a publisher found for a topic already listed
+        # (by a subscriber of it) is news too, and restarts the wait for the graph to settle
+        return node.get_topic_names_and_types() + [
+            (f'{topic} (published)', []) for topic in sorted(played) if published(topic)]
+
+    settled(graph, DISCOVERY_S)
     live = sorted({c.topic for c in connections if published(remaps.get(c.topic, c.topic))})
     if live:
         print(f'rmcli: not playing {", ".join(live)}: published live by another node (name '
