@@ -20,7 +20,7 @@ import argparse
 import csv
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -71,11 +71,9 @@ class Owner:
 
 @dataclass
 class Record:
-    """The run's samples: command times and values, response times and values."""
+    """The run: when the step went out [ns, node clock], once it has."""
 
     step_ns: int | None = None
-    t: list[float] = field(default_factory=list)  # [s] from the step
-    y: list[float] = field(default_factory=list)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -118,7 +116,7 @@ def _run(args: argparse.Namespace, node: Any, executor: Any) -> int:
         bridge.set({prefix + g: v for g, v in new.items()})
     try:
         if owner is not None:
-            _enable(node, executor, owner, False, deadline)
+            _enable(node, executor, owner, False, time.monotonic() + args.timeout)
         try:
             response.record = record
             drive = _Drive(node, executor, joint, loop)
