@@ -39,14 +39,20 @@ class RemotePowerStage:
         joint_states: JointStateView,
     ) -> None:
         self._publisher = publisher
+        self._group = group
         self._joints = tuple(joints)
         self._model = model
         self._joint_states = joint_states
-        self._msg = PowerLimit(
-            group=group, joints=list(self._joints), k1=model.k1, k2=model.k2,
-            static_power_w=model.static_power_w, limit_w=math.inf,
-        )
-        self._publisher.publish(self._msg)
+        self._limit_w = math.inf
+        self._publish()
+
+    def _publish(self) -> None:
+        """The request as it stands now (latched: a bridge started later gets it too)."""
+        model = self._model
+        self._publisher.publish(PowerLimit(
+            group=self._group, joints=list(self._joints), k1=model.k1, k2=model.k2,
+            static_power_w=model.static_power_w, limit_w=self._limit_w,
+        ))
 
     @property
     def model(self) -> ChassisPowerModel:
@@ -56,25 +62,18 @@ class RemotePowerStage:
     @model.setter
     def model(self, model: ChassisPowerModel) -> None:
         self._model = model
-        self._msg = PowerLimit(
-            group=self._msg.group, joints=self._msg.joints, k1=model.k1, k2=model.k2,
-            static_power_w=model.static_power_w, limit_w=self._msg.limit_w,
-        )
-        self._publisher.publish(self._msg)
+        self._publish()
 
     @property
     def limit_w(self) -> float:
         """The allowed power [W] (inf: no limit)."""
-        return float(self._msg.limit_w)
+        return self._limit_w
 
     @limit_w.setter
     def limit_w(self, value: float) -> None:
-        if value != self._msg.limit_w:
-            self._msg = PowerLimit(
-                group=self._msg.group, joints=self._msg.joints, k1=self._msg.k1,
-                k2=self._msg.k2, static_power_w=self._msg.static_power_w, limit_w=value,
-            )
-            self._publisher.publish(self._msg)
+        if value != self._limit_w:
+            self._limit_w = float(value)
+            self._publish()
 
     @property
     def last(self) -> PowerLimitResult | None:
