@@ -10,7 +10,7 @@ the step at t = 0 from y0 (the response there) towards the target r, step h = r 
   end of the record; None if it is outside at the end;
 - steady-state error: r minus the mean of y over the last TAIL of the record.
 
-Pure: no rclpy.
+Pure arithmetic on the samples; the ROS side is rmcli's (rm_bringup.cli.tune_step).
 """
 
 from __future__ import annotations
