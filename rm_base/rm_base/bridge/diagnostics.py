@@ -9,7 +9,10 @@ Levels:
 * joint: OK while driven, commanded off or never commanded; WARN when held at zero by a
   command timeout or a bus recovery; ERROR when offline, over temperature, in a device
   fault or after an internal error. The message names the hold reason.
-* bus: OK when up (WARN above 80 % load); ERROR when down (being reopened).
+* bus: OK when up (WARN above 80 % load); ERROR when down (being reopened). A SocketCAN
+  bus also carries the kernel's view (``ip -details -statistics link``: link up, the
+  controller's state and error counters, bus-off and restart counts, frames dropped):
+  WARN while its controller is ERROR-PASSIVE, ERROR when the link is down or BUS-OFF.
 * scheduler: WARN when deadlines were missed since the previous report, ERROR when a
   tick raised since then.
 * commands: WARN when /actuator_cmd messages were rejected since the previous report.
@@ -25,6 +28,7 @@ from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 
 from rm_base.hardware import BusStats, HoldReason, JointState, Mode
+from rm_base.hardware.can_link import LinkReport
 from rm_base.loop import PeriodStats
 from rm_base.loop.timing import HISTOGRAM_EDGES_US
 from rm_base.ros.diagnostics import diagnostic_status
@@ -105,7 +109,9 @@ class DiagnosticsReporter:
         msg.header.stamp = stamp
         joints = hardware['joints']
         msg.status = [self._joint(s, joints[s.name]) for s in states]
-        msg.status += [self._bus(stats) for stats in hardware['buses'].values()]
+        links = hardware.get('links', {})
+        msg.status += [self._bus(stats, links.get(name))
+                       for name, stats in hardware['buses'].items()]
         msg.status.append(self._scheduler(hardware['scheduler']))
         msg.status.append(self._commands(commands))
         return msg
@@ -147,7 +153,7 @@ class DiagnosticsReporter:
             values,
         )
 
-    def _bus(self, stats: BusStats) -> DiagnosticStatus:
+    def _bus(self, stats: BusStats, link: LinkReport | None = None) -> DiagnosticStatus:
         load = stats.load_fraction
         if stats.state == 'up':
             level = WARN if load is not None and load > BUS_LOAD_WARN else OK
@@ -171,7 +177,12 @@ class DiagnosticsReporter:
             'open_failures': stats.open_failures,
             'log_dropped': stats.log_dropped,
             'last_error': stats.last_error or '',
+            'bus_off': stats.bus_off,
+            'last_error_frame': stats.last_error_frame or '',
         }
+        if link is not None:
+            level, message = _kernel_view(link, level, message)
+            values.update(_link_values(link))
         return diagnostic_status(
             f'{self._prefix}bus {stats.name}', level, message, stats.name, values
         )
@@ -228,3 +239,32 @@ class DiagnosticsReporter:
         values.update({f'rejected {reason}': n for reason, n in sorted(stats.rejected.items())})
         values['last_rejection'] = stats.last_rejection or ''
         return diagnostic_status(f'{self._prefix}commands', level, message, 'actuator_cmd', values)
+
+
+def _kernel_view(link: LinkReport, level: bytes, message: str) -> tuple[bytes, str]:
+    """The bus's level and message with what the kernel says of its interface."""
+    if not link.exists:
+        return ERROR, 'the interface does not exist'
+    if not link.up:
+        return ERROR, f'link down (kernel); {message}'
+    if link.can_state == 'BUS-OFF':
+        return ERROR, f'controller BUS-OFF; {message}'
+    if link.can_state in ('ERROR-PASSIVE', 'STOPPED'):
+        return max(level, WARN), f'controller {link.can_state}; {message}'
+    return level, message
+
+
+def _link_values(link: LinkReport) -> dict[str, Any]:
+    values: dict[str, Any] = {
+        'kernel link': 'up' if link.up else ('down' if link.exists else 'missing'),
+        'kernel kind': link.kind or 'unknown',
+    }
+    if link.can_state:
+        values['kernel can_state'] = link.can_state
+    if link.tx_error_counter is not None:
+        values['kernel tx_error_counter'] = link.tx_error_counter
+        values['kernel rx_error_counter'] = link.rx_error_counter
+    if link.restart_ms is not None:
+        values['kernel restart_ms'] = link.restart_ms
+    values.update({f'kernel {name}': n for name, n in link.counters.items()})
+    return values

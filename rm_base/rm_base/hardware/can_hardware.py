@@ -35,6 +35,7 @@ from rm_base.control import ChassisPowerModel
 from rm_base.errors import ConfigError
 from rm_base.hardware.actuators import Actuator, HoldReason, JointState, MitActuator
 from rm_base.hardware.bus import BusFactory, ManagedBus
+from rm_base.hardware.can_link import LinkReader, LinkReport
 from rm_base.hardware.config import HardwareConfig
 from rm_base.hardware.errors import CommandRejectedError, HardwareConfigError
 from rm_base.hardware.families import GroupBuilder, MotorFamilies
@@ -86,6 +87,8 @@ class CanHardware:
         self.buses: dict[str, ManagedBus] = {
             b.name: ManagedBus(b, clock_ns=clock_ns, bus_factory=bus_factory) for b in config.buses
         }
+        # the kernel's view of each SocketCAN bus, for /diagnostics (read off the loop)
+        self._links = LinkReader()
         self.actuators: dict[str, Actuator] = {}
         # families whose motors share command frames pack them through their groups
         grouped: dict[str, tuple[GroupBuilder, list[Actuator]]] = {}
@@ -383,10 +386,25 @@ class CanHardware:
         """
         return [a.state(stamp_ns) for a in self.actuators.values()]
 
+    def links(self) -> dict[str, LinkReport]:
+        """The kernel's report of each SocketCAN bus, by bus name.
+
+        From `ip -details -statistics link`; a bus whose report could not be read is left
+        out.
+        """
+        reports = {}
+        for name, bus in self.buses.items():
+            if bus.config.interface == 'socketcan':
+                report = self._links.report(str(bus.config.channel))
+                if report is not None:
+                    reports[name] = report
+        return reports
+
     def diagnostics(self) -> dict[str, Any]:
         """Bus counters and load, scheduler timing, and per-joint counters."""
         return {
             'buses': {name: bus.stats() for name, bus in self.buses.items()},
+            'links': self.links(),
             'scheduler': self.scheduler.stats(),
             'joints': {name: a.diagnostics() for name, a in self.actuators.items()},
             'unknown_joint_commands': self._unknown_joint_commands,

@@ -8,6 +8,7 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from rm_base.bridge.diagnostics import CommandStats, DiagnosticsReporter
 from rm_base.bridge.messages import time_msg
 from rm_base.hardware import BusStats, JointState
+from rm_base.hardware.can_link import LinkReport
 from rm_base.loop import PeriodStats
 
 OK, WARN, ERROR = DiagnosticStatus.OK, DiagnosticStatus.WARN, DiagnosticStatus.ERROR
@@ -53,7 +54,8 @@ def scheduler_stats(overruns=0, errors=0):
     return PeriodStats(1_000_000, 5000, overruns, overruns, 800.0, 60.0, (1,) * 9, 300.0, errors)
 
 
-def build(reporter, hold='none', online=True, bus=None, scheduler=None, commands=None):
+def build(reporter, hold='none', online=True, bus=None, scheduler=None, commands=None,
+          link=None):
     state = JointState(
         'wheel',
         1.0,
@@ -69,6 +71,7 @@ def build(reporter, hold='none', online=True, bus=None, scheduler=None, commands
         'joints': {'wheel': joint_diag(hold)},
         'buses': {'can0': bus or bus_stats()},
         'scheduler': scheduler or scheduler_stats(),
+        'links': {'can0': link} if link is not None else {},
     }
     msg = reporter.build(hardware, [state], commands or CommandStats(), time_msg(0))
     return {s.name: s for s in msg.status}
@@ -141,6 +144,35 @@ def test_bus_level(bus, level, message):
     v = values(status)
     assert v['reopen_count'] == '1'
     assert v['send_errors'] == '0'
+
+
+@pytest.mark.parametrize(
+    ('link', 'level', 'message'),
+    [
+        (LinkReport(exists=True, up=True, kind='can', can_state='ERROR-ACTIVE'), OK, 'up'),
+        (LinkReport(exists=True, up=True, kind='can', can_state='ERROR-PASSIVE'), WARN,
+         'controller ERROR-PASSIVE; up'),
+        (LinkReport(exists=True, up=True, kind='can', can_state='BUS-OFF'), ERROR,
+         'controller BUS-OFF; up'),
+        (LinkReport(exists=True, up=False, kind='vcan'), ERROR, 'link down (kernel); up'),
+        (LinkReport(exists=False), ERROR, 'the interface does not exist'),
+    ],
+)
+def test_the_kernels_view_of_a_socketcan_bus_sets_its_level(link, level, message):
+    status = build(DiagnosticsReporter('b'), bus=bus_stats(), link=link)['b: bus can0']
+    assert (status.level, status.message) == (level, message)
+
+
+def test_the_kernels_counters_and_the_last_error_frame_are_values():
+    link = LinkReport(exists=True, up=True, kind='can', can_state='ERROR-WARNING',
+                      tx_error_counter=97, rx_error_counter=2, restart_ms=100,
+                      counters={'rx_dropped': 4, 'bus_off': 1})
+    bus = bus_stats(error_frames=3, bus_off=1, last_error_frame='bus-off')
+    v = values(build(DiagnosticsReporter('b'), bus=bus, link=link)['b: bus can0'])
+    assert (v['kernel link'], v['kernel can_state'], v['kernel tx_error_counter'],
+            v['kernel restart_ms'], v['kernel rx_dropped'], v['kernel bus_off']) == (
+        'up', 'ERROR-WARNING', '97', '100', '4', '1')
+    assert (v['error_frames'], v['bus_off'], v['last_error_frame']) == ('3', '1', 'bus-off')
 
 
 def test_bus_without_bitrate_has_no_load_fraction():
