@@ -28,9 +28,11 @@ from typing import Any, Protocol
 
 import can
 
+from rm_base.hardware.can_link import link_is_up
 from rm_base.hardware.can_log import CanLog
 from rm_base.hardware.config import BusConfig
 from rm_base.hardware.errors import BusError
+from rm_base.hardware.protocols.can_error import decode_error_frame
 
 _log = logging.getLogger(__name__)
 
@@ -94,6 +96,9 @@ class BusStats:
         send_errors: failed sends (driver error, buffer full, bus down).
         receive_errors: errors raised by the driver while receiving.
         error_frames: CAN error frames reported by the driver.
+        last_error_frame: the last of them, decoded (classes, controller state,
+            counters), or None.
+        bus_off: error frames that said the controller went bus-off.
         handler_errors: exceptions raised by frame handlers (bugs; logged).
         reopen_count: successful (re)opens after the first open.
         open_failures: failed attempts to open.
@@ -120,6 +125,8 @@ class BusStats:
     last_error: str | None
     frames_late: int = 0
     log_dropped: int = 0
+    last_error_frame: str | None = None
+    bus_off: int = 0
 
 
 #: Largest believable age of a received frame [s]: a timestamp older than this (or in the
@@ -206,6 +213,8 @@ class ManagedBus:
         self._send_errors = 0
         self._receive_errors = 0
         self._error_frames = 0
+        self._last_error_frame: str | None = None
+        self._bus_off = 0
         self._handler_errors = 0
         self._reopen_count = 0
         self._open_failures = 0
@@ -272,6 +281,13 @@ class ManagedBus:
             kwargs.setdefault('fd', True)
             if cfg.data_bitrate is not None:
                 kwargs.setdefault('data_bitrate', cfg.data_bitrate)
+        if cfg.interface == 'socketcan' and link_is_up(str(cfg.channel)) is False:
+            # the kernel binds a socket to a link that is down; nothing would pass until up
+            self._open_failures += 1
+            self._note_error(f'link {cfg.channel} is down (ip link set {cfg.channel} up)')
+            self._state = BusState.DOWN
+            self._schedule_reopen()
+            return False
         try:
             bus = self._factory(
                 interface=cfg.interface, channel=cfg.channel, ignore_config=True, **kwargs
@@ -422,8 +438,10 @@ class ManagedBus:
         self._sent += len(msgs)
         self._bits += sum(map(frame_bits, msgs))
         if self._log_sink is not None:
+            # under the interface's name, as candump writes it, so can-utils replay the log
+            channel = str(self.config.channel)
             for msg in msgs:
-                self._log_sink.sent(msg, self.name)
+                self._log_sink.sent(msg, channel)
         observer = self._sent_observer
         if observer is not None:
             observer(msgs)
@@ -520,6 +538,10 @@ class ManagedBus:
         """
         if msg.is_error_frame:
             self._error_frames += 1
+            report = decode_error_frame(msg.arbitration_id, bytes(msg.data))
+            self._last_error_frame = report.describe()
+            if report.bus_off:
+                self._bus_off += 1
             return 0
         self._received += 1
         self._bits += frame_bits(msg)
@@ -569,4 +591,6 @@ class ManagedBus:
             last_error=self._last_error,
             frames_late=self._late,
             log_dropped=self._log_sink.dropped if self._log_sink is not None else 0,
+            last_error_frame=self._last_error_frame,
+            bus_off=self._bus_off,
         )

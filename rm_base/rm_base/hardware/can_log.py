@@ -55,10 +55,13 @@ class CanLog:
             self._wake.set()
 
     def received(self, msg: can.Message) -> None:
-        """Log a received frame (the interface stamped it)."""
+        """Log a received frame (the interface stamped it), marked Rx."""
         if len(self._queue) >= self._max:
             self._drop()
             return
+        # socketcan says is_rx=False of a frame another process on this host sent (vcan,
+        # a second program on can0); to this bus's log it is one it received
+        msg.is_rx = True
         self._queue.append(msg)
 
     def sent(self, msg: can.Message, channel: str) -> None:

@@ -331,6 +331,13 @@ def test_error_frames_are_counted():
         assert bus.dispatch(err, 0) == 0
         assert bus.stats().error_frames == 1
         assert bus.stats().frames_received == 0
+        # the kernel's bus-off, with the controller's counters (docs/PROTOCOLS.md §7)
+        off = can.Message(is_error_frame=True, arbitration_id=0x240,
+                          data=bytes([0, 0, 0, 0, 0, 0, 255, 0]))
+        bus.dispatch(off, 0)
+        stats = bus.stats()
+        assert (stats.error_frames, stats.bus_off) == (2, 1)
+        assert stats.last_error_frame == 'bus-off counters, counters tx 255 rx 0'
 
 
 def test_bus_options_are_passed_to_python_can():
@@ -383,6 +390,8 @@ def test_frames_are_logged_with_python_can_writers(tmp_path, channel, suffix):
                for m in logged)
     if suffix in ('.asc', '.blf', '.log'):  # the formats that keep the direction
         assert [m.is_rx for m in logged] == [False, True]
+    if suffix == '.log':  # candump's format: both under the interface's name
+        assert [m.channel for m in logged] == [channel, channel]
 
 
 def test_unknown_log_suffix_is_an_error(tmp_path, channel):

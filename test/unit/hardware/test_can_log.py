@@ -48,3 +48,17 @@ def test_a_writer_that_falls_behind_drops_new_frames_counted_and_said_once(tmp_p
     log.stop()
     assert time.monotonic() - start < 5.0
     assert stuck.written <= 101  # never more than the bound (+ the one in hand)
+
+
+def test_a_log_is_candump_format_with_each_frames_direction(tmp_path):
+    # socketcan marks a frame another local program sent is_rx=False; this bus received it
+    path = tmp_path / 'can0.log'
+    log = CanLog(str(path), 'can0')
+    heard = can.Message(arbitration_id=0x201, data=b'\x01\x02', is_extended_id=False,
+                        is_rx=False, channel='vcan0', timestamp=10.0)
+    log.received(heard)
+    log.sent(can.Message(arbitration_id=0x200, data=bytes(8), is_extended_id=False), 'vcan0')
+    log.stop()
+    lines = path.read_text().splitlines()
+    assert lines[0] == '(10.000000) vcan0 201#0102 R'
+    assert lines[1].split()[1:] == ['vcan0', '200#0000000000000000', 'T']
