@@ -6,6 +6,7 @@
     bringup --sim --params-file extra.yaml  # and overrides, loaded last
     bringup --sim --sim-time              # every node on /clock (`rmcli bag play --clock`)
     bringup --sim --foxglove              # and the robot live in Foxglove (ws://127.0.0.1:8765)
+    bringup --sim --sim-can socketcan     # rm_sim on the kernel's CAN (vcan can0, can1)
 
 The robot config is a ROS parameter file with a ``can_bridge`` and an ``rm_robot``
 section (rm_bringup/config/<robot>.yaml). ``--sim`` starts rm_sim, the simulated motors
@@ -96,6 +97,12 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     which.add_argument('--config', help='path of a robot config file (instead of --robot)')
     parser.add_argument('--sim', action='store_true', help='run every bus on rm_sim')
     parser.add_argument(
+        '--sim-can', default=None, metavar='INTERFACE',
+        help="with --sim: rm_sim answers on this python-can interface's channels named as "
+        "the robot's (socketcan: vcan interfaces can0, can1) and the robot's buses stay as "
+        'its config has them; default: rm_sim_socket',
+    )
+    parser.add_argument(
         '--params-file', action='append', default=[], type=pathlib.Path,
         help='another parameter file, loaded last (repeatable), e.g. can_bridge: log_file',
     )
@@ -112,7 +119,10 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     parser.add_argument(
         '--duration', type=float, default=None, help='stop after this many seconds [s]'
     )
-    return parser.parse_args(remove_ros_args(['bringup', *argv])[1:])
+    args = parser.parse_args(remove_ros_args(['bringup', *argv])[1:])
+    if args.sim_can is not None and not args.sim:
+        parser.error('--sim-can needs --sim')
+    return args
 
 
 class _StatusPrinter:
@@ -162,7 +172,7 @@ def _main(args: argparse.Namespace, files: list[pathlib.Path], console: Console 
         sim = None
         if args.sim:
             try:
-                sim = SimProcess(files, pathlib.Path(workdir))
+                sim = SimProcess(files, pathlib.Path(workdir), args.sim_can)
             except ConfigError as err:
                 print(f'[bringup] {err}', file=sys.stderr)
                 return 1

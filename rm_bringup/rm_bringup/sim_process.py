@@ -7,6 +7,10 @@
 its simulation overlay: ``sim: false`` (no in-process simulator) and every bus with
 ``interface: rm_sim_socket`` on rm_sim's socket. The robot then runs exactly as on
 socketcan; only the interface name differs.
+
+With ``interface='socketcan'`` rm_sim answers on the kernel's CAN interfaces named as the
+robot's channels (vcan interfaces called can0, can1 ...: docs/KERNEL_CAN.md) and the
+overlay leaves the buses as the robot config has them: the robot runs unchanged.
 """
 
 from __future__ import annotations
@@ -40,34 +44,29 @@ class SimProcess:
         ConfigError: rm_sim did not come up (its log's last lines are in the message).
     """
 
-    def __init__(self, files: Sequence[pathlib.Path], workdir: pathlib.Path) -> None:
+    def __init__(self, files: Sequence[pathlib.Path], workdir: pathlib.Path,
+                 interface: str | None = None) -> None:
         workdir.mkdir(parents=True, exist_ok=True)
         self.socket = str(workdir / 'can.sock')
         self.log_path = workdir / 'rm_sim.log'
+        self.interface = interface
         buses = sorted(
             {k.split('.')[1] for k in bridge_parameters(files) if k.startswith('buses.')}
         )
-        self.bridge_overlay = workdir / 'rm_sim_socket.yaml'
+        parameters: dict[str, object] = {'sim': False}
+        if interface is None:
+            parameters['buses'] = {
+                bus: {'interface': 'rm_sim_socket', 'options': {'socket': self.socket}}
+                for bus in buses
+            }
+        self.bridge_overlay = workdir / 'rm_sim_bridge.yaml'
         self.bridge_overlay.write_text(
-            yaml.safe_dump(
-                {
-                    BRIDGE_SECTION: {
-                        'ros__parameters': {
-                            'sim': False,
-                            'buses': {
-                                bus: {
-                                    'interface': 'rm_sim_socket',
-                                    'options': {'socket': self.socket},
-                                }
-                                for bus in buses
-                            },
-                        }
-                    }
-                }
-            )
+            yaml.safe_dump({BRIDGE_SECTION: {'ros__parameters': parameters}})
         )
         args = [sys.executable, '-m', 'rm_base.bridge.sim_process', '--socket', self.socket,
                 '--parent-pid', str(os.getpid())]
+        if interface is not None:
+            args += ['--interface', interface]
         for path in files:
             args += ['--params-file', str(path)]
         self._log = open(self.log_path, 'wb')
@@ -80,9 +79,15 @@ class SimProcess:
             self.stop()
             raise
 
+    def _listening(self) -> bool:
+        if self.interface is None:
+            return os.path.exists(self.socket)
+        # rm_sim says "[rm_sim] can0, can1 on socketcan" once every channel's bus is open
+        return f' on {self.interface}' in self.log_path.read_text(errors='replace')
+
     def _wait_listening(self) -> None:
         deadline = time.monotonic() + START_TIMEOUT_S
-        while not os.path.exists(self.socket):
+        while not self._listening():
             if self.process.poll() is not None or time.monotonic() > deadline:
                 tail = self.log_path.read_text(errors='replace').strip().splitlines()[-5:]
                 raise ConfigError('rm_sim did not start: ' + (' | '.join(tail) or 'no output'))

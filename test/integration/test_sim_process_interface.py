@@ -1,0 +1,32 @@
+"""rm_sim started by bringup on a python-can interface (`bringup --sim --sim-can ...`).
+
+On the kernel's socketcan the same path runs in test/kernel; here python-can's virtual
+interface stands in: rm_sim opens a bus per channel, says so, and the robot's buses are
+left as its config has them."""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+import yaml
+from rm_bringup.bringup import parameter_files
+from rm_bringup.sim_process import SimProcess
+from support.ros import isolate_ros_environment
+
+pytestmark = [pytest.mark.ros, pytest.mark.realtime]
+
+
+def test_rm_sim_on_an_interface_leaves_the_robots_buses_alone(tmp_path, monkeypatch):
+    env = dict(os.environ)
+    isolate_ros_environment(env)
+    for key in ('ROS_DOMAIN_ID', 'ROS_AUTOMATIC_DISCOVERY_RANGE'):
+        monkeypatch.setenv(key, env[key])
+    files = parameter_files('standard', None, sim=True)
+    with SimProcess(files, tmp_path, interface='virtual') as sim:
+        assert sim.process.poll() is None
+        overlay = yaml.safe_load(sim.bridge_overlay.read_text())
+        assert overlay == {'can_bridge': {'ros__parameters': {'sim': False}}}
+        said = sim.log_path.read_text()
+    assert '[rm_sim] can0, can1 on virtual' in said
+    assert not (tmp_path / 'can.sock').exists()  # no socket: the buses are the interface's
