@@ -8,7 +8,7 @@ PYTEST_ARGS ?=
 # pytest-xdist workers of the suite's first pass: auto = one per CPU; 0 = this process
 export TEST_WORKERS ?= auto
 
-.PHONY: all setup test run lint lock clean bench soak
+.PHONY: all setup test test-kernel run lint lock clean bench soak
 
 all: test
 
@@ -18,6 +18,12 @@ setup:
 ## test: the whole suite (unit, integration, replay, linters), each test once
 test: setup
 	@scripts/run_tests.sh $(PYTEST_ARGS)
+
+## test-kernel: the kernel CAN tier in a guest kernel (installs qemu, can-utils and the
+## guest's kernel on first use: docs/KERNEL_CAN.md)
+test-kernel: setup
+	@scripts/kernel_setup.sh
+	@scripts/kernel_tests.sh $(PYTEST_ARGS)
 
 ## run: the standard robot on the simulated CAN bus (ROBOT=hero for the hero)
 run: setup
