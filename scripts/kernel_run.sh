@@ -24,7 +24,8 @@ echo "$cache/root/lib/modules/$kver" > "$out/modules_dir"
   echo '#!/bin/bash'
   echo 'mount -t proc proc /proc; mount -t sysfs sys /sys; mount -t devtmpfs dev /dev'
   echo 'mkdir -p /dev/pts /dev/shm; mount -t devpts devpts /dev/pts; mount -t tmpfs tmpfs /dev/shm'
-  echo 'mount -t tmpfs tmpfs /tmp; mount -t tmpfs tmpfs /run'
+  # scratch space in the guest's memory; not over /tmp, where a clone may live (CI's)
+  echo 'mount -t tmpfs tmpfs /run; mkdir -p /run/tmp; export TMPDIR=/run/tmp'
   # progress on the guest's console (kept when the guest fails, below)
   echo 'mark() { echo "[guest $(cut -d" " -f1 /proc/uptime) s] $*" > /dev/console; }'
   echo 'mark mounted'
