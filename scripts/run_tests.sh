@@ -40,9 +40,12 @@ echo "[test] pass 1 of 2: the tests that run no robot in real time, $workers wor
 run -n "$workers" --dist loadfile -m "$(within 'not realtime')" ${args[@]+"${args[@]}"}
 
 # The kernel CAN tier (docs/KERNEL_CAN.md), in a guest kernel, for the whole suite only,
-# where `make test-kernel` has set the guest up. Between the passes, alone: beside pass 1
-# the guest (software-emulated) slowed 10-fold and its waits ran out.
-if [ -z "$selection" ] && [ ${#args[@]} -eq 0 ] && [ "${RM_KERNEL_TESTS:-1}" != 0 ]; then
+# with RM_KERNEL_TESTS=1 where `make test-kernel` has set the guest up. Between the passes,
+# alone: beside pass 1 the guest (software-emulated) slowed 10-fold and its waits ran out.
+# Not by default yet: about one guest run in three stalls for minutes (under study).
+if [ "${RM_KERNEL_TESTS:-0}" != 1 ]; then
+  echo '[test] kernel CAN tier not run: `make test-kernel` runs it (RM_KERNEL_TESTS=1: here)'
+elif [ -z "$selection" ] && [ ${#args[@]} -eq 0 ]; then
   if why=$(scripts/kernel_setup.sh --check); then
     echo "[test] the kernel CAN tier, in a guest kernel (make test-kernel)"
     # README's command; bounded, so a guest that stalls cannot hold the suite up
