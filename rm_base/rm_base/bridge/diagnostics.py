@@ -247,11 +247,10 @@ def _kernel_view(link: LinkReport, level: bytes, message: str) -> tuple[bytes, s
         return ERROR, 'the interface does not exist'
     if not link.up:
         return ERROR, f'link down (kernel); {message}'
-    if link.can_state == 'BUS-OFF':
-        return ERROR, f'controller BUS-OFF; {message}'
-    if link.can_state in ('ERROR-PASSIVE', 'STOPPED'):
-        return max(level, WARN), f'controller {link.can_state}; {message}'
-    return level, message
+    if link.healthy:
+        return level, message
+    worst = ERROR if link.can_state == 'BUS-OFF' else max(level, WARN)
+    return worst, f'controller {link.can_state}; {message}'
 
 
 def _link_values(link: LinkReport) -> dict[str, Any]:
