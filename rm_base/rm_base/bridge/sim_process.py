@@ -53,7 +53,7 @@ TYPED = frozenset({
     'scheduler.one_cpu', 'scheduler.cpu', 'scheduler.cpu_latency_us',
     'scheduler.collect_garbage',
     *(f'safety.{key}' for key in SAFETY_SCHEMA.names),
-    'sim', 'sim.timing', 'sim.seed', 'calibration.file', 'calibration.max_speed',
+    'sim', 'sim.timing', 'sim.seed', 'sim.can', 'calibration.file', 'calibration.max_speed',
 })
 
 
@@ -90,15 +90,7 @@ def _serve(world: SimWorld, interface: str | None, path: str) -> SimServer | Bus
     """
     if interface is None:
         return SimServer(world, path)
-    buses: dict[str, can.BusABC] = {}
-    try:
-        for name in sorted(world.channels):
-            buses[name] = can.Bus(interface=interface, channel=name)
-    except (can.CanError, OSError) as err:
-        for bus in buses.values():
-            bus.shutdown()
-        raise can.CanInitializationError(str(err)) from err
-    return BusPeer(world, buses)
+    return BusPeer.open(world, interface)
 
 
 def parse_args(argv: list[str]) -> argparse.Namespace:
@@ -136,7 +128,7 @@ def main(argv: list[str] | None = None) -> int:
         server = _serve(world, args.interface, path)
     except can.CanError as err:
         world.close()
-        print(f'[{NODE_NAME}] cannot open {args.interface}: {err}', file=sys.stderr)
+        print(f'[{NODE_NAME}] {err}', file=sys.stderr)
         return 1
     if not init_ros(NODE_NAME, [NODE_NAME]):
         server.stop()
