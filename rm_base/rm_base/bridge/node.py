@@ -35,7 +35,7 @@ from rm_base.bridge.messages import (
     time_msg,
 )
 from rm_base.bridge.node_params import read_parameters
-from rm_base.bridge.params import with_sim_world
+from rm_base.bridge.params import SIM_CAN_DEFAULT, with_sim_world
 from rm_base.bridge.power_limits import RemotePowerLimits, parse_power_limit
 from rm_base.bridge.sim_config import world_config
 from rm_base.bridge.sim_remote import SimRemoteInput
@@ -54,6 +54,7 @@ from rm_base.ros.node_main import inbox_node
 from rm_base.ros.publish import publish
 from rm_base.runtime import compiled
 from rm_base.sim import SimConfigError, SimWorld, Timing
+from rm_base.sim.bus_peer import BusPeer
 from rm_msgs.msg import ActuatorCmd, ActuatorState, CanFrame, PowerLimit
 
 NODE_NAME = 'can_bridge'
@@ -94,7 +95,9 @@ class CanBridgeNode(Node):
       at ``diagnostics_rate`` (:mod:`rm_base.bridge.diagnostics`), and with
       ``publish_frames`` every frame on ``~/frames`` (rm_msgs/CanFrame).
     - With ``sim: true`` every bus runs on ``rm_sim`` in one world built from the
-      parameters (:mod:`rm_base.bridge.sim_config`), and std_srvs/SetBool services inject
+      parameters (:mod:`rm_base.bridge.sim_config`) — with ``sim.can: socketcan`` the
+      buses stay on the kernel's interfaces and the simulated motors answer there
+      (:mod:`rm_base.sim.bus_peer`) — and std_srvs/SetBool services inject
       (``data: true``) or clear (``false``) faults: ``~/sim/<joint>/offline``, ``.../jam``,
       ``.../over_temperature``, ``.../garbage`` and ``~/sim/<bus>/bus_off``.
     - Every parameter is read once at start-up; ``ros2 param set`` is refused.
@@ -120,6 +123,7 @@ class CanBridgeNode(Node):
         self._fast_logger = FastLogger(super().get_logger())
         self.hardware: CanHardware | None = None
         self.sim_world: SimWorld | None = None
+        self.sim_peer: BusPeer | None = None
         self._frame_tap: FrameTap | None = None
         self._shut_down = False
         self._stop = threading.Event()
@@ -151,6 +155,20 @@ class CanBridgeNode(Node):
                 ) from err
             hardware = with_sim_world(hardware, self.sim_world)
         bus_factory: BusFactory = can.Bus
+        if self.sim_world is not None and settings.sim is not None \
+                and settings.sim.can != SIM_CAN_DEFAULT:
+            # the simulated motors on the kernel's (or another python-can) interfaces,
+            # joined before the robot's buses open so that no frame of theirs is missed
+            try:
+                self.sim_peer = BusPeer.open(
+                    self.sim_world, settings.sim.can,
+                    stepped=self.sim_world.timing is Timing.STEPPED,
+                )
+            except can.CanError as err:
+                raise BridgeConfigError(f'sim.can: {err}') from err
+            self.sim_peer.start()
+            if self.sim_world.timing is Timing.REALTIME:
+                self.sim_world.start()
         if settings.publish_frames:
             names = {(b.interface, str(b.channel)): b.name for b in settings.hardware_config.buses}
             self._frame_tap = FrameTap(names, bus_factory)
@@ -336,9 +354,19 @@ class CanBridgeNode(Node):
                 f'the simulator ticks every {world.period_ns} ns and the loop every '
                 f'{hw.scheduler.period_ns} ns; lockstep needs the same period'
             )
+        peer = self.sim_peer
+        if peer is None:
+            for _ in range(ticks):
+                world.step(1)
+                hw.tick(world.time_ns)
+            return
+        # over a kernel interface: each half tick's frames in every socket before the next
+        channels = {name: str(bus.config.channel) for name, bus in hw.buses.items()}
         for _ in range(ticks):
             world.step(1)
+            peer.settle({channels[n]: bus.frames_sent for n, bus in hw.buses.items()})
             hw.tick(world.time_ns)
+            peer.settle({channels[n]: bus.frames_sent for n, bus in hw.buses.items()})
 
     # --- publishing (own thread) -----------------------------------------------------------
     def command_stats(self) -> CommandStats:
@@ -380,6 +408,10 @@ class CanBridgeNode(Node):
 
     def publish_diagnostics(self) -> None:
         """Publish /diagnostics once (the publisher thread's job)."""
+        publish(self._diagnostics_pub, self.diagnostics_message())
+
+    def diagnostics_message(self) -> DiagnosticArray:
+        """What /diagnostics says now."""
         assert self.hardware is not None
         msg = self._diagnostics.build(
             self.hardware.diagnostics(),
@@ -390,7 +422,7 @@ class CanBridgeNode(Node):
         inbox = self._inbox
         if inbox is not None:  # /actuator_cmd taken and dropped
             msg.status.append(self._inbox_report.status(inbox))
-        publish(self._diagnostics_pub, msg)
+        return msg
 
     def publish_frames(self) -> None:
         """Publish the frames seen since the last call on ~/frames."""
@@ -479,6 +511,8 @@ class CanBridgeNode(Node):
                 self.publish_states()
             except Exception as err:  # the context may already be gone
                 self.get_logger().debug(f'final states not published: {err!r}')
+        if self.sim_peer is not None:
+            self.sim_peer.stop()
         if self.sim_world is not None:
             self.sim_world.close()
 

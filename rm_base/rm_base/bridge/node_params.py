@@ -16,7 +16,13 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from rm_base.bridge.errors import BridgeConfigError
-from rm_base.bridge.params import BridgeSettings, is_ros_own, plain, settings_from_parameters
+from rm_base.bridge.params import (
+    SIM_CAN_DEFAULT,
+    BridgeSettings,
+    is_ros_own,
+    plain,
+    settings_from_parameters,
+)
 from rm_base.config.calibration import CalibrationFile, joint_zero_offsets
 from rm_base.config.schema import Schema
 from rm_base.hardware.config import SAFETY_SCHEMA, SCHEDULER_SCHEMA
@@ -135,6 +141,14 @@ def read_parameters(node: Node) -> tuple[BridgeSettings, CalibrationFile | None]
         Timing,
         Timing.REALTIME,
         description='realtime: a physics thread; stepped: only sim_world.step() (tests)',
+    )
+    declare(
+        'sim.can',
+        params.string,
+        SIM_CAN_DEFAULT,
+        description="where the simulated motors answer: rm_sim (the simulator's own "
+        'channels, in this process) or a python-can interface the buses open too '
+        "(socketcan: the kernel's interfaces named as the buses' channels, e.g. vcan0)",
     )
     declare(
         'sim.seed',

@@ -68,6 +68,8 @@ SIM_REFEREE_PREFIX = 'sim.referee.'
 SIM_REMOTE_PREFIX = 'sim.remote.'
 SIM_IMAGE_LINK_PREFIX = 'sim.image_link.'
 _JOINT_SIM_KEY = 'sim'
+#: ``sim.can``: the simulator's own channels, in the bridge's process.
+SIM_CAN_DEFAULT = 'rm_sim'
 
 
 @dataclasses.dataclass(frozen=True)
@@ -77,6 +79,10 @@ class SimSettings:
     Attributes:
         timing: who drives the world's clock.
         seed: random seed of the world.
+        can: where the simulated motors answer: ``rm_sim`` (the world's own channels, in
+            the process), or a python-can interface (``socketcan``: the kernel's
+            interfaces named as the buses' channels, vcan0 ...) that the robot's buses
+            open too.
         body: ``body`` of the world config (nested; empty for none).
         imu: the one IMU's config, or None.
         referee: the simulated referee's config, or None.
@@ -87,6 +93,7 @@ class SimSettings:
 
     timing: Timing = Timing.REALTIME
     seed: int = 0
+    can: str = SIM_CAN_DEFAULT
     body: Mapping[str, Any] = dataclasses.field(default_factory=dict)
     imu: Mapping[str, Any] | None = None
     referee: Mapping[str, Any] | None = None
@@ -184,7 +191,7 @@ def settings_from_parameters(
     Args:
         typed: the declared, already type-checked parameters: ``publish_rate``,
             ``diagnostics_rate``, ``publish_frames``, ``log_file``, ``sim``,
-            ``sim.timing`` (:class:`Timing` or its value), ``sim.seed``,
+            ``sim.timing`` (:class:`Timing` or its value), ``sim.seed``, ``sim.can``,
             ``scheduler.rate_hz``, ``scheduler.receive_in_loop``, ``scheduler.priority``,
             ``scheduler.edge_priority``, ``scheduler.one_cpu``, ``scheduler.cpu``,
             ``scheduler.cpu_latency_us``,
@@ -235,11 +242,12 @@ def settings_from_parameters(
                 'scheduler.rate_hz, scheduler.receive_in_loop, scheduler.(edge_)priority, '
                 'scheduler.collect_garbage, safety.*, '
                 'publish_rate, '
-                'diagnostics_rate, publish_frames, log_file, sim, sim.timing, sim.seed, '
+                'diagnostics_rate, publish_frames, log_file, sim, sim.timing, sim.seed, sim.can, '
                 'sim.body.*, sim.imu.*, sim.referee.*, sim.remote.*, sim.image_link.*'
             )
     hardware = nest(hardware_flat)
     sim_on = bool(typed.get('sim', False))
+    sim_can = str(typed.get('sim.can', SIM_CAN_DEFAULT)) or SIM_CAN_DEFAULT
     buses = hardware.get('buses')
     if isinstance(buses, dict):
         log_file = typed.get('log_file') or None
@@ -248,7 +256,7 @@ def settings_from_parameters(
                 continue  # the hardware schema reports it, naming the key
             if sim_on:
                 # Same code path as on a robot; only the python-can interface differs.
-                bus['interface'] = 'rm_sim'
+                bus['interface'] = sim_can
             if log_file and 'log_file' not in bus:
                 bus['log_file'] = bus_log_path(log_file, bus_name, len(buses) > 1)
     scheduler = {
@@ -276,6 +284,7 @@ def settings_from_parameters(
         sim = SimSettings(
             timing=Timing(typed.get('sim.timing', Timing.REALTIME)),
             seed=int(typed.get('sim.seed', 0)),
+            can=sim_can,
             body=nest(body_flat),
             imu=nest(imu_flat) if imu_flat else None,
             referee=nest(referee_flat) if referee_flat else None,
@@ -314,7 +323,10 @@ def cpu_index(typed: Mapping[str, Any]) -> int | None:
 
 
 def with_sim_world(hardware: Mapping[str, Any], world: Any) -> dict[str, Any]:
-    """A copy of the hardware config whose every bus opens on ``world`` (``options.world``).
+    """A copy of the hardware config whose every ``rm_sim`` bus opens on ``world``.
+
+    The world goes in ``options.world``; a bus on another interface (``sim.can``) is left
+    as it is.
 
     Passing the world object (not its config) makes every bus share it, and keeps it
     alive when a bus is closed and reopened after an error.
@@ -322,6 +334,7 @@ def with_sim_world(hardware: Mapping[str, Any], world: Any) -> dict[str, Any]:
     config = dict(hardware)
     config['buses'] = {
         name: {**bus, 'options': {**bus.get('options', {}), 'world': world}}
+        if bus.get('interface') == SIM_CAN_DEFAULT else bus
         for name, bus in hardware['buses'].items()
     }
     return config

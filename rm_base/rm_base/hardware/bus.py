@@ -564,6 +564,11 @@ class ManagedBus:
         self._last_error = text
         _log.warning('bus %s: %s', self.name, text)
 
+    @property
+    def frames_sent(self) -> int:
+        """Frames the driver accepted so far (``stats()`` without resetting the load)."""
+        return self._sent
+
     def stats(self) -> BusStats:
         """Counters and the bus load since the previous call."""
         now = self._clock_ns()

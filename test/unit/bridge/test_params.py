@@ -127,6 +127,18 @@ def test_when_sim_expect_every_bus_on_rm_sim_even_without_an_interface():
     assert settings.sim is not None and settings.sim.timing is Timing.REALTIME
 
 
+def test_sim_can_puts_every_bus_and_the_motors_on_that_interface_channels_kept():
+    params = {**YAW, 'buses.can0.channel': 'vcan7', 'buses.can0.interface': 'slcan'}
+    settings = settings_from_parameters({'sim': True, 'sim.can': 'socketcan'}, params)
+    bus = settings.hardware_config.buses[0]
+    assert (bus.interface, bus.channel) == ('socketcan', 'vcan7')
+    assert settings.sim is not None and settings.sim.can == 'socketcan'
+    # with_sim_world leaves it alone: the world reaches it over the kernel, not in-process
+    config = with_sim_world(settings.hardware, object())
+    assert 'world' not in config['buses']['can0'].get('options', {})
+    assert settings_from_parameters({'sim': True}, params).sim.can == 'rm_sim'
+
+
 def test_sim_settings_come_from_sim_groups_and_joint_sim_keys():
     params = {
         **YAW,
