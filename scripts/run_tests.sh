@@ -42,14 +42,15 @@ run -n "$workers" --dist loadfile -m "$(within 'not realtime')" ${args[@]+"${arg
 # The kernel CAN tier (docs/KERNEL_CAN.md), in a guest kernel, for the whole suite only,
 # with RM_KERNEL_TESTS=1 where `make test-kernel` has set the guest up. Between the passes,
 # alone: beside pass 1 the guest (software-emulated) slowed 10-fold and its waits ran out.
-# Not by default yet: about one guest run in three stalls for minutes (under study).
+# Not by default: its ~5 minutes (the robot in lockstep, in the slow guest) would take
+# make test past its 10-minute budget.
 if [ "${RM_KERNEL_TESTS:-0}" != 1 ]; then
   echo '[test] kernel CAN tier not run: `make test-kernel` runs it (RM_KERNEL_TESTS=1: here)'
 elif [ -z "$selection" ] && [ ${#args[@]} -eq 0 ]; then
   if why=$(scripts/kernel_setup.sh --check); then
     echo "[test] the kernel CAN tier, in a guest kernel (make test-kernel)"
     # README's command; bounded, so a guest that stalls cannot hold the suite up
-    KERNEL_TIMEOUT=${KERNEL_TIMEOUT:-600} make --no-print-directory test-kernel
+    KERNEL_TIMEOUT=${KERNEL_TIMEOUT:-900} make --no-print-directory test-kernel
     rc=$?
     [ "$rc" -ne 0 ] && status=$rc
   else
