@@ -4,6 +4,7 @@ docs/KERNEL_CAN.md). On a kernel without AF_CAN they are skipped, saying so."""
 
 from __future__ import annotations
 
+import os
 import socket
 import subprocess
 import uuid
@@ -30,6 +31,23 @@ def pytest_collection_modifyitems(config, items):
     for item in items:
         if '/test/kernel/' in str(item.fspath):
             item.add_marker(skip)
+
+
+def pytest_runtest_logreport(report):
+    """In the guest, a failure is printed as it happens: a guest that stalls later and
+    is cut by its timeout never reaches pytest's summary, and the first failure is
+    the one that explains the rest."""
+    if report.failed and os.environ.get('RM_KERNEL_GUEST'):
+        reporter = _CONFIG[0].pluginmanager.get_plugin('terminalreporter')
+        reporter.write_line(f'\n[kernel] {report.nodeid} failed in {report.when}:')
+        reporter.write_line(report.longreprtext)
+
+
+_CONFIG: list[pytest.Config] = []
+
+
+def pytest_configure(config):
+    _CONFIG.append(config)
 
 
 def ip(*args: str) -> None:
