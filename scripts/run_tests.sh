@@ -42,7 +42,7 @@ run -n "$workers" --dist loadfile -m "$(within 'not realtime')" ${args[@]+"${arg
 # The kernel CAN tier (docs/KERNEL_CAN.md), in a guest kernel, for the whole suite only,
 # with RM_KERNEL_TESTS=1 where `make test-kernel` has set the guest up. Between the passes,
 # alone: beside pass 1 the guest (software-emulated) slowed 10-fold and its waits ran out.
-# Not by default: its ~5 minutes (the robot in lockstep, in the slow guest) would take
+# Not by default: its ~4 minutes (the robot in lockstep, in the slow guest) would take
 # make test past its 10-minute budget.
 if [ "${RM_KERNEL_TESTS:-0}" != 1 ]; then
   echo '[test] kernel CAN tier not run: `make test-kernel` runs it (RM_KERNEL_TESTS=1: here)'
