@@ -511,6 +511,22 @@ class Actuator:
             f'{self.name}: a {self.type_name} has no absolute angle at its output to zero'
         )
 
+    def _zero_at_direct_drive(self) -> float:
+        """The zero as an offset, for a rotor encoder only where it turns with the output.
+
+        Behind a gearbox the rotor's single-turn encoder cannot tell after a restart which
+        output angle it is at, so such a zero would not hold.
+
+        Raises:
+            CommandRejectedError: geared, or no feedback yet.
+        """
+        if self.gear_ratio != 1.0:
+            raise CommandRejectedError(
+                f'{self.name}: its encoder turns {self.gear_ratio:g} times per output turn, '
+                'so a zero would not hold across a restart'
+            )
+        return self._zero_by_offset()
+
     def _zero_by_offset(self) -> float:
         # For an absolute single-turn encoder at the output: the zero is where it reads now,
         # as an angle in [0, 2pi), and the whole turns go so that the position reads 0.

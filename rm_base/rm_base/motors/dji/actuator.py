@@ -26,7 +26,7 @@ from rm_base.config.schema import Schema, integer, number
 from rm_base.geometry.encoder import EncoderUnwrapper
 from rm_base.hardware.actuators.base import Actuator, Defaults, Feedback, JointCommand
 from rm_base.hardware.config import JointConfig, SafetyConfig
-from rm_base.hardware.errors import CommandRejectedError, HardwareConfigError, ValueRangeError
+from rm_base.hardware.errors import HardwareConfigError, ValueRangeError
 from rm_base.motors.dji import protocol as dji
 
 _RPM_TO_RAD_S = dji.RAD_PER_S_PER_RPM
@@ -130,12 +130,7 @@ class DjiActuator(Actuator):
         Raises:
             CommandRejectedError: geared, or no feedback yet.
         """
-        if self.gear_ratio != 1.0:
-            raise CommandRejectedError(
-                f'{self.name}: its encoder turns {self.gear_ratio:g} times per output turn, '
-                'so a zero would not hold across a restart'
-            )
-        return self._zero_by_offset()
+        return self._zero_at_direct_drive()
 
 
 @mypyc_attr(allow_interpreted_subclasses=True)
