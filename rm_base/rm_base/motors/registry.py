@@ -29,6 +29,7 @@ BUILT_IN = {
     'damiao': 'rm_base.motors.damiao.family',
     'cheetah': 'rm_base.motors.cheetah.family',
     'piper': 'rm_base.motors.piper.family',
+    'lk': 'rm_base.motors.lk.family',
 }
 
 

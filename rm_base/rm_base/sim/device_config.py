@@ -24,7 +24,7 @@ MOTOR_SCHEMA = Schema(
     (
         string('type', nonempty=True,
                description='simulated motor type (m3508, m2006, gm6020, dm4310, dm8009, '
-               'cheetah)'),
+               'cheetah, mf9025, mg4010)'),
         integer('id', ge=0, le=STD_ID_MAX,
                 description='ESC id (DJI) or CAN id'),
         string('name', None, nonempty=True,
@@ -33,7 +33,7 @@ MOTOR_SCHEMA = Schema(
         number('initial_velocity', 0.0, unit='rad/s', description='output speed at the start'),
         number('overtemp_c', None, unit='degC',
                description='the driver cuts its output above this winding temperature; '
-               "default the family's (none for DJI and Cheetah, 120 for Damiao)"),
+               "default the family's (none for DJI and Cheetah, 120 for Damiao and LK)"),
     ),
     open=True,
 )
@@ -117,7 +117,8 @@ def check_channel(devices: list[SimDevice]) -> None:
     listened: dict[int, SimDevice] = {}
     for dev in devices:
         for frame_id in dev.listen_ids:
-            if frame_id in sent:
+            # (a device may answer on the id it is asked on, as LK motors do)
+            if frame_id in sent and sent[frame_id] is not dev:
                 raise SimConfigError(
                     f'{dev.name} listens on 0x{frame_id:03X}, where {sent[frame_id].name} sends'
                 )

@@ -72,7 +72,7 @@ def forget_families():
 
 
 def test_every_built_in_joint_type_finds_its_class_and_family():
-    assert list(motors.families()) == ['dji', 'damiao', 'cheetah', 'piper']
+    assert list(motors.families()) == ['dji', 'damiao', 'cheetah', 'piper', 'lk']
     for name, family in motors.families().items():
         for cls in family.actuators:
             assert motors.actuator_class(cls.type_name) is cls
@@ -83,6 +83,8 @@ def test_every_built_in_joint_type_finds_its_class_and_family():
         'dm4310', {'model': 'DM4340'}
     )
     assert motors.families()['piper'].sim is None  # no simulated arm
+    assert motors.family_of('lk').sim.simulated_type(
+        joint(type='lk', current_scale='mg')) == ('mg4010', {})
 
 
 @pytest.mark.parametrize('bad', ['m3509', '', 3, None])
@@ -95,7 +97,7 @@ def test_an_unknown_joint_type_is_refused_with_the_known_ones(bad):
 
 def test_a_family_from_an_entry_point_drives_its_simulated_motor(tmp_path, monkeypatch, channel):
     install(tmp_path, monkeypatch, 'acme = acme_motors:FAMILY\n')
-    assert list(motors.families()) == ['dji', 'damiao', 'cheetah', 'piper', 'acme']
+    assert list(motors.families()) == ['dji', 'damiao', 'cheetah', 'piper', 'lk', 'acme']
     acme_class = motors.actuator_class('acme_mit')
     assert issubclass(acme_class, Cheetah) and acme_class.__module__ == 'acme_motors'
 
