@@ -214,11 +214,13 @@ class LkLockstep(Lockstep):
     """The same, waiting for each LK motor's reply of this step, whatever its kind (a
     status read's reply carries no position)."""
 
+    ticks = 0
+
     def step(self):
         self.now_ns += MS
         self.hw.tick(self.now_ns)
         self.world.step(1)
-        self.ticks = getattr(self, 'ticks', 0) + 1
+        self.ticks += 1
         deadline = time.monotonic() + 10.0
         while not all(a.replies >= self.ticks for a in self.hw.actuators.values()):
             if time.monotonic() > deadline:

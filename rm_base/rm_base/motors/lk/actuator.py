@@ -107,7 +107,6 @@ class LkActuator(Actuator):
             self.command_id = lk.motor_frame_id(config.id)
         except ValueRangeError as err:
             raise HardwareConfigError(f'{where}.id: {err}') from err
-        self.model = model
         self.scale = lk.CURRENT_SCALES[scale]
         bits = options['encoder_bits'] or (model.encoder_bits if model else 16)
         self._unwrapper = EncoderUnwrapper(1 << bits)
@@ -187,10 +186,11 @@ class LkActuator(Actuator):
     def _pack(self) -> can.Message:
         iq = self.iq
         # a read takes the tick's place only when it delays no step to zero output
-        if self._run_due and not (iq == 0 and self._sent_iq != 0):
+        may_read = iq != 0 or self._sent_iq == 0
+        if may_read and self._run_due:
             self._run_due = False
             data = lk.pack_simple(lk.Command.RUN)
-        elif self._status_due and not (iq == 0 and self._sent_iq != 0):
+        elif may_read and self._status_due:
             self._status_due = False
             data = lk.pack_simple(lk.Command.READ_STATUS_1)
         else:
