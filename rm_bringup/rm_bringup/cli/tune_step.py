@@ -197,15 +197,23 @@ class _Params:
 
 
 def _owner(node: Any, executor: Any, joint: str, deadline: float) -> Owner | None:
-    """The plugin that drives joint (from its PluginState), or None if none does."""
+    """The plugin that drives joint (from its PluginState), or None if none does.
+
+    Discovery shows a node's topics one by one, so the first state topic only names the
+    host node; its ``plugins`` parameter says which states to wait for.
+    """
     from rm_base.plugin.base import STATE_QOS
 
     from rm_msgs.msg import PluginState
 
-    topics: list[str] = []
-    while not topics and time.monotonic() < deadline:  # rm_robot, if it runs, shows up
-        topics = [n for n, types in node.get_topic_names_and_types() if _PLUGIN_STATE in types]
+    hosts: set[str] = set()
+    while not hosts and time.monotonic() < deadline:  # rm_robot, if it runs, shows up
+        # /rm_robot/gimbal/state -> /rm_robot
+        hosts = {n.rsplit('/', 2)[0] for n, types in node.get_topic_names_and_types()
+                 if _PLUGIN_STATE in types}
         executor.spin_once(timeout_sec=0.05)
+    topics = [f'{host}/{plugin}/state' for host in sorted(hosts)
+              for plugin in _Params(node, executor, host, deadline).get('plugins') or ()]
     states: dict[str, Any] = {}
     subs = [node.create_subscription(PluginState, topic,
                                      lambda msg, topic=topic: states.__setitem__(topic, msg),
@@ -214,6 +222,9 @@ def _owner(node: Any, executor: Any, joint: str, deadline: float) -> Owner | Non
         executor.spin_once(timeout_sec=0.05)
     for sub in subs:
         node.destroy_subscription(sub)
+    if len(states) < len(topics):
+        missing = ', '.join(sorted(set(topics) - set(states)))
+        raise CliError(f'no state from {missing}: cannot tell who drives {joint!r}')
     for topic, state in sorted(states.items()):
         if joint in state.joints:
             if state.state_name != 'PASSIVE' and state.enabled:
@@ -221,7 +232,6 @@ def _owner(node: Any, executor: Any, joint: str, deadline: float) -> Owner | Non
                     f'joint {joint!r} is driven by plugin {state.plugin!r}, now '
                     f'{state.state_name}: command it PASSIVE first')
             i = list(state.joints).index(joint)
-            # /rm_robot/gimbal/state -> /rm_robot
             return Owner(topic.rsplit('/', 2)[0], state.plugin, state.joint_min[i],
                          state.joint_max[i])
     return None
