@@ -166,6 +166,7 @@ def joint_types() -> list[str]:
 def tables() -> list[str]:
     """The sections of can_bridge's per-bus and per-joint tables, from their schemas."""
     from rm_base.hardware.config import BUS_SCHEMA, JOINT_SCHEMA
+    from rm_base.hardware.supercap import SUPERCAP_SCHEMA
 
     return [
         '### buses.<bus>\n',
@@ -177,6 +178,12 @@ def tables() -> list[str]:
         "Keys beyond these are the options of the joint's type (next section). *none*: "
         "the type's own value (or no log, no PID).\n",
         *markdown_table(JOINT_SCHEMA.declared('joints.<joint>.')),
+        '',
+        '### supercap\n',
+        'The super-capacitor controller (HKUST RM2024, docs/PROTOCOLS.md §8), if the robot '
+        'has one: its bus, and how the chassis spends and refills it '
+        '(docs/ROBOT.md, "Super-capacitor").\n',
+        *markdown_table(SUPERCAP_SCHEMA.declared('supercap.')),
         '',
     ]
 

@@ -114,7 +114,30 @@ class DiagnosticsReporter:
                        for name, stats in hardware['buses'].items()]
         msg.status.append(self._scheduler(hardware['scheduler']))
         msg.status.append(self._commands(commands))
+        if hardware.get('supercap') is not None:
+            msg.status.append(self._supercap(hardware['supercap']))
         return msg
+
+    def _supercap(self, report: Mapping[str, Any]) -> DiagnosticStatus:
+        state = report['state']
+        if state in ('offline', 'fault'):
+            why = f': {report["errors"]}' if report['errors'] else ''
+            level, message = WARN, f'{state}{why}; the chassis keeps to the referee limit'
+        else:
+            level, message = OK, f'{state}, energy {100 * report["energy"]:.0f} %'
+        values = {
+            'state': state,
+            'energy [%]': 100 * report['energy'],
+            'chassis power [W]': report['chassis_power_w'],
+            'board limit [W]': report['board_limit_w'],
+            'referee limit [W]': report['referee_limit_w'],
+            'requested [W]': report['request_w'],
+            'errors': report['errors'],
+            'frames_decoded': report['frames_decoded'],
+            'decode_errors': report['decode_errors'],
+        }
+        return diagnostic_status(f'{self._prefix}supercap', level, message,
+                                 f'{report["bus"]}/supercap', values)
 
     def _joint(self, state: JointState, diag: Mapping[str, Any]) -> DiagnosticStatus:
         hold = diag['hold_reason']

@@ -15,6 +15,8 @@ declarations and the schemas named here:
 ``buses.<bus>.*``               a bus: ``hardware.config.BUS_SCHEMA``
 ``joints.<joint>.*``            a joint: ``hardware.config.JOINT_SCHEMA`` and its family's
                                 options
+``supercap.*``                  the super-capacitor controller:
+                                ``hardware.supercap.SUPERCAP_SCHEMA``
 ``joints.<joint>.sim.*``        simulated-motor overrides (sim only):
                                 ``sim.device_config.MOTOR_SCHEMA``, ``PHYSICS_SCHEMA`` and
                                 the family's ``SimFamily.schema``
@@ -61,7 +63,7 @@ ROS_OWN_PARAMETERS = frozenset({'use_sim_time', 'start_type_description_service'
 ROS_OWN_PREFIXES = ('qos_overrides.',)
 
 #: Prefixes of the open-ended parameter groups (names chosen by the robot config).
-HARDWARE_PREFIXES = ('buses.', 'joints.')
+HARDWARE_PREFIXES = ('buses.', 'joints.', 'supercap.')
 SIM_BODY_PREFIX = 'sim.body.'
 SIM_IMU_PREFIX = 'sim.imu.'
 SIM_REFEREE_PREFIX = 'sim.referee.'
@@ -238,7 +240,7 @@ def settings_from_parameters(
             image_link_flat[name.removeprefix(SIM_IMAGE_LINK_PREFIX)] = value
         else:
             raise BridgeConfigError(
-                f'unknown parameter {name!r}; the bridge takes buses.*, joints.*, '
+                f'unknown parameter {name!r}; the bridge takes buses.*, joints.*, supercap.*, '
                 'scheduler.rate_hz, scheduler.receive_in_loop, scheduler.(edge_)priority, '
                 'scheduler.collect_garbage, safety.*, '
                 'publish_rate, '

@@ -16,8 +16,9 @@ from typing import Any, NamedTuple
 
 from rm_base.bridge.errors import PowerLimitRejectedError
 from rm_base.control import ChassisPowerModel
-from rm_base.errors import ConfigError
+from rm_base.errors import ConfigError, InputRejectedError
 from rm_base.hardware import CanHardware
+from rm_base.hardware.supercap import PowerSupply
 
 
 class PowerLimitRequest(NamedTuple):
@@ -27,6 +28,7 @@ class PowerLimitRequest(NamedTuple):
     joints: tuple[str, ...]
     model: ChassisPowerModel
     limit_w: float
+    supply: PowerSupply
 
 
 def parse_power_limit(msg: Any, known_joints: Collection[str]) -> PowerLimitRequest:
@@ -54,7 +56,12 @@ def parse_power_limit(msg: Any, known_joints: Collection[str]) -> PowerLimitRequ
     limit = float(msg.limit_w)
     if math.isnan(limit) or limit < 0.0:
         raise PowerLimitRejectedError(f'power limit {group!r}: limit_w {limit} (must be >= 0)')
-    return PowerLimitRequest(group, joints, model, limit)
+    try:
+        supply = PowerSupply(float(msg.referee_limit_w), float(msg.buffer_j),
+                             float(msg.request_w))
+    except InputRejectedError as err:
+        raise PowerLimitRejectedError(f'power limit {group!r}: {err}') from err
+    return PowerLimitRequest(group, joints, model, limit, supply)
 
 
 class RemotePowerLimits:
@@ -81,5 +88,6 @@ class RemotePowerLimits:
             if old is not None:
                 self._hardware.remove_power_limit(request.group)
             self._hardware.add_power_limit(request.group, request.joints, request.model)
-        self._hardware.power_limits[request.group].limit_w = request.limit_w
+        stage = self._hardware.power_limits[request.group]
+        stage.limit_w, stage.supply = request.limit_w, request.supply
         self._requests[request.group] = request

@@ -41,6 +41,8 @@ from rm_base.hardware.errors import CommandRejectedError, HardwareConfigError
 from rm_base.hardware.families import GroupBuilder, MotorFamilies
 from rm_base.hardware.power_stage import PowerLimitStage
 from rm_base.hardware.protocols.mit import SystemCommand
+from rm_base.hardware.protocols.supercap import COMMAND_ID as SUPERCAP_COMMAND_ID
+from rm_base.hardware.supercap import Supercap
 from rm_base.joints import JointTarget
 from rm_base.loop.data import JOINT_STATES
 from rm_base.loop.scheduler import Packer, Scheduler
@@ -106,6 +108,10 @@ class CanHardware:
                 grouped.setdefault(family.name, (family.build_groups, []))[1].append(actuator)
         actuators = list(self.actuators.values())
         self.groups = [g for build, members in grouped.values() for g in build(members)]
+        #: The super-capacitor controller, if the config has one.
+        self.supercap = (
+            Supercap(config.supercap, config.rate_hz) if config.supercap is not None else None
+        )
         self._check_ids(own_frames)
         for a in actuators:
             bus = self.buses[a.bus_name]
@@ -122,6 +128,11 @@ class CanHardware:
             (g, self._outgoing[g.bus_name].append) for g in self.groups
         ]
         packers += [(a, self._outgoing[a.bus_name].append) for a in own_frames]
+        if self.supercap is not None:
+            cap_bus = self.buses[self.supercap.bus_name]
+            for fid in self.supercap.feedback_ids():
+                cap_bus.add_handler(fid, self.supercap.handle_frame)
+            packers.append((self.supercap, self._outgoing[self.supercap.bus_name].append))
         self.scheduler = Scheduler(
             actuators,
             packers,
@@ -145,6 +156,8 @@ class CanHardware:
         sent: dict[tuple[str, int], str] = {
             (g.bus_name, g.arbitration_id): g.name for g in self.groups
         }
+        if self.supercap is not None:
+            sent[(self.supercap.bus_name, SUPERCAP_COMMAND_ID)] = 'the supercap'
         replies: dict[tuple[str, str], str] = {}
         for a in own_frames:
             key = (a.bus_name, a.command_id)
@@ -322,6 +335,8 @@ class CanHardware:
         if group in self.power_limits:
             raise HardwareConfigError(f'power limit {group!r}: the group has one already')
         stage = PowerLimitStage(group, [self.actuators[j] for j in joints], model)
+        if self.supercap is not None and self.supercap.config.group == group:
+            stage.supercap = self.supercap
         self.scheduler.add_stage(stage)
         self.power_limits[group] = stage
         return stage
@@ -408,6 +423,8 @@ class CanHardware:
             'scheduler': self.scheduler.stats(),
             'joints': {name: a.diagnostics() for name, a in self.actuators.items()},
             'unknown_joint_commands': self._unknown_joint_commands,
+            'supercap': (self.supercap.report(self._clock_ns())
+                         if self.supercap is not None else None),
         }
 
 

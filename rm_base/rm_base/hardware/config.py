@@ -1,7 +1,8 @@
 """Configuration of the CAN hardware layer, built from plain dicts (YAML, ROS parameters).
 
 The config is ``{'buses': {name: bus}, 'joints': {name: joint} (or a list of joints with a
-'name'), 'scheduler': {...}, 'safety': {...}}``. Each table's keys, with type, unit, bounds,
+'name'), 'scheduler': {...}, 'safety': {...}, 'supercap': {...}}`` (``supercap`` optional:
+``rm_base.hardware.supercap.SUPERCAP_SCHEMA``). Each table's keys, with type, unit, bounds,
 default and description, are declared once below (``BUS_SCHEMA``, ``JOINT_SCHEMA``,
 ``SCHEDULER_SCHEMA``, ``SAFETY_SCHEMA``); the same declarations validate a config (errors
 name the key) and give the tables of docs/PARAMETERS.md. A joint's keys beyond
@@ -24,6 +25,7 @@ from rm_base.config.schema import Key, Schema, boolean, integer, mapping, number
 from rm_base.control import PidConfig, PidGains, pid_config
 from rm_base.errors import ConfigError
 from rm_base.hardware.errors import HardwareConfigError
+from rm_base.hardware.supercap import SupercapConfig, check_bus
 
 _EMPTY: Mapping[str, Any] = MappingProxyType({})
 
@@ -271,6 +273,7 @@ class HardwareConfig:
     receive_in_loop: bool = True
     priority: int = 0
     collect_garbage: bool = True
+    supercap: SupercapConfig | None = None
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> HardwareConfig:
@@ -280,11 +283,11 @@ class HardwareConfig:
             HardwareConfigError: anything missing, unknown or invalid, naming where.
         """
         data = _mapping('config', data)
-        unknown = set(data) - {'buses', 'joints', 'scheduler', 'safety'}
+        unknown = set(data) - {'buses', 'joints', 'scheduler', 'safety', 'supercap'}
         if unknown:
             raise HardwareConfigError(
                 f'config: unknown key(s) {sorted(unknown)}; '
-                'allowed: buses, joints, scheduler, safety'
+                'allowed: buses, joints, scheduler, safety, supercap'
             )
         buses_data = _mapping('buses', data.get('buses'))
         if not buses_data:
@@ -316,7 +319,11 @@ class HardwareConfig:
             'scheduler', data.get('scheduler') or {}, HardwareConfigError
         )
         safety = SafetyConfig.from_dict(data.get('safety'))
+        supercap = None
+        if data.get('supercap') is not None:
+            supercap = SupercapConfig.from_dict(_mapping('supercap', data['supercap']))
+            check_bus(supercap, bus_names)
         return cls(
             buses, joints, scheduler['rate_hz'], safety, scheduler['receive_in_loop'],
-            scheduler['priority'], scheduler['collect_garbage'],
+            scheduler['priority'], scheduler['collect_garbage'], supercap,
         )

@@ -18,6 +18,7 @@ from collections.abc import Sequence
 
 from rm_base.control import ChassisPowerModel, PowerLimitResult, limit_power
 from rm_base.hardware.actuators import Actuator
+from rm_base.hardware.supercap import PowerSupply, Supercap
 from rm_base.loop.data import JOINT_EFFORTS, JOINT_STATES
 
 
@@ -32,6 +33,11 @@ class PowerLimitStage:
     Attributes:
         limit_w: allowed power [W], >= 0; inf (the default) limits nothing.
         last: what the last tick did (scale, efforts, predicted power), None before it.
+        supply: the referee's limit and buffer and a commanded limit, for the
+            super-capacitor (set by the plugin, as ``limit_w``).
+        supercap: the super-capacitor that feeds the group, or None; with one, the limit
+            of a tick is what it allows from ``limit_w`` and ``supply``
+            (rm_base.hardware.supercap).
     """
 
     def __init__(
@@ -45,6 +51,8 @@ class PowerLimitStage:
         self.model = model
         self.limit_w = math.inf
         self.last: PowerLimitResult | None = None
+        self.supply = PowerSupply()
+        self.supercap: Supercap | None = None
         self._actuators = tuple(actuators)
 
     @property
@@ -54,13 +62,17 @@ class PowerLimitStage:
 
     def __call__(self, now_ns: int, dt: float) -> bool:
         """Scale this tick's efforts of the group if they would draw too much."""
+        supercap = self.supercap
+        limit_w = self.limit_w
+        if supercap is not None:  # every tick, also with no effort: it keeps its state
+            limit_w = supercap.allow(limit_w, self.supply, now_ns)
         actuators = self._actuators
         efforts = [a.effort_out for a in actuators]
         if not any(efforts):
             self.last = None
             return False
         speeds = [fb.velocity if (fb := a.feedback) is not None else 0.0 for a in actuators]
-        result = limit_power(self.model, efforts, speeds, self.limit_w)
+        result = limit_power(self.model, efforts, speeds, limit_w)
         if result.scale < 1.0:
             for actuator in actuators:
                 actuator.scale_output(result.scale)

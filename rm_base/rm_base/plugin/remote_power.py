@@ -14,6 +14,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
 from rm_base.control import ChassisPowerModel, PowerLimitResult, estimate_power
 from rm_base.errors import InputRejectedError
+from rm_base.hardware.supercap import PowerSupply
 from rm_base.plugin.joints import JointStateView
 from rm_msgs.msg import PowerLimit
 
@@ -44,6 +45,7 @@ class RemotePowerStage:
         self._model = model
         self._joint_states = joint_states
         self._limit_w = math.inf
+        self._supply = PowerSupply()
         self._publish()
 
     def _publish(self) -> None:
@@ -52,6 +54,8 @@ class RemotePowerStage:
         self._publisher.publish(PowerLimit(
             group=self._group, joints=list(self._joints), k1=model.k1, k2=model.k2,
             static_power_w=model.static_power_w, limit_w=self._limit_w,
+            referee_limit_w=self._supply.referee_limit_w, buffer_j=self._supply.buffer_j,
+            request_w=self._supply.request_w,
         ))
 
     @property
@@ -73,6 +77,17 @@ class RemotePowerStage:
     def limit_w(self, value: float) -> None:
         if value != self._limit_w:
             self._limit_w = float(value)
+            self._publish()
+
+    @property
+    def supply(self) -> PowerSupply:
+        """The referee's numbers for a super-capacitor; new ones go out to the bridge."""
+        return self._supply
+
+    @supply.setter
+    def supply(self, value: PowerSupply) -> None:
+        if value != self._supply:
+            self._supply = value
             self._publish()
 
     @property

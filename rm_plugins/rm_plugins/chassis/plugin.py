@@ -83,6 +83,7 @@ from rm_base.geometry import (
     wrap_to_pi,
     yaw_from_quaternion,
 )
+from rm_base.hardware.supercap import PowerSupply
 from rm_base.joints import JointState
 from rm_base.plugin import JointTarget, LatestMessage, LogThrottle, PluginBase, PluginConfigError
 from rm_base.plugin.commands import stamp_ns_of
@@ -426,9 +427,26 @@ class StandChassis(PluginBase):
         self._report.set_output(
             Twist2D(), [0.0] * count, [0.0] * count,
             self._idle_power(speeds),
-            self._power_limit(now_ns, self._request),
+            self._set_power(now_ns, self._request),
         )
         self._report.speeds = speeds
+
+    def _set_power(self, now_ns: int, request: ChassisRequest | None) -> float:
+        """Hand the power stage this tick's limit and the referee's numbers; the limit.
+
+        A super-capacitor, if the loop has one for the wheels, turns them into its own
+        allowance (rm_base.hardware.supercap); without one the limit is the allowance.
+        """
+        limit = self._power_limit(now_ns, request)
+        stage = self._power_stage
+        stage.limit_w = limit
+        referee_w, buffer_j = (self._referee_power.heard(now_ns)
+                               if self._referee_power is not None else (math.nan, math.nan))
+        commanded = request.power_limit if request is not None else None
+        supply = PowerSupply(referee_w, buffer_j, commanded or 0.0)
+        if supply != stage.supply:
+            stage.supply = supply
+        return limit
 
     def _power_limit(self, now_ns: int, request: ChassisRequest | None) -> float:
         """The power limit for this tick [W].
@@ -505,10 +523,9 @@ class StandChassis(PluginBase):
             yaw_joint=phi, yaw_joint_rate=phi_rate, gimbal_yaw_rate=gimbal_rate,
             heading=self._odometry.pose.yaw,
         )
-        limit = self._power_limit(now_ns, request)
+        limit = self._set_power(now_ns, request)
         joints = self.config.wheel_joints
         stage = self._power_stage
-        stage.limit_w = limit
         targets = {
             joint: JointTarget.with_velocity(target)
             for joint, target in zip(joints, motion.wheel_targets, strict=True)

@@ -45,6 +45,17 @@ class RefereePower:
             with self._lock:
                 self._buffer = buffer
 
+    def heard(self, now_ns: int) -> tuple[float, float]:
+        """(the referee's limit [W], buffer [J]) as last heard; NaN for what is not.
+
+        The buffer counts only while the limit is fresh: both come from one referee.
+        """
+        with self._lock:
+            limit, buffer = self._limit, self._buffer
+        if limit is None or now_ns - limit[1] > self._timeout_ns:
+            return math.nan, math.nan
+        return limit[0], math.nan if buffer is None else buffer
+
     def budget(self, now_ns: int, fallback_w: float) -> float:
         """The power the chassis may draw now [W]; fallback_w while the referee is silent."""
         with self._lock:
