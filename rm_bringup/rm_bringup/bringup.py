@@ -172,7 +172,9 @@ def _main(args: argparse.Namespace, files: list[pathlib.Path], console: Console 
         sim = None
         if args.sim:
             try:
-                sim = SimProcess(files, pathlib.Path(workdir), args.sim_can)
+                # the extra files too: they may add devices or change the simulated ones
+                sim = SimProcess([*files, *args.params_file], pathlib.Path(workdir),
+                                 args.sim_can)
             except ConfigError as err:
                 print(f'[bringup] {err}', file=sys.stderr)
                 return 1
