@@ -96,7 +96,7 @@ def format_status(latest: Mapping[str, Any]) -> str:
         parts.append(_referee_part(referee))
     diagnostics = latest.get('diagnostics')
     if diagnostics:
-        loads, overruns, charge = [], None, {}
+        loads, overruns, charge, cap = [], None, {}, None
         for status in diagnostics.values():
             values = _diag_values(status)
             kind = status.name.split(': ', 1)[-1]  # 'can_bridge: bus can0' -> 'bus can0'
@@ -109,9 +109,13 @@ def format_status(latest: Mapping[str, Any]) -> str:
                     loads.append(f'{name} ?')
             elif kind == 'scheduler':
                 overruns = values.get('overruns')
+            elif kind == 'supercap':
+                cap = _supercap_part(values)
             elif kind == 'command sources':
                 charge = {k.removesuffix(' in charge'): v or '-' for k, v in values.items()
                           if k.endswith(' in charge')}
+        if cap is not None:
+            parts.append(cap)
         if loads:
             parts.append(' '.join(sorted(loads)))
         rate = latest.get('overrun_rate')
@@ -136,6 +140,16 @@ def format_status(latest: Mapping[str, Any]) -> str:
         if hot:
             parts.append('hot ' + ','.join(hot))
     return ' | '.join(parts) if parts else 'waiting for the robot...'
+
+
+def _supercap_part(values: Mapping[str, str]) -> str:
+    """``cap 73% burst``: how full the capacitor is and what it does; ``cap offline``."""
+    state = values.get('state', '?')
+    try:
+        energy = float(values.get('energy [%]', 'nan'))
+    except ValueError:
+        energy = math.nan
+    return f'cap {energy:.0f}% {state}' if math.isfinite(energy) else f'cap {state}'
 
 
 def _pose_part(pose: Any) -> str:

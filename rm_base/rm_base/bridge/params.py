@@ -23,6 +23,8 @@ declarations and the schemas named here:
 ``sim.body.*``                  robot body: ``sim.body_config.BODY_TABLES``
 ``sim.imu.*``                   one IMU: ``sim.imu.IMU_SCHEMA``
 ``sim.referee.*``               the referee system: ``sim.referee.REFEREE_SCHEMA``
+``sim.supercap.*``              the super-capacitor board (with ``supercap.*``):
+                                ``sim.supercap.SUPERCAP_SIM_SCHEMA`` but its channel
 ``sim.remote.*``                the DR16 receiver: ``sim.operator_link.link_schema``
 ``sim.image_link.*``            the image link's keyboard/mouse: the same
 ==============================  =============================================================
@@ -67,6 +69,7 @@ HARDWARE_PREFIXES = ('buses.', 'joints.', 'supercap.')
 SIM_BODY_PREFIX = 'sim.body.'
 SIM_IMU_PREFIX = 'sim.imu.'
 SIM_REFEREE_PREFIX = 'sim.referee.'
+SIM_SUPERCAP_PREFIX = 'sim.supercap.'
 SIM_REMOTE_PREFIX = 'sim.remote.'
 SIM_IMAGE_LINK_PREFIX = 'sim.image_link.'
 _JOINT_SIM_KEY = 'sim'
@@ -88,6 +91,8 @@ class SimSettings:
         body: ``body`` of the world config (nested; empty for none).
         imu: the one IMU's config, or None.
         referee: the simulated referee's config, or None.
+        supercap: the simulated super-capacitor board's settings (nested; empty: the
+            defaults, if the hardware has a supercap).
         remote: the simulated DR16 receiver's config, or None.
         image_link: the simulated image link's config, or None.
         motors: per joint, overrides of its simulated motor (nested).
@@ -101,6 +106,7 @@ class SimSettings:
     referee: Mapping[str, Any] | None = None
     remote: Mapping[str, Any] | None = None
     image_link: Mapping[str, Any] | None = None
+    supercap: Mapping[str, Any] = dataclasses.field(default_factory=dict)
     motors: Mapping[str, Mapping[str, Any]] = dataclasses.field(default_factory=dict)
 
 
@@ -214,6 +220,7 @@ def settings_from_parameters(
     body_flat: dict[str, Any] = {}
     imu_flat: dict[str, Any] = {}
     referee_flat: dict[str, Any] = {}
+    supercap_flat: dict[str, Any] = {}
     remote_flat: dict[str, Any] = {}
     image_link_flat: dict[str, Any] = {}
     for name, value in open_params.items():
@@ -234,6 +241,8 @@ def settings_from_parameters(
             imu_flat[name.removeprefix(SIM_IMU_PREFIX)] = value
         elif name.startswith(SIM_REFEREE_PREFIX):
             referee_flat[name.removeprefix(SIM_REFEREE_PREFIX)] = value
+        elif name.startswith(SIM_SUPERCAP_PREFIX):
+            supercap_flat[name.removeprefix(SIM_SUPERCAP_PREFIX)] = value
         elif name.startswith(SIM_REMOTE_PREFIX):
             remote_flat[name.removeprefix(SIM_REMOTE_PREFIX)] = value
         elif name.startswith(SIM_IMAGE_LINK_PREFIX):
@@ -245,7 +254,8 @@ def settings_from_parameters(
                 'scheduler.collect_garbage, safety.*, '
                 'publish_rate, '
                 'diagnostics_rate, publish_frames, log_file, sim, sim.timing, sim.seed, sim.can, '
-                'sim.body.*, sim.imu.*, sim.referee.*, sim.remote.*, sim.image_link.*'
+                'sim.body.*, sim.imu.*, sim.referee.*, sim.supercap.*, sim.remote.*, '
+                'sim.image_link.*'
             )
     hardware = nest(hardware_flat)
     sim_on = bool(typed.get('sim', False))
@@ -290,6 +300,7 @@ def settings_from_parameters(
             body=nest(body_flat),
             imu=nest(imu_flat) if imu_flat else None,
             referee=nest(referee_flat) if referee_flat else None,
+            supercap=nest(supercap_flat),
             remote=nest(remote_flat) if remote_flat else None,
             image_link=nest(image_link_flat) if image_link_flat else None,
             motors={joint: nest(keys) for joint, keys in motors_flat.items()},

@@ -115,8 +115,8 @@ def world_config(hardware: HardwareConfig, sim: SimSettings) -> dict[str, Any]:
         sim: the simulator settings from the parameters.
 
     Returns:
-        A plain dict: timing, seed, channels, and body / imus / referee / remote /
-        image_link if configured.
+        A plain dict: timing, seed, channels, and body / imus / supercap / referee /
+        remote / image_link if configured.
 
     Raises:
         BridgeConfigError: a joint has no simulated model, or two buses share a channel.
@@ -144,6 +144,12 @@ def world_config(hardware: HardwareConfig, sim: SimSettings) -> dict[str, Any]:
         config['body'] = dict(sim.body)
     if sim.imu is not None:
         config['imus'] = [dict(sim.imu)]
+    if hardware.supercap is not None:  # simulated as the motors are: always, defaults or not
+        if 'channel' in sim.supercap:
+            raise BridgeConfigError('sim.supercap.channel: the board is on supercap.bus')
+        config['supercap'] = {**sim.supercap, 'channel': channel_of_bus[hardware.supercap.bus]}
+    elif sim.supercap:
+        raise BridgeConfigError('sim.supercap.* is set, but there is no supercap.bus')
     if sim.referee is not None:
         config['referee'] = dict(sim.referee)
     if sim.remote is not None:

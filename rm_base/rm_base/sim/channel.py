@@ -37,6 +37,25 @@ class _Endpoint(Protocol):
     def _deliver(self, msg: can.Message) -> None: ...
 
 
+class CanNode(Protocol):
+    """A simulated device on a channel that is not a motor (the super-capacitor board)."""
+
+    @property
+    def listen_ids(self) -> frozenset[int]:
+        """Standard ids of the frames it reads."""
+        ...
+
+    def receive(self, arbitration_id: int, data: bytes, now_ns: int, *,
+                is_extended_id: bool = False, is_remote_frame: bool = False,
+                is_fd: bool = False) -> list[Frame]:
+        """A frame seen on the bus; the frames it answers with."""
+        ...
+
+    def emit(self, now_ns: int) -> list[Frame]:
+        """The frames it sends on its own at this tick."""
+        ...
+
+
 @dataclass
 class ChannelStats:
     """Frame counters of one channel (monotonic).
@@ -98,6 +117,7 @@ class SimChannel:
         name: channel name (``'can0'``).
         world: the world it belongs to.
         devices: the motors on it, in config order.
+        nodes: its other devices (a super-capacitor board), after the motors.
         stats: frame counters.
     """
 
@@ -105,13 +125,14 @@ class SimChannel:
         self.name = name
         self.world = world
         self.devices: list[SimDevice] = []
+        self.nodes: list[CanNode] = []
         self.stats = ChannelStats()
         self._endpoints: list[_Endpoint] = []
         self._state = can.BusState.ACTIVE
         self.closed = False
         # can id -> the devices listening on it, in device order; built for _routed_count
-        # devices (the list only grows, through SimWorld.add_motor)
-        self._routes: dict[int, tuple[SimDevice, ...]] = {}
+        # devices and nodes (the lists only grow, through SimWorld.add_motor / set_supercap)
+        self._routes: dict[int, tuple[SimDevice | CanNode, ...]] = {}
         self._routed_count = 0
         # frames sent while the physics thread held the lock (see send)
         self._handed_over: collections.deque[tuple[_Endpoint | None, can.Message, float | None]] = (
@@ -243,11 +264,11 @@ class SimChannel:
         can_id: int,
         data: bytes,
         replies: list[Frame],
-        source: SimDevice | None = None,
+        source: SimDevice | CanNode | None = None,
         **flags: bool,
     ) -> bool:
         """Hand a frame to every motor (but its sender) listening on its id; collect replies."""
-        if self._routed_count != len(self.devices):
+        if self._routed_count != len(self.devices) + len(self.nodes):
             self._build_routes()
         listeners = self._routes.get(can_id)
         if not listeners:
@@ -261,8 +282,8 @@ class SimChannel:
         return claimed
 
     def _build_routes(self) -> None:
-        routes: dict[int, list[SimDevice]] = {}
-        devices = list(self.devices)
+        routes: dict[int, list[SimDevice | CanNode]] = {}
+        devices = [*self.devices, *self.nodes]
         for device in devices:
             for can_id in device.listen_ids:
                 routes.setdefault(can_id, []).append(device)
@@ -303,8 +324,8 @@ class SimChannel:
                         endpoint._deliver(msg)
 
     def _emit(self, now_ns: int) -> None:
-        sent: list[tuple[SimDevice, Frame]] = []
-        for device in self.devices:
+        sent: list[tuple[SimDevice | CanNode, Frame]] = []
+        for device in (*self.devices, *self.nodes) if self.nodes else self.devices:
             frames = device.emit(now_ns)
             if frames:
                 sent += [(device, frame) for frame in frames]

@@ -31,6 +31,7 @@ from rm_base.hardware.protocols.referee import (
 from rm_base.sim.launcher import Launcher, Shot
 from rm_base.sim.pty_port import PtyPort
 from rm_base.sim.referee_rules import STEP_NS, Outputs, RefereeRules, RefereeSettings
+from rm_base.sim.supercap import SimSupercap
 from rm_base.sim_devices.device import SimDevice
 from rm_base.sim_devices.errors import SimConfigError
 
@@ -79,6 +80,9 @@ class SimReferee:
         self.rules = RefereeRules(settings)
         self.launcher = launcher
         self.plugged = True
+        #: A super-capacitor board between the chassis output and the wheels, if any
+        #: (rm_base.sim.supercap): the referee then measures its input.
+        self.supply: SimSupercap | None = None
         self._ports: dict[str, tuple[SimDevice, ...]] = {
             'chassis': tuple(chassis),
             'gimbal': tuple(gimbal),
@@ -119,10 +123,14 @@ class SimReferee:
 
         Called by the world after the motors stepped, with the projectiles of this tick.
         """
-        power = 0.0
-        for device in self._ports['chassis']:
-            if device.powered:
-                power += device.model.electrical_power
+        supply = self.supply
+        if supply is not None:  # a super-capacitor board: what it draws
+            power = supply.input_power_w
+        else:
+            power = 0.0
+            for device in self._ports['chassis']:
+                if device.powered:
+                    power += device.model.electrical_power
         self._energy_j += max(0.0, power) * dt
         if not shots and now_ns < self._next_step_ns:
             return []  # most ticks: the rules (and so the outputs) only change on these

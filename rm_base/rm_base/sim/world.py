@@ -41,6 +41,7 @@ from rm_base.sim.imu import SimImu
 from rm_base.sim.referee import SimReferee
 from rm_base.sim.remote import SimRemote
 from rm_base.sim.serial_devices import SerialDevice, SerialDevices
+from rm_base.sim.supercap import SimSupercap, supercap_from_config
 from rm_base.sim_devices.device import SimDevice
 from rm_base.sim_devices.errors import SimConfigError, SimLookupError, SimStateError
 from rm_base.sim_devices.faults import Fault, FaultKind
@@ -132,6 +133,8 @@ class SimWorld:
         self._epoch = time.time()
         self._channels: dict[str, SimChannel] = {}
         self._devices: dict[str, SimDevice] = {}
+        #: The super-capacitor board, if the world has one (:meth:`set_supercap`).
+        self.supercap: SimSupercap | None = None
         self._device_channel: dict[str, SimChannel] = {}
         self._thread: threading.Thread | None = None
         self._stop = threading.Event()
@@ -156,6 +159,7 @@ class SimWorld:
             body: {...}                 # see rm_base.sim.body_config.body_from_config
             imus: [{path: '/tmp/rm_sim_${ROS_DOMAIN_ID}/imu', mount: gimbal, rate_hz: 100}]
             referee: {path: '/tmp/rm_sim_${ROS_DOMAIN_ID}/referee', chassis_power_limit: 60}
+            supercap: {channel: can0, capacity_j: 2000}   # rm_base.sim.supercap
             remote: {path: '/tmp/rm_sim_${ROS_DOMAIN_ID}/dr16'}
             image_link: {path: '/tmp/rm_sim_${ROS_DOMAIN_ID}/image_link'}
 
@@ -171,7 +175,7 @@ class SimWorld:
         config = load_config(config)
         allowed = {
             'timing', 'tick_rate_hz', 'seed', 'channels', 'body', 'imus', 'referee', 'remote',
-            'image_link',
+            'image_link', 'supercap',
         }
         unknown = sorted(set(config) - allowed)
         if unknown:
@@ -194,6 +198,8 @@ class SimWorld:
                 raise SimConfigError(f'imus must be a list, got {imus!r}')
             for imu in imus:
                 world.add_imu(imu)
+            if 'supercap' in config:
+                world.set_supercap(config['supercap'])
             if 'referee' in config:
                 world.set_referee(config['referee'])
             if 'remote' in config:
@@ -278,11 +284,38 @@ class SimWorld:
     def set_referee(self, config: Mapping[str, Any]) -> SimReferee:
         """Create the referee system, judging the body set before.
 
-        See :meth:`rm_base.sim.serial_devices.SerialDevices.set_referee`.
+        See :meth:`rm_base.sim.serial_devices.SerialDevices.set_referee`; with a
+        super-capacitor board, the referee measures what the board draws.
         """
         with self.lock:
             self._check_open()
-            return self.serial.set_referee(config, self.body)
+            referee = self.serial.set_referee(config, self.body)
+            referee.supply = self.supercap
+            return referee
+
+    def set_supercap(self, config: Mapping[str, Any]) -> SimSupercap:
+        """Put the super-capacitor board (:mod:`rm_base.sim.supercap`) on a channel.
+
+        It feeds the body's wheels, so the body comes first.
+
+        Raises:
+            SimConfigError: invalid config, or the body has no chassis.
+            SimLookupError: no such channel.
+            SimStateError: the world has a board already.
+        """
+        with self.lock:
+            self._check_open()
+            if self.supercap is not None:
+                raise SimStateError('the world has a super-capacitor board already')
+            chassis = self.body.chassis
+            if chassis is None:
+                raise SimConfigError('a super-capacitor feeds the chassis: the body has none')
+            cap = supercap_from_config(config, chassis.motors)
+            self.channel(cap.channel).nodes.append(cap)
+            self.supercap = cap
+            if self.serial.referee is not None:
+                self.serial.referee.supply = cap
+            return cap
 
     def set_remote(self, config: Mapping[str, Any]) -> SimRemote:
         """Create the DR16 receiver (:class:`~rm_base.sim.remote.SimRemote`) from ``{path}``."""
@@ -469,6 +502,8 @@ class SimWorld:
             device.step(dt, body.yaw_acceleration)
         body.apply_end_stops()
         self.time_ns = now = now + self.period_ns
+        if self.supercap is not None:
+            self.supercap.step(now, dt)
         for channel in self._channels.values():
             channel._emit(now)
         # a device's counter runs on real time while the physics runs in real time

@@ -226,3 +226,24 @@ def test_commands_warn_about_new_rejections():
     assert v['rejected'] == '2'
     assert v['rejected non_finite'] == '2'
     assert v['last_rejection'] == 'non_finite: fl: velocity is nan'
+
+
+def test_the_supercap_is_a_status_of_its_own_and_warns_when_the_chassis_falls_back():
+    from rm_base.hardware.supercap import CapState, PowerSupply, Supercap, SupercapConfig
+
+    cap = Supercap(SupercapConfig(bus='can0'), 1000.0)
+    state = JointState('wheel', 0.0, 0.0, 0.0, 40.0, True, 0, 0, 0.0)
+    hardware = {'joints': {'wheel': joint_diag('none')}, 'buses': {'can0': bus_stats()},
+                'scheduler': scheduler_stats(), 'supercap': cap.report(0)}
+    reporter = DiagnosticsReporter('can_bridge')
+    status = {s.name: s for s in reporter.build(hardware, [state], CommandStats(),
+                                                time_msg(0)).status}['can_bridge: supercap']
+    assert (status.level, status.message) == (
+        WARN, 'offline; the chassis keeps to the referee limit')
+    assert status.hardware_id == 'can0/supercap'
+    assert values(status)['state'] == CapState.OFFLINE.value
+    cap.allow(70.0, PowerSupply(referee_limit_w=80.0), 0)
+    hardware['supercap'] = cap.report(0)
+    status = {s.name: s for s in reporter.build(hardware, [state], CommandStats(),
+                                                time_msg(0)).status}['can_bridge: supercap']
+    assert values(status)['referee limit [W]'] == '80'

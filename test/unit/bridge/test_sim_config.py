@@ -141,3 +141,22 @@ def test_when_two_buses_share_a_channel_expect_error():
     )
     with pytest.raises(BridgeConfigError, match="both 'x'"):
         world_config(hw, SimSettings())
+
+
+def test_a_supercap_is_simulated_on_its_bus_channel_with_the_sim_keys():
+    hardware = HardwareConfig.from_dict({
+        'buses': {'can0': {'interface': 'virtual', 'channel': 'chassis_bus'}},
+        'joints': {'w': {'type': 'm3508', 'bus': 'can0', 'id': 1}},
+        'supercap': {'bus': 'can0'},
+    })
+    config = world_config(hardware, SimSettings(supercap={'capacity_j': 500.0}))
+    assert config['supercap'] == {'capacity_j': 500.0, 'channel': 'chassis_bus'}
+    assert world_config(hardware, SimSettings())['supercap'] == {'channel': 'chassis_bus'}
+    with pytest.raises(BridgeConfigError, match=r'the board is on supercap\.bus'):
+        world_config(hardware, SimSettings(supercap={'channel': 'other'}))
+    plain = HardwareConfig.from_dict({
+        'buses': {'can0': {'interface': 'virtual'}},
+        'joints': {'w': {'type': 'm3508', 'bus': 'can0', 'id': 1}},
+    })
+    with pytest.raises(BridgeConfigError, match=r'sim\.supercap\.\* is set, but there is no'):
+        world_config(plain, SimSettings(supercap={'capacity_j': 500.0}))

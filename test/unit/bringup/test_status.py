@@ -114,3 +114,13 @@ def test_the_pose_follows_the_chassis_and_the_referee_part_says_hp_and_cuts():
     whole = RefereeRobotStatus(hp=200, max_hp=200, gimbal_power=True, chassis_power=True,
                                shooter_power=True)
     assert format_status({'referee': whole, 'diagnostics': {}}) == 'hp 200/200'
+
+
+def test_the_supercap_shows_how_full_it_is_and_what_it_does_or_that_it_is_offline():
+    def line(values):
+        status = _status('can_bridge: supercap', values)
+        return format_status({'diagnostics': {status.name: status}})
+
+    assert line({'state': 'burst', 'energy [%]': 73.4}) == 'cap 73% burst'
+    assert line({'state': 'offline', 'energy [%]': math.nan}) == 'cap offline'
+    assert line({'state': 'fault', 'energy [%]': 'unknown'}) == 'cap fault'
