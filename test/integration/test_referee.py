@@ -6,6 +6,7 @@ between, and watches the plugin's topics only.
 """
 
 import math
+import os
 
 import pytest
 from diagnostic_msgs.msg import DiagnosticArray
@@ -22,6 +23,7 @@ from support.serial_port import Pty
 from rm_msgs.msg import (
     PluginState,
     RefereeGameStatus,
+    RefereeInteraction,
     RefereeKeyboardMouse,
     RefereePowerHeat,
     RefereeRobotStatus,
@@ -159,3 +161,29 @@ def _keyboard_and_mouse(h, pty):
     assert wait_until(lambda: sent(V1), WAIT)  # A9 53: mouse (-7, 15, 0), left, CTRL + F
     k = h.keyboard[-1]
     assert (k.mouse_x, k.mouse_y, k.left, k.keys) == (-7, 15, True, 0x0220)
+
+
+def test_interaction_content_goes_out_on_the_port_paced_once_the_robot_id_is_known(rig):
+    h, pty = rig
+    os.set_blocking(pty.master, False)
+    publisher = h.probe.create_publisher(RefereeInteraction, '/referee/interaction', 10)
+    assert wait_until(lambda: publisher.get_subscription_count() > 0, WAIT)
+    content_id, content = ref.drawing([ref.circle(b'CIR', (960, 540), 30)])
+    for _ in range(3):
+        publisher.publish(RefereeInteraction(content_id=content_id, content=list(content)))
+    pty.write(F2)  # robot status: robot 3
+    parser = ref.FrameParser()
+    frames = []
+
+    def read():
+        try:
+            frames.extend(f for f in parser.feed(os.read(pty.master, 4096)) if f.cmd_id == 0x0301)
+        except BlockingIOError:
+            pass
+        return len(frames) >= 3
+
+    assert wait_until(read, WAIT)
+    sent = ref.decode_interaction(frames[0].data)
+    assert (sent.content_id, sent.sender_id, sent.receiver_id) == (0x0101, 3, 0x0103)
+    assert ref.decode_drawing(sent.content_id, sent.content)[0][0].name == b'CIR'
+    assert wait_until(lambda: (h.status() or {}).get('0x0301 sent') == '3', WAIT), h.status()

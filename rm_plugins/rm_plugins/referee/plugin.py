@@ -21,11 +21,13 @@ docs/PROTOCOLS.md §6.
 
 from __future__ import annotations
 
+import dataclasses
 import threading
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.time import Time
+from rm_base.errors import InputRejectedError
 from rm_base.hardware.protocols.referee import (
     FrameParser,
     ProtocolVersion,
@@ -33,8 +35,10 @@ from rm_base.hardware.protocols.referee import (
     RobotStatus,
     StatusDecoder,
 )
-from rm_base.plugin import PluginBase
+from rm_base.plugin import LogThrottle, PluginBase
 
+from rm_msgs.msg import RefereeInteraction
+from rm_plugins.referee.interaction import InteractionLink
 from rm_plugins.referee.messages import TOPICS
 from rm_plugins.referee.power_watch import PowerWatch
 from rm_plugins.serial.device import DeviceLink, LinkState, link_status, read_serial_settings
@@ -88,6 +92,18 @@ class Referee(PluginBase):
             name='referee',
         )
         self.reader = self._link.reader
+        # what the robot sends: 0x0301 content from referee/interaction (the client UI)
+        self._interaction = InteractionLink(
+            p.double('interaction.bandwidth', 3720.0, unit='B/s', gt=0.0,
+                     description='most bytes a second of 0x0301 frames (the rules: 3720)'),
+            p.double('interaction.max_hz', 10.0, unit='Hz', gt=0.0, le=30.0,
+                     description='most 0x0301 frames a second (the rules: 30; 10 in older '
+                     'tables)'),
+        )
+        self._robot_id: int | None = None
+        self._write_failures = 0
+        self._refusals = LogThrottle(5 * _NS_PER_S)
+        self.subscribe('referee/interaction', RefereeInteraction, self._on_interaction, 10)
 
     def on_enable(self) -> None:
         """Start the reader (its thread opens the port)."""
@@ -98,10 +114,14 @@ class Referee(PluginBase):
         self._link.stop()
 
     def update(self, now: Time, dt: float) -> None:
-        """Decide the link state; publish /diagnostics when due."""
+        """Decide the link state; send a 0x0301 frame when due; /diagnostics when due."""
         now_ns = now.nanoseconds
         state, reason, stats = self._link.decide(now_ns)
         self.transition(state, reason)
+        with self._lock:
+            frame = self._interaction.take(self._robot_id, now_ns)
+        if frame is not None and not self.reader.write(frame):
+            self._write_failures += 1
         if self._next_diagnostics_ns is None or now_ns >= self._next_diagnostics_ns:
             self._next_diagnostics_ns = now_ns + round(
                 self._settings.diagnostics_period * _NS_PER_S
@@ -115,6 +135,7 @@ class Referee(PluginBase):
             record = self._decoder.decode(frame)
         self._link.received(now.nanoseconds)
         if isinstance(record, RobotStatus):
+            self._robot_id = record.robot_id
             said = self._power_watch.note(record)
             if said is not None:
                 self.logger.warning(said)
@@ -127,6 +148,16 @@ class Referee(PluginBase):
         publisher.publish(msg)
         with self._lock:
             self._published += 1
+
+    def _on_interaction(self, msg: RefereeInteraction, receive_ns: int) -> None:
+        """Queue 0x0301 content to send (the subscription's thread)."""
+        try:
+            with self._lock:
+                self._interaction.offer(msg.content_id, msg.receiver_id, bytes(msg.content))
+        except InputRejectedError as err:
+            tail = self._refusals.due(receive_ns)
+            if tail is not None:
+                self.logger.warning(f'referee/interaction refused: {err}{tail}')
 
     def _publish_diagnostics(self, now: Time, stats: Any) -> None:
         decoder = self._decoder
@@ -146,12 +177,23 @@ class Referee(PluginBase):
                 'wrong_length': _counts(wrong),
                 'ignored': _counts(ignored),
                 'rejected': _counts(rejected),
+                **self._interaction_values(),
             },
         )
         msg = DiagnosticArray()
         msg.header.stamp = now.to_msg()
         msg.status = [status]
         self._diagnostics.publish(msg)
+
+
+    def _interaction_values(self) -> dict[str, Any]:
+        with self._lock:
+            sent = dataclasses.replace(self._interaction.stats)
+        return {
+            '0x0301 sent': sent.sent, '0x0301 bytes': sent.bytes_sent,
+            '0x0301 dropped (queue full)': sent.dropped, '0x0301 refused': sent.refused,
+            '0x0301 write failures': self._write_failures,
+        }
 
 
 def _counts(counter: Any) -> str:

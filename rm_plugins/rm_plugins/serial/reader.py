@@ -275,6 +275,28 @@ class SerialReader:
         finally:
             self._port_lock.release()
 
+    def write(self, data: bytes) -> bool:
+        """Write data to the port without blocking; False if it is not open, busy or full.
+
+        The port's output buffer full (nobody reads the other end) is a failed write, never
+        a wait: the caller is the control loop. A descriptor that never blocks (a tty, a
+        pty) is written directly: pyserial's own write with ``write_timeout=0`` spins
+        while the buffer stays full.
+        """
+        if self._port is None or not self._port_lock.acquire(blocking=False):
+            return False
+        try:
+            port = self._port
+            if port is None:
+                return False
+            fd = nonblocking_descriptor(port)
+            written = os.write(fd, data) if fd is not None else port.write(data)
+            return bool(written == len(data))
+        except (serial.SerialException, OSError, TypeError, ValueError, termios.error):
+            return False  # BlockingIOError (the buffer full) among them
+        finally:
+            self._port_lock.release()
+
     @property
     def running(self) -> bool:
         """Whether the reader thread is alive."""

@@ -286,3 +286,38 @@ def test_a_record_the_version_cannot_carry_is_refused():
         ref.encode_status(ref.PowerHeat(1.0, 70000, 0), V.V2026)
     with pytest.raises(TypeError, match='not a referee status record'):
         ref.encode_status(object(), V.V2026)
+
+
+def test_a_text_figure_carries_its_characters_in_30_bytes():
+    figure = ref.text_figure(b'MOD', (100, 800), 4, font_size=24, layer=2)
+    data = ref.draw_text(3, figure, 'GYRO')
+    assert data[:6] == bytes.fromhex('1001 0300 0301')  # 0x0110, sender 3 -> client 0x0103
+    assert len(data) == 6 + 15 + 30 and data[-30:] == b'GYRO' + bytes(26)
+    parsed = ref.decode_interaction(data)
+    assert ref.decode_drawing(parsed.content_id, parsed.content) == ([figure], 'GYRO')
+    with pytest.raises(ValueRangeError, match='> 30'):
+        ref.draw_text(3, figure, 'X' * 31)
+    with pytest.raises(ValueRangeError, match='not a TEXT'):
+        ref.draw_text(3, ref.line(b'ABC', (0, 0), (1, 1)), 'A')
+
+
+def test_the_reference_line_decodes_back_to_its_figure_and_padding_is_left_out():
+    figure = ref.line(b'AB1', (960, 540), (1160, 540), layer=1, color=ref.Color.GREEN, width=3)
+    parsed = ref.decode_interaction(ref.decode_frame(F7).data)
+    assert (parsed.content_id, parsed.sender_id, parsed.receiver_id) == (0x0101, 3, 0x0103)
+    assert ref.decode_drawing(parsed.content_id, parsed.content) == ([figure], None)
+    three = [ref.circle(b'CR%d' % i, (100 * i, 100), 10 + i) for i in range(3)]
+    parsed = ref.decode_interaction(ref.draw(103, three))
+    assert ref.decode_drawing(parsed.content_id, parsed.content) == (three, None)
+    number = ref.number(b'PWR', (50, 900), 12.345, op=ref.FigureOp.MODIFY)
+    assert ref.decode_figure(ref.encode_figure(number)) == number
+
+
+@pytest.mark.parametrize(('content_id', 'content', 'match'), [
+    (0x0102, bytes(15), '0x0102 content of 15 bytes'),
+    (0x0200, bytes(15), 'not a drawing command'),
+    (0x0110, bytes(40), '0x0110 content of 40 bytes'),
+])
+def test_a_drawing_of_the_wrong_shape_is_refused(content_id, content, match):
+    with pytest.raises(ValueRangeError, match=match):
+        ref.decode_drawing(content_id, content)

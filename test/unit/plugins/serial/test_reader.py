@@ -1,6 +1,7 @@
 """SerialReader on real pseudo-terminals and pyserial's loop://: frames, garbage, port loss."""
 
 import math
+import os
 import threading
 
 import pytest
@@ -360,3 +361,17 @@ def test_a_device_with_parity_on_a_pseudo_terminal_is_reopened_without_it(tmp_pa
             port.close()
     finally:
         pty.close()
+
+
+def test_write_reaches_the_device_and_never_blocks_on_a_full_buffer(tmp_path, reader_factory):
+    port = Pty(str(tmp_path / 'referee'))
+    reader = reader_factory(port.path, Collector())
+    assert not reader.write(b'early')  # not open yet: refused, not queued
+    reader.start()
+    assert wait(lambda: reader.stats().port_open)
+    assert reader.write(b'\xa5hello')
+    assert wait(lambda: os.read(port.master, 64) == b'\xa5hello')
+    # nobody reads the device side now: the buffer fills, and writes fail at once
+    results = [reader.write(bytes(1000)) for _ in range(200)]
+    assert not all(results) and results[-1] is False
+    port.close()

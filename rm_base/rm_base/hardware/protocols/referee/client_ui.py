@@ -20,6 +20,8 @@ MAX_CONTENT_LENGTH = 112
 CLIENT_ID_BASE = 0x0100
 SERVER_ID = 0x8080
 DELETE_FIGURES = 0x0100
+DRAW_TEXT = 0x0110
+TEXT_LENGTH = 30
 #: Figures per drawing command: 0x0101 draws 1, 0x0102 2, 0x0103 5, 0x0104 7.
 DRAW_COMMANDS = ((1, 0x0101), (2, 0x0102), (5, 0x0103), (7, 0x0104))
 FIGURE_LENGTH = 15
@@ -127,6 +129,39 @@ def number(
                   details_e=raw >> 21)
 
 
+def text_figure(
+    name: bytes, at: tuple[int, int], length: int, *, font_size: int = 20, layer: int = 0,
+    color: Color = Color.TEAM, width: int = 2, op: FigureOp = FigureOp.ADD,
+) -> Figure:
+    """The figure of a text of length characters (its characters go in :func:`draw_text`)."""
+    return Figure(name, op, FigureType.TEXT, layer, color, at[0], at[1], width,
+                  details_a=font_size, details_b=length)
+
+
+def text_drawing(figure: Figure, text: str) -> tuple[int, bytes]:
+    """(content id, content) of one text figure: 0x0110, the figure, 30 bytes of text.
+
+    Raises:
+        ValueRangeError: not a text figure, a text of more than 30 ASCII characters, or a
+            figure that does not encode.
+    """
+    if figure.type is not FigureType.TEXT:
+        raise ValueRangeError(f'figure {figure.name!r} is a {figure.type.name}, not a TEXT')
+    try:
+        chars = text.encode('ascii')
+    except UnicodeEncodeError:
+        raise ValueRangeError(f'text {text!r} is not ASCII') from None
+    if len(chars) > TEXT_LENGTH:
+        raise ValueRangeError(f'text of {len(chars)} characters > {TEXT_LENGTH}')
+    return DRAW_TEXT, encode_figure(figure) + chars.ljust(TEXT_LENGTH, b'\0')
+
+
+def draw_text(robot_id: int, figure: Figure, text: str) -> bytes:
+    """The 0x0301 data of one text figure on the robot's client (see :func:`text_drawing`)."""
+    content_id, content = text_drawing(figure, text)
+    return interaction(content_id, robot_id, client_id(robot_id), content)
+
+
 _FIELD_BITS = (
     ('layer', 4), ('color', 4), ('details_a', 9), ('details_b', 9), ('width', 10),
     ('x', 11), ('y', 11), ('details_c', 10), ('details_d', 11), ('details_e', 11),
@@ -175,8 +210,8 @@ def interaction(content_id: int, sender_id: int, receiver_id: int, content: byte
     return _SUB_HEADER.pack(content_id, sender_id, receiver_id) + bytes(content)
 
 
-def draw(robot_id: int, figures: Sequence[Figure]) -> bytes:
-    """The 0x0301 data drawing up to 7 figures on the robot's client (padded with no-ops).
+def drawing(figures: Sequence[Figure]) -> tuple[int, bytes]:
+    """(content id, content) drawing up to 7 figures (padded with no-op figures).
 
     Raises:
         ValueRangeError: no figure or more than 7, or a figure that does not encode.
@@ -187,11 +222,88 @@ def draw(robot_id: int, figures: Sequence[Figure]) -> bytes:
         raise ValueRangeError(f'a drawing command carries 1 to 7 figures, got {count}')
     size, content_id = slots
     content = b''.join(encode_figure(f) for f in figures) + bytes(FIGURE_LENGTH * (size - count))
+    return content_id, content
+
+
+def draw(robot_id: int, figures: Sequence[Figure]) -> bytes:
+    """The 0x0301 data drawing up to 7 figures on the robot's client (see :func:`drawing`)."""
+    content_id, content = drawing(figures)
     return interaction(content_id, robot_id, client_id(robot_id), content)
+
+
+def deletion(op: DeleteOp, layer: int = 0) -> tuple[int, bytes]:
+    """(content id, content) deleting one layer (0-9) or every figure."""
+    if not 0 <= layer <= 9:
+        raise ValueRangeError(f'UI layer must be 0..9, got {layer}')
+    return DELETE_FIGURES, bytes((op, layer))
 
 
 def delete(robot_id: int, op: DeleteOp, layer: int = 0) -> bytes:
     """The 0x0301 data deleting one layer (0-9) or every figure of the robot's client."""
-    if not 0 <= layer <= 9:
-        raise ValueRangeError(f'UI layer must be 0..9, got {layer}')
-    return interaction(DELETE_FIGURES, robot_id, client_id(robot_id), bytes((op, layer)))
+    content_id, content = deletion(op, layer)
+    return interaction(content_id, robot_id, client_id(robot_id), content)
+
+
+def decode_figure(data: bytes) -> Figure:
+    """One figure from its 15 bytes (the inverse of :func:`encode_figure`).
+
+    Raises:
+        ValueRangeError: not 15 bytes, or an operation, type or colour that does not exist.
+    """
+    if len(data) != FIGURE_LENGTH:
+        raise ValueRangeError(f'a figure is {FIGURE_LENGTH} bytes, got {len(data)}')
+    word1, word2, word3 = struct.unpack('<III', data[3:])
+    try:
+        op, kind, color = FigureOp(word1 & 7), FigureType(word1 >> 3 & 7), Color(word1 >> 10 & 15)
+    except ValueError as err:
+        raise ValueRangeError(f'figure {bytes(data[:3])!r}: {err}') from None
+    return Figure(
+        bytes(data[:3]), op, kind, word1 >> 6 & 15, color, word2 >> 10 & 0x7FF,
+        word2 >> 21, word2 & 0x3FF, word1 >> 14 & 0x1FF, word1 >> 23, word3 & 0x3FF,
+        word3 >> 10 & 0x7FF, word3 >> 21,
+    )
+
+
+@dataclass(frozen=True)
+class Interaction:
+    """One 0x0301 frame's data, as the referee reads it."""
+
+    content_id: int
+    sender_id: int
+    receiver_id: int
+    content: bytes
+
+
+def decode_interaction(data: bytes) -> Interaction:
+    """The sub-header and content of 0x0301 data.
+
+    Raises:
+        ValueRangeError: shorter than the sub-header, or content beyond 112 bytes.
+    """
+    if not _SUB_HEADER.size <= len(data) <= _SUB_HEADER.size + MAX_CONTENT_LENGTH:
+        raise ValueRangeError(f'0x0301 data of {len(data)} bytes')
+    content_id, sender, receiver = _SUB_HEADER.unpack_from(data)
+    return Interaction(content_id, sender, receiver, bytes(data[_SUB_HEADER.size:]))
+
+
+def decode_drawing(content_id: int, content: bytes) -> tuple[list[Figure], str | None]:
+    """The figures of a drawing command (0x0101-0x0104, 0x0110) and a text's characters.
+
+    No-op figures (padding) are left out.
+
+    Raises:
+        ValueRangeError: not a drawing command, or content of the wrong length.
+    """
+    if content_id == DRAW_TEXT:
+        if len(content) != FIGURE_LENGTH + TEXT_LENGTH:
+            raise ValueRangeError(f'0x0110 content of {len(content)} bytes')
+        chars = content[FIGURE_LENGTH:].rstrip(b'\0').decode('ascii', 'replace')
+        return [decode_figure(content[:FIGURE_LENGTH])], chars
+    size = next((n for n, cmd in DRAW_COMMANDS if cmd == content_id), None)
+    if size is None:
+        raise ValueRangeError(f'0x{content_id:04X} is not a drawing command')
+    if len(content) != size * FIGURE_LENGTH:
+        raise ValueRangeError(f'0x{content_id:04X} content of {len(content)} bytes')
+    figures = [decode_figure(content[i:i + FIGURE_LENGTH])
+               for i in range(0, len(content), FIGURE_LENGTH)]
+    return [f for f in figures if f.op is not FigureOp.NONE], None
