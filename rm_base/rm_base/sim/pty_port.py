@@ -92,6 +92,22 @@ class PtyPort:
                 return
             self._write(data)
 
+    def read(self) -> bytes:
+        """What the other end wrote since the last call, without blocking; b'' if none."""
+        with self._io_lock:
+            if self._closed:
+                return b''
+            chunks = []
+            while True:
+                try:
+                    chunk = os.read(self._master, 4096)
+                except (BlockingIOError, OSError):  # nothing waits; EIO: nobody has it open
+                    break
+                if not chunk:
+                    break
+                chunks.append(chunk)
+            return b''.join(chunks)
+
     def _write(self, data: bytes) -> None:
         for attempt in range(2):
             try:

@@ -22,6 +22,7 @@ from typing import Any
 
 from rm_base.config.schema import Schema, integer, number, one_of, string
 from rm_base.hardware.protocols.referee import (
+    FrameParser,
     GameProgress,
     GameStatus,
     ProtocolVersion,
@@ -30,6 +31,7 @@ from rm_base.hardware.protocols.referee import (
 )
 from rm_base.sim.launcher import Launcher, Shot
 from rm_base.sim.pty_port import PtyPort
+from rm_base.sim.referee_client import INTERACTION_CMD_ID, SimClient
 from rm_base.sim.referee_rules import STEP_NS, Outputs, RefereeRules, RefereeSettings
 from rm_base.sim.supercap import SimSupercap
 from rm_base.sim_devices.device import SimDevice
@@ -95,6 +97,9 @@ class SimReferee:
         self._next_step_ns = STEP_NS
         self._seq = 0
         self._outputs = Outputs()
+        #: The robot's operator client, drawn on through 0x0301 (rm_base.sim.referee_client).
+        self.client = SimClient(settings.robot_id)
+        self._parser = FrameParser()
         self.port = PtyPort(path, name)
 
     @property
@@ -118,11 +123,22 @@ class SimReferee:
         self.rules.revive()
         self._switch_outputs()
 
+    def receive(self, data: bytes, now_ns: int) -> None:
+        """Bytes the robot sent: its 0x0301 frames go to the client; others are ignored."""
+        for frame in self._parser.feed(data):
+            if frame.cmd_id == INTERACTION_CMD_ID:
+                self.client.on_frame(frame, now_ns)
+
     def tick(self, now_ns: int, dt: float, shots: Sequence[Shot]) -> list[bytes]:
         """Account one physics tick ending at now_ns; the frames due now.
 
         Called by the world after the motors stepped, with the projectiles of this tick.
+        What the robot wrote on the terminal is read first.
         """
+        if self.plugged:
+            sent = self.port.read()
+            if sent:
+                self.receive(sent, now_ns)
         supply = self.supply
         if supply is not None:  # a super-capacitor board: what it draws
             power = supply.input_power_w

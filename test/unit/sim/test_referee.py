@@ -158,3 +158,15 @@ def test_the_referee_needs_the_body_first(path):
     with SimWorld.from_config(world_config(path, unique_channel())) as world:
         with pytest.raises(Exception, match='body before the referee'):
             world.set_body({})
+
+
+def test_what_the_robot_writes_on_the_terminal_reaches_its_client(path):
+    world = SimWorld.from_config(world_config(path, unique_channel(), robot_id=3))
+    with world, serial.Serial(world.referee.port.path, timeout=0.2) as port:
+        figure = ref.circle(b'AIM', (960, 540), 40)
+        port.write(ref.encode_frame(0x0301, ref.draw(3, [figure])) + b'\x00garbage')
+        port.flush()
+        world.step(2)
+        client = world.referee.client
+        assert client.shown[b'AIM'].figure == figure
+        assert (client.frames, dict(client.errors)) == (1, {})
