@@ -17,7 +17,9 @@ from typing import Any
 
 import rclpy
 from rclpy.context import Context
+from rclpy.parameter import Parameter
 from rm_base.bridge import CanBridgeNode
+from rm_base.config.param_files import load_parameters
 from rm_base.config.schema import OPTIONAL, DeclaredParameter
 from rm_base.host.node import RobotHost
 from rm_base.plugin.params import declared_parameters
@@ -38,7 +40,8 @@ through the parameter services): it is checked as at start-up, the values of one
 applied together between two runs of the plugin, and a refusal names the key and the
 bound. The others are read once, at start-up: setting one is refused with "needs a
 restart". The plugins' parameters
-are listed for the plugins the `{ROBOT}` robot loads, under their instance names; the keys
+are listed for the plugins the `{ROBOT}` robot configures (loaded or not), under their
+instance names; the keys
 only another robot's config declares (a swerve chassis' steering joints) close the page.
 
 can_bridge's bus and joint tables (`buses.<bus>.*`, `joints.<joint>.*`: one table per bus
@@ -66,7 +69,14 @@ def collect(robot: str = ROBOT) -> dict[str, list[DeclaredParameter]]:
     try:
         bridge = CanBridgeNode(context=context)
         nodes.append(bridge)
-        host = RobotHost(hardware=bridge.hardware, context=context)
+        # every plugin the config has a section for, loaded or not (the client UI)
+        host_params = load_parameters(files).get('rm_robot', {})
+        plugins = list(host_params.get('plugins', ()))
+        plugins += [key.removesuffix('.type') for key in host_params
+                    if key.endswith('.type') and key.count('.') == 1
+                    and key.removesuffix('.type') not in plugins]
+        host = RobotHost(hardware=bridge.hardware, context=context,
+                         parameter_overrides=[Parameter('plugins', value=plugins)])
         nodes.append(host)
         declared = {
             'can_bridge': declared_parameters(bridge),

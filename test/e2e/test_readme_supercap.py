@@ -8,24 +8,17 @@ import re
 import shutil
 
 import pytest
-from support.user_session import ROOT, UserSession, readme_blocks
+import yaml
+from support.user_session import ROOT, UserSession, readme_blocks, readme_yaml
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow, pytest.mark.realtime]
-
-
-def readme_yaml() -> str:
-    text = (ROOT / 'README.md').read_text(encoding='utf-8')
-    start = text.index('## Super-capacitor\n')
-    (block,) = re.findall(r'```yaml\n(.*?)```', text[start:text.find('\n## ', start + 1)],
-                          flags=re.S)
-    return block
 
 
 def test_the_board_is_ready_and_a_burst_shows_on_the_status_line(tmp_path):
     start, burst = readme_blocks('Super-capacitor')
     work = tmp_path / 'work'
     work.mkdir()
-    (work / 'supercap.yaml').write_text(readme_yaml())
+    (work / 'supercap.yaml').write_text(yaml.safe_dump(readme_yaml('Super-capacitor')))
     (work / 'scripts').symlink_to(ROOT / 'scripts')
     command = ['bash', '-c', f'cd {work} && ' + ' && '.join(
         line for line in start.strip().splitlines() if not line.startswith('#'))]

@@ -11,14 +11,11 @@ The board's config is README's "Super-capacitor" example, read from README.
 
 from __future__ import annotations
 
-import re
-from pathlib import Path
-
 import pytest
-import yaml
 from geometry_msgs.msg import Twist
 from rm_base.hardware.protocols.supercap import CapError
 from support.lockstep import LockstepRobot
+from support.user_session import readme_yaml
 
 from rm_msgs.msg import ChassisCmd, GimbalCmd, ShootCmd
 
@@ -32,16 +29,9 @@ BURST_W = 100.0  # README's supercap.burst_w
 SNAPPY = {
     f'chassis.ramp.linear.{kind}_acceleration': 30.0 for kind in ('launch', 'normal', 'brake')
 }
-README = Path(__file__).resolve().parents[2] / 'README.md'
-
-
 def readme_supercap() -> dict[str, object]:
     """README's "Super-capacitor" config, as flat can_bridge parameters."""
-    text = README.read_text(encoding='utf-8')
-    start = text.index('## Super-capacitor\n')
-    (block,) = re.findall(r'```yaml\n(.*?)```', text[start:text.find('\n## ', start + 1)],
-                          flags=re.S)
-    table = yaml.safe_load(block)['can_bridge']['ros__parameters']['supercap']
+    table = readme_yaml('Super-capacitor')['can_bridge']['ros__parameters']['supercap']
     return {f'supercap.{key}': value for key, value in table.items()}
 
 

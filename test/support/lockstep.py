@@ -16,7 +16,10 @@ Commands are handed to the plugins through the same callbacks their subscription
 the plugins subscribed to it at once (outbox loopback); the simulated Hi220's frames
 are decoded as the Hi220 plugin decodes them and handed to /imu's subscribers, the
 simulated referee's frames (when the config has one) as the Referee plugin decodes them and
-handed to the subscribers of its topics, and the simulated DR16's and image link's frames
+handed to the subscribers of its topics (and what the plugins publish on
+referee/interaction paced as the Referee plugin paces it, then handed to the simulated
+referee's client; the bridge's /diagnostics at its rate to the plugins that listen), and
+the simulated DR16's and image link's frames
 decoded and handed to the manual-control plugin as its readers would (rm_manual's plugin,
 run inside rm_robot here so it steps with the loop). No
 executor spins, nothing waits on DDS or a terminal: the same inputs give the same numbers
@@ -45,6 +48,7 @@ from rm_base.sim import SimImageLink, SimImu, SimRemote
 from rm_plugins.imu.conversion import Mounting, reading_from_sample
 from rm_plugins.imu.message import imu_message
 from rm_plugins.manual.driver import Keyboard
+from rm_plugins.referee.interaction import InteractionLink
 from rm_plugins.referee.messages import TOPICS as REFEREE_TOPICS
 
 from support.robot import _parameter, robot_parameters
@@ -104,6 +108,7 @@ class LockstepRobot:
         self._bridge_topics: set[str] = set()
         self._driven: dict[str, Mapping[str, float]] = {}
         self._state_every = round(1e9 / float(bridge.get('publish_rate', 200.0)))
+        self._diagnostics_every = round(1e9 / float(bridge.get('diagnostics_rate', 1.0)))
         self.ticks = 0
         self.context = Context()
         rclpy.init(context=self.context, domain_id=int(os.environ['ROS_DOMAIN_ID']))
@@ -123,6 +128,11 @@ class LockstepRobot:
                 parameter_overrides=[_parameter(k, v) for k, v in host.items()],
             )
             self._clock = self.host.get_clock()
+            # The referee plugin's way out, played too: what the plugins publish on
+            # referee/interaction, paced as the plugin paces it, reaches rm_sim's referee.
+            self.interaction = InteractionLink()
+            if 'referee' in self._played:
+                self.host.add_local_handler('referee/interaction', self._on_interaction)
             self._manual = self.host.plugin('manual') if 'manual' in plugins else None
             self._set_clock(self.world.time_ns)
         except BaseException:
@@ -173,6 +183,10 @@ class LockstepRobot:
             for joint, command in self._driven.items():
                 self.bridge.hardware.set_command(joint, **command)
             self.bridge.step(1)
+            self._relay_interaction()
+            if self.world.time_ns % self._diagnostics_every == 0:
+                # the bridge's /diagnostics, at its rate, to the plugins that listen
+                self.host.inject('/diagnostics', self.bridge.diagnostics_message())
             self.ticks += 1
             for hook in self._tick_hooks:
                 hook()
@@ -249,6 +263,17 @@ class LockstepRobot:
         msg = convert(record)
         msg.header.stamp = self._clock.now().to_msg()
         self.host.inject(topic, msg)
+
+    def _on_interaction(self, msg: Any, _receive_ns: int) -> None:
+        self.interaction.offer(msg.content_id, msg.receiver_id, bytes(msg.content))
+
+    def _relay_interaction(self) -> None:
+        referee = self.world.referee
+        if referee is None or not self.interaction.waiting:
+            return
+        frame = self.interaction.take(referee.rules.settings.robot_id, self.world.time_ns)
+        if frame is not None:
+            referee.receive(frame, self.world.time_ns)
 
     def _on_imu_frame(self, frame: bytes) -> None:
         reading = reading_from_sample(decode_payload(decode_frame(frame)), self._mounting)

@@ -21,6 +21,9 @@ import signal
 import subprocess
 import time
 from collections.abc import Callable
+from typing import Any
+
+import yaml
 
 from support.ros import isolate_ros_environment
 
@@ -34,6 +37,15 @@ def readme_blocks(section: str) -> list[str]:
     start = text.index(f'## {section}\n')
     end = text.find('\n## ', start + 1)
     return re.findall(r'```bash\n(.*?)```', text[start:end], flags=re.S)
+
+
+def readme_yaml(section: str) -> Any:
+    """The one YAML block of a README section, loaded."""
+    text = (ROOT / 'README.md').read_text(encoding='utf-8')
+    start = text.index(f'## {section}\n')
+    end = text.find('\n## ', start + 1)
+    (block,) = re.findall(r'```yaml\n(.*?)```', text[start:end], flags=re.S)
+    return yaml.safe_load(block)
 
 
 def user_environment(**extra: str) -> dict[str, str]:

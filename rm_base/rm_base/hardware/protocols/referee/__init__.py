@@ -24,9 +24,11 @@ from rm_base.hardware.protocols.referee.client_ui import (
     draw_text,
     drawing,
     encode_figure,
+    integer,
     interaction,
     line,
     number,
+    rectangle,
     text_drawing,
     text_figure,
 )
@@ -101,9 +103,11 @@ __all__ = [
     'encode_figure',
     'encode_frame',
     'encode_status',
+    'integer',
     'interaction',
     'line',
     'number',
+    'rectangle',
     'text_drawing',
     'text_figure',
 ]

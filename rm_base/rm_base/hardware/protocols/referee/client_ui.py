@@ -118,6 +118,26 @@ def circle(
                   details_c=radius)
 
 
+def rectangle(
+    name: bytes, corner: tuple[int, int], opposite: tuple[int, int], *, layer: int = 0,
+    color: Color = Color.TEAM, width: int = 2, op: FigureOp = FigureOp.ADD,
+) -> Figure:
+    """A rectangle's outline between two opposite corners [px]."""
+    return Figure(name, op, FigureType.RECTANGLE, layer, color, corner[0], corner[1], width,
+                  details_d=opposite[0], details_e=opposite[1])
+
+
+def integer(
+    name: bytes, at: tuple[int, int], value: int, *, font_size: int = 20, layer: int = 0,
+    color: Color = Color.TEAM, width: int = 2, op: FigureOp = FigureOp.ADD,
+) -> Figure:
+    """A whole number (an int32 in details c|d|e)."""
+    raw = int(value) & 0xFFFFFFFF
+    return Figure(name, op, FigureType.INTEGER, layer, color, at[0], at[1], width,
+                  details_a=font_size, details_c=raw & 0x3FF, details_d=(raw >> 10) & 0x7FF,
+                  details_e=raw >> 21)
+
+
 def number(
     name: bytes, at: tuple[int, int], value: float, *, font_size: int = 20, layer: int = 0,
     color: Color = Color.TEAM, width: int = 2, op: FigureOp = FigureOp.ADD,
