@@ -23,6 +23,7 @@ declarations and the schemas named here:
 ``sim.body.*``                  robot body: ``sim.body_config.BODY_TABLES``
 ``sim.imu.*``                   one IMU: ``sim.imu.IMU_SCHEMA``
 ``sim.referee.*``               the referee system: ``sim.referee.REFEREE_SCHEMA``
+``sim.target.*``                a spinning robot to shoot at: ``sim.target.TARGET_SCHEMA``
 ``sim.supercap.*``              the super-capacitor board (with ``supercap.*``):
                                 ``sim.supercap.SUPERCAP_SIM_SCHEMA`` but its channel
 ``sim.remote.*``                the DR16 receiver: ``sim.operator_link.link_schema``
@@ -70,6 +71,7 @@ SIM_BODY_PREFIX = 'sim.body.'
 SIM_IMU_PREFIX = 'sim.imu.'
 SIM_REFEREE_PREFIX = 'sim.referee.'
 SIM_SUPERCAP_PREFIX = 'sim.supercap.'
+SIM_TARGET_PREFIX = 'sim.target.'
 SIM_REMOTE_PREFIX = 'sim.remote.'
 SIM_IMAGE_LINK_PREFIX = 'sim.image_link.'
 _JOINT_SIM_KEY = 'sim'
@@ -91,6 +93,7 @@ class SimSettings:
         body: ``body`` of the world config (nested; empty for none).
         imu: the one IMU's config, or None.
         referee: the simulated referee's config, or None.
+        target: the spinning robot to shoot at, or None.
         supercap: the simulated super-capacitor board's settings (nested; empty: the
             defaults, if the hardware has a supercap).
         remote: the simulated DR16 receiver's config, or None.
@@ -107,6 +110,7 @@ class SimSettings:
     remote: Mapping[str, Any] | None = None
     image_link: Mapping[str, Any] | None = None
     supercap: Mapping[str, Any] = dataclasses.field(default_factory=dict)
+    target: Mapping[str, Any] | None = None
     motors: Mapping[str, Mapping[str, Any]] = dataclasses.field(default_factory=dict)
 
 
@@ -221,6 +225,7 @@ def settings_from_parameters(
     imu_flat: dict[str, Any] = {}
     referee_flat: dict[str, Any] = {}
     supercap_flat: dict[str, Any] = {}
+    target_flat: dict[str, Any] = {}
     remote_flat: dict[str, Any] = {}
     image_link_flat: dict[str, Any] = {}
     for name, value in open_params.items():
@@ -243,6 +248,8 @@ def settings_from_parameters(
             referee_flat[name.removeprefix(SIM_REFEREE_PREFIX)] = value
         elif name.startswith(SIM_SUPERCAP_PREFIX):
             supercap_flat[name.removeprefix(SIM_SUPERCAP_PREFIX)] = value
+        elif name.startswith(SIM_TARGET_PREFIX):
+            target_flat[name.removeprefix(SIM_TARGET_PREFIX)] = value
         elif name.startswith(SIM_REMOTE_PREFIX):
             remote_flat[name.removeprefix(SIM_REMOTE_PREFIX)] = value
         elif name.startswith(SIM_IMAGE_LINK_PREFIX):
@@ -254,8 +261,8 @@ def settings_from_parameters(
                 'scheduler.collect_garbage, safety.*, '
                 'publish_rate, '
                 'diagnostics_rate, publish_frames, log_file, sim, sim.timing, sim.seed, sim.can, '
-                'sim.body.*, sim.imu.*, sim.referee.*, sim.supercap.*, sim.remote.*, '
-                'sim.image_link.*'
+                'sim.body.*, sim.imu.*, sim.referee.*, sim.supercap.*, sim.target.*, '
+                'sim.remote.*, sim.image_link.*'
             )
     hardware = nest(hardware_flat)
     sim_on = bool(typed.get('sim', False))
@@ -301,6 +308,7 @@ def settings_from_parameters(
             imu=nest(imu_flat) if imu_flat else None,
             referee=nest(referee_flat) if referee_flat else None,
             supercap=nest(supercap_flat),
+            target=nest(target_flat) if target_flat else None,
             remote=nest(remote_flat) if remote_flat else None,
             image_link=nest(image_link_flat) if image_link_flat else None,
             motors={joint: nest(keys) for joint, keys in motors_flat.items()},

@@ -116,7 +116,7 @@ def world_config(hardware: HardwareConfig, sim: SimSettings) -> dict[str, Any]:
 
     Returns:
         A plain dict: timing, seed, channels, and body / imus / supercap / referee /
-        remote / image_link if configured.
+        target / remote / image_link if configured.
 
     Raises:
         BridgeConfigError: a joint has no simulated model, or two buses share a channel.
@@ -152,6 +152,8 @@ def world_config(hardware: HardwareConfig, sim: SimSettings) -> dict[str, Any]:
         raise BridgeConfigError('sim.supercap.* is set, but there is no supercap.bus')
     if sim.referee is not None:
         config['referee'] = dict(sim.referee)
+    if sim.target is not None:
+        config['target'] = dict(sim.target)
     if sim.remote is not None:
         config['remote'] = dict(sim.remote)
     if sim.image_link is not None:

@@ -42,6 +42,7 @@ from rm_base.sim.referee import SimReferee
 from rm_base.sim.remote import SimRemote
 from rm_base.sim.serial_devices import SerialDevice, SerialDevices
 from rm_base.sim.supercap import SimSupercap, supercap_from_config
+from rm_base.sim.target import SimTarget, muzzle_pose, target_from_config
 from rm_base.sim_devices.device import SimDevice
 from rm_base.sim_devices.errors import SimConfigError, SimLookupError, SimStateError
 from rm_base.sim_devices.faults import Fault, FaultKind
@@ -135,6 +136,8 @@ class SimWorld:
         self._devices: dict[str, SimDevice] = {}
         #: The super-capacitor board, if the world has one (:meth:`set_supercap`).
         self.supercap: SimSupercap | None = None
+        #: A spinning robot to shoot at, if the world has one (``target``).
+        self.target: SimTarget | None = None
         self._device_channel: dict[str, SimChannel] = {}
         self._thread: threading.Thread | None = None
         self._stop = threading.Event()
@@ -160,6 +163,7 @@ class SimWorld:
             imus: [{path: '/tmp/rm_sim_${ROS_DOMAIN_ID}/imu', mount: gimbal, rate_hz: 100}]
             referee: {path: '/tmp/rm_sim_${ROS_DOMAIN_ID}/referee', chassis_power_limit: 60}
             supercap: {channel: can0, capacity_j: 2000}   # rm_base.sim.supercap
+            target: {x: 4.0, v_yaw: 2.0}                  # rm_base.sim.target
             remote: {path: '/tmp/rm_sim_${ROS_DOMAIN_ID}/dr16'}
             image_link: {path: '/tmp/rm_sim_${ROS_DOMAIN_ID}/image_link'}
 
@@ -175,7 +179,7 @@ class SimWorld:
         config = load_config(config)
         allowed = {
             'timing', 'tick_rate_hz', 'seed', 'channels', 'body', 'imus', 'referee', 'remote',
-            'image_link', 'supercap',
+            'image_link', 'supercap', 'target',
         }
         unknown = sorted(set(config) - allowed)
         if unknown:
@@ -200,6 +204,8 @@ class SimWorld:
                 world.add_imu(imu)
             if 'supercap' in config:
                 world.set_supercap(config['supercap'])
+            if 'target' in config:
+                world.target = target_from_config(config['target'])
             if 'referee' in config:
                 world.set_referee(config['referee'])
             if 'remote' in config:
@@ -509,7 +515,13 @@ class SimWorld:
         # a device's counter runs on real time while the physics runs in real time
         device_ns = time.perf_counter_ns() if self.running else now
         launcher = body.launcher
-        self.serial.tick(now, device_ns, dt, launcher.update(now) if launcher else ())
+        shots = launcher.update(now) if launcher else ()
+        target = self.target
+        if target is not None and shots:
+            muzzle, yaw, pitch = muzzle_pose(body)
+            for shot in shots:
+                target.shoot(shot.time_ns, muzzle, yaw, pitch, shot.speed_mps)
+        self.serial.tick(now, device_ns, dt, shots)
         for channel in self._channels.values():
             channel.flush_handed_over()
 
