@@ -3,12 +3,13 @@
 The simulated enemy moves as rm_auto_aim's tracker models one (rm_base.geometry.
 armor_target): a centre at a constant velocity, spinning at ``v_yaw``, with ``armors``
 plates (``width`` x ``height``) at ``radius`` (and ``radius_2``, ``dz`` for the second
-pair of four). Each projectile the simulated launcher fires leaves the muzzle along the
-gimbal's world yaw and pitch at its speed, without drag (from the muzzle: ``barrel_length`` along the barrel from the pitch
-axis, ``pivot_height`` up); the first plate whose front face its path crosses, within the
-plate, is hit. Plates are judged at the moment the projectile reaches them, so the spin
-during the flight counts. A plate seen edge-on (its face turned more than ``max_incidence``
-from the path) deflects the projectile: no hit. The robot's body hides nothing else.
+pair of four). Each projectile the simulated launcher fires leaves the muzzle
+(``barrel_length`` along the barrel from the pitch axis, ``pivot_height`` up) along the
+gimbal's world yaw and pitch at its speed, without drag; the first plate whose front face
+its path crosses, within the plate, is hit. Plates are judged at the moment the
+projectile reaches them, so the spin during the flight counts. A plate seen edge-on (its
+face turned more than ``max_incidence`` from the path) deflects the projectile: no hit.
+The robot's body hides nothing else.
 """
 
 from __future__ import annotations

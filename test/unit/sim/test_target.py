@@ -27,7 +27,8 @@ def test_a_shot_solved_for_a_still_plate_hits_it_and_one_a_plate_width_off_misse
 
 
 def test_a_plate_seen_edge_on_deflects_and_the_back_plates_are_never_hit():
-    edge = target_from_config({'x': 4.0, 'v_yaw': 0.0, 'yaw': 1.4, 'barrel_length': 0.0})  # plate 0 turned away
+    # plate 0 turned away
+    edge = target_from_config({'x': 4.0, 'v_yaw': 0.0, 'yaw': 1.4, 'barrel_length': 0.0})
     pitch = aim_pitch(math.hypot(4.0 - 0.25 * math.cos(1.4), 0.25 * math.sin(1.4)), -0.1)
     yaw = math.atan2(-0.25 * math.sin(1.4), 4.0 - 0.25 * math.cos(1.4))
     assert edge.shoot(0, (0.0, 0.0), yaw, pitch, SPEED) is None
