@@ -355,6 +355,7 @@ def test_speed_gears_scale_the_commanded_speed_and_rotation(rig):
     r = rig(chassis={'gears.fast.linear': 1.5, 'gears.fast.angular': 1.2})
     cmd = r.command(ChassisCmd.RAW)
     r.velocity(vx=0.8, wz=1.0)
+    r.robot.watch('/chassis_state')
     measured = {}
     for gear in (ChassisCmd.GEAR_SLOW, ChassisCmd.GEAR_NORMAL, ChassisCmd.GEAR_FAST):
         cmd.speed_gear = gear
@@ -371,6 +372,7 @@ def test_speed_gears_scale_the_commanded_speed_and_rotation(rig):
                            ChassisCmd.GEAR_FAST: (1.2, 1.2)}.items():
         assert measured[gear] == pytest.approx((vx, wz), rel=0.05), (gear, measured)
     assert r.plugin.reason == 'commanded RAW in FAST gear'
+    assert r.robot.latest('/chassis_state').speed_gear == ChassisCmd.GEAR_FAST
 
 
 def test_when_passive_expect_zero_effort_on_the_wire_and_the_wheels_coasting(rig):

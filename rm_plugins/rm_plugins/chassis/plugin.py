@@ -571,9 +571,12 @@ class StandChassis(PluginBase):
         # The messages are built by the ROS edge's thread, from these values.
         if self.heard(self._chassis_state_pub):
             speeds = tuple(report.speeds) if report.speeds is not None else None
+            request = self._request
+            gear = (request.gear if request is not None and self.state is not ChassisMode.PASSIVE
+                    else SpeedGear.NORMAL)
             snapshot = _StateReport(
                 now_ns, int(self.state.value), self.reason, report.twist, twist,
-                tuple(report.targets), speeds, report.power_w, report.power_limit_w,
+                tuple(report.targets), speeds, report.power_w, report.power_limit_w, int(gear),
             )
             self.publish_built(self._chassis_state_pub, _chassis_state_message, cfg, snapshot)
         if self.heard(self._odom_pub):
@@ -613,6 +616,7 @@ class _StateReport(NamedTuple):
     speeds: tuple[float, ...] | None
     power_w: float
     power_limit_w: float
+    gear: int
 
 
 def _chassis_state_message(cfg: ChassisConfig, report: _StateReport) -> ChassisState:
@@ -632,6 +636,7 @@ def _chassis_state_message(cfg: ChassisConfig, report: _StateReport) -> ChassisS
     )
     msg.power = float(report.power_w)
     msg.power_limit = float(report.power_limit_w)
+    msg.speed_gear = report.gear
     return msg
 
 

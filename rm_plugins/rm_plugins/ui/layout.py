@@ -4,7 +4,7 @@ One figure per name (3 bytes, the client's handle). The bars and numbers move in
 (``BAR_STEP`` pixels, whole percent) so that a figure changes only when what it shows
 does, not with every tick's noise: each change costs the link a figure.
 
-Screen (1920 x 1080, (0, 0) bottom left): the chassis' mode and power limit and the
+Screen (1920 x 1080, (0, 0) bottom left): the chassis' mode, gear and power limit and the
 friction wheels as text top left; the capacitor's and the barrel's bars bottom centre; a
 crosshair at the aim point, green when the friction wheels are at speed.
 """
@@ -38,6 +38,7 @@ class UiInputs:
 
     Attributes:
         chassis: the chassis' mode name (``GYRO``).
+        gear: its speed gear's name (``FAST``); NORMAL is not shown.
         power_limit_w: the chassis' power limit in force [W].
         shooter: the shooter's state name (``READY``).
         friction_ready: the friction wheels at speed.
@@ -48,6 +49,7 @@ class UiInputs:
     """
 
     chassis: str | None = None
+    gear: str | None = None
     power_limit_w: float | None = None
     shooter: str | None = None
     friction_ready: bool = False
@@ -68,7 +70,8 @@ def layout(inputs: UiInputs) -> dict[bytes, Item]:
     if inputs.chassis is not None:
         power = (f' {inputs.power_limit_w:.0f}W' if inputs.power_limit_w is not None
                  and inputs.power_limit_w < 10_000 else '')
-        words = f'{inputs.chassis}{power}'[:30]
+        gear = f' {inputs.gear}' if inputs.gear not in (None, 'NORMAL') else ''
+        words = f'{inputs.chassis}{gear}{power}'[:30]
         add(text_figure(b'CMD', (80, 820), len(words), font_size=24, layer=LAYER_TEXT,
                         color=Color.WHITE), words)
     if inputs.shooter is not None:

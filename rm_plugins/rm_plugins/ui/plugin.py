@@ -32,6 +32,8 @@ from rm_plugins.ui.sync import UiSync
 
 _CHASSIS_NAMES = {v: k for k, v in vars(ChassisCmd).items() if k.isupper() and
                   not k.startswith('GEAR_') and isinstance(v, int)}
+_GEAR_NAMES = {v: k.removeprefix('GEAR_') for k, v in vars(ChassisCmd).items()
+               if k.startswith('GEAR_') and isinstance(v, int)}
 _SHOOTER_NAMES = {v: k for k, v in vars(ShooterState).items() if k.isupper()
                   and isinstance(v, int)}
 _HERO = 1  # robot id (red; blue + 100): the hero's barrel is the 42 mm one
@@ -143,6 +145,7 @@ class ClientUi(PluginBase):
                 energy = None
         return UiInputs(
             chassis=_CHASSIS_NAMES.get(chassis.state) if chassis is not None else None,
+            gear=_GEAR_NAMES.get(chassis.speed_gear) if chassis is not None else None,
             power_limit_w=(float(chassis.power_limit) if chassis is not None
                            and math.isfinite(chassis.power_limit) else None),
             shooter=_SHOOTER_NAMES.get(shooter.state) if shooter is not None else None,

@@ -99,3 +99,9 @@ def test_resend_clears_and_draws_everything_at_once():
     rig.run(wanted, 5)
     assert rig.showing(wanted) and not rig.client.errors
     assert rig.sent[5].content_id == 0x0100
+
+
+def test_the_chassis_text_says_its_mode_gear_and_power_limit():
+    items = layout(replace(INPUTS, gear='FAST', power_limit_w=160.0))
+    assert items[b'CMD'][1] == 'GYRO FAST 160W'
+    assert layout(replace(INPUTS, gear='NORMAL'))[b'CMD'][1] == 'GYRO 60W'
