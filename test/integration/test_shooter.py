@@ -347,6 +347,25 @@ def test_when_the_command_returns_after_a_dropout_expect_the_burst_not_fired_aga
     assert {s.shots_fired for s in r.states_since(mark)} == {2}
 
 
+def test_a_burst_cut_short_by_a_dropout_fires_only_its_shots_left_when_it_comes_back(rig):
+    # README's hero burst: the commander's stream paused longer than command_timeout
+    # (0.2 s) in the middle of a burst of 5; the same PUSH back finishes the 5, no more.
+    r = rig()
+    ready(r)
+    r.send(ShootCmd.PUSH, speed=15.0, hz=5.0, num=5, burst_id=4)
+    assert r.wait_until(lambda: shots(r) >= 1, WAIT)
+    command = r.command
+    r.stop_commands()
+    assert r.wait_until(lambda: r.in_state(ShooterState.PASSIVE), WAIT)
+    fired = shots(r)
+    assert fired < 5
+    r.resend(command)
+    assert r.wait_until(lambda: shots(r) >= 5, WAIT), (fired, r.state())
+    mark = r.mark()
+    assert r.wait_until(lambda: r.mark() >= mark + 25, WAIT)
+    assert {s.shots_fired for s in r.states_since(mark)} == {5}
+
+
 @pytest.mark.parametrize(
     ('fields', 'reason'),
     [

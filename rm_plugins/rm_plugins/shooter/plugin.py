@@ -179,8 +179,8 @@ class StandShooter(PluginBase):
             )
             * _NS_PER_S
         )
-        # Kept across resets: a command that returns after a dropout must not fire its burst
-        # again, and a fault holds until a new burst or mode.
+        # Kept across resets: a command that returns after a dropout must not start its burst
+        # again (only its shots left: on_reset), and a fault holds until a new burst or mode.
         self._shots_fired = 0
         self._last_burst_id: int | None = None
         self._last_mode: ShootMode | None = None
@@ -192,7 +192,14 @@ class StandShooter(PluginBase):
         self.on_reset()
 
     def on_reset(self) -> None:
-        """Forget the command, the burst, the trigger's targets and the jam timer."""
+        """Forget the command, the burst, the trigger's targets and the jam timer.
+
+        A burst in progress is kept aside: the same PUSH coming back after a lost command
+        resumes it (an explicit disable or enable forgets it).
+        """
+        burst: _Burst | None = getattr(self, '_burst', None)
+        self._interrupted: tuple[int | None, int | None] | None = (
+            (self._last_burst_id, burst.remaining) if burst is not None else None)
         self._burst: _Burst | None = None
         self._jam_count = 0
         self._attempts = 0  # BLOCK recoveries since the trigger last got past a jam
@@ -218,12 +225,14 @@ class StandShooter(PluginBase):
             self._heat.params = barrel  # the heat so far stays
 
     def on_enable(self) -> None:
-        """A fault does not survive an explicit disable/enable."""
+        """A fault or an interrupted burst does not survive an explicit disable/enable."""
         self._fault = False
+        self._interrupted = None
 
     def on_disable(self) -> None:
-        """A fault does not survive an explicit disable/enable."""
+        """A fault or an interrupted burst does not survive an explicit disable/enable."""
         self._fault = False
+        self._interrupted = None
 
     # -- tick ---------------------------------------------------------------------------------
 
@@ -263,8 +272,17 @@ class StandShooter(PluginBase):
                 self.logger.info(f'fault cleared: mode changed to {command.mode.name}')
             self._last_mode = command.mode
             if command.mode is not ShootMode.PUSH:
-                self._burst = None  # releasing PUSH ends the burst
+                self._burst = self._interrupted = None  # releasing PUSH ends the burst
+        interrupted = self._interrupted
+        if (command.mode is ShootMode.PUSH and self._burst is None and interrupted is not None
+                and interrupted[0] == command.burst_id):
+            self._interrupted = None
+            left = interrupted[1]
+            self._burst = _Burst(left, min(command.hz, self.config.max_hz))
+            self.logger.info(f'burst {command.burst_id} resumed after the lost command: '
+                             f'{"continuous" if left is None else f"{left} shot(s) left"}')
         if command.mode is ShootMode.PUSH and command.burst_id != self._last_burst_id:
+            self._interrupted = None
             self._last_burst_id = command.burst_id
             if self._fault:
                 self._fault = False
