@@ -14,14 +14,12 @@ gains); the numbers in the docstrings were measured with them and are asserted w
 import itertools
 import math
 import os
-import re
 import time
 
-import yaml
 from rm_base.hardware import MODE_MIT, MODE_POSITION, MODE_VELOCITY, CanHardware
 from rm_base.motors.lk.actuator import Mf9025
 from rm_base.sim import DJI_ENCODER_COUNTS, SimWorld
-from support.user_session import ROOT
+from support.user_session import readme_yaml
 
 from rm_base import motors as motor_families
 
@@ -301,11 +299,7 @@ def test_an_lk_mg4010_behind_its_gear_reaches_and_holds_a_position():
 
 def readme_joints() -> dict:
     """The joints of README's "Motors" example, as written there."""
-    text = (ROOT / 'README.md').read_text(encoding='utf-8')
-    start = text.index('## Motors\n')
-    section = text[start:text.find('\n## ', start + 1)]
-    (block,) = re.findall(r'```yaml\n(.*?)```', section, flags=re.S)
-    return yaml.safe_load(block)['can_bridge']['ros__parameters']['joints']
+    return readme_yaml('Motors')['can_bridge']['ros__parameters']['joints']
 
 
 def test_the_readme_lk_joint_holds_a_position_on_its_simulated_motor():

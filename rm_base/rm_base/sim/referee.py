@@ -22,6 +22,7 @@ from typing import Any
 
 from rm_base.config.schema import Schema, integer, number, one_of, string
 from rm_base.hardware.protocols.referee import (
+    INTERACTION_CMD_ID,
     FrameParser,
     GameProgress,
     GameStatus,
@@ -31,7 +32,7 @@ from rm_base.hardware.protocols.referee import (
 )
 from rm_base.sim.launcher import Launcher, Shot
 from rm_base.sim.pty_port import PtyPort
-from rm_base.sim.referee_client import INTERACTION_CMD_ID, SimClient
+from rm_base.sim.referee_client import SimClient
 from rm_base.sim.referee_rules import STEP_NS, Outputs, RefereeRules, RefereeSettings
 from rm_base.sim.supercap import SimSupercap
 from rm_base.sim_devices.device import SimDevice

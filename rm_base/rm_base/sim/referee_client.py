@@ -24,12 +24,13 @@ from rm_base.hardware.protocols.referee import (
     decode_drawing,
     decode_interaction,
 )
-from rm_base.hardware.protocols.referee.client_ui import DELETE_FIGURES
+from rm_base.hardware.protocols.referee.client_ui import (
+    DELETE_FIGURES,
+    FRAME_OVERHEAD,
+    MAX_BYTES_PER_S,
+    MAX_FRAMES_PER_S,
+)
 
-INTERACTION_CMD_ID = 0x0301
-FRAME_OVERHEAD = 9
-MAX_BYTES_PER_S = 3720
-MAX_FRAMES_PER_S = 30
 _NS_PER_S = 1_000_000_000
 
 
@@ -103,9 +104,9 @@ class SimClient:
         self.peak_frames_per_s = max(self.peak_frames_per_s, len(window))
         self.peak_bytes_per_s = max(self.peak_bytes_per_s, self._window_bytes)
         if len(window) > MAX_FRAMES_PER_S:
-            self.errors['over 30 frames/s'] += 1
+            self.errors[f'over {MAX_FRAMES_PER_S} frames/s'] += 1
         if self._window_bytes > MAX_BYTES_PER_S:
-            self.errors['over 3720 bytes/s'] += 1
+            self.errors[f'over {MAX_BYTES_PER_S} bytes/s'] += 1
 
     def _delete(self, content: bytes) -> None:
         if len(content) != 2 or content[0] not in (DeleteOp.LAYER, DeleteOp.ALL):

@@ -18,11 +18,12 @@ from dataclasses import dataclass
 
 from rm_base.errors import InputRejectedError
 from rm_base.hardware.protocols.referee import client_id, encode_frame, interaction
-from rm_base.hardware.protocols.referee.client_ui import MAX_CONTENT_LENGTH
+from rm_base.hardware.protocols.referee.client_ui import (
+    INTERACTION_CMD_ID,
+    MAX_BYTES_PER_S,
+    MAX_CONTENT_LENGTH,
+)
 
-INTERACTION_CMD_ID = 0x0301
-#: Bytes of a frame besides its data: header 5, cmd id 2, CRC16 2.
-FRAME_OVERHEAD = 9
 _NS_PER_S = 1_000_000_000
 
 
@@ -46,7 +47,8 @@ class InteractionLink:
         queue: frames kept waiting at most.
     """
 
-    def __init__(self, bytes_per_s: float = 3720.0, max_hz: float = 10.0, queue: int = 8) -> None:
+    def __init__(self, bytes_per_s: float = MAX_BYTES_PER_S, max_hz: float = 10.0,
+                 queue: int = 8) -> None:
         if not (bytes_per_s > 0 and max_hz > 0 and queue > 0):
             raise ValueError('bytes_per_s, max_hz and queue must be > 0')
         self.bytes_per_s = bytes_per_s

@@ -3,7 +3,8 @@
 import pytest
 from rm_base.errors import InputRejectedError
 from rm_base.hardware.protocols import referee as ref
-from rm_plugins.referee.interaction import FRAME_OVERHEAD, InteractionLink
+from rm_base.hardware.protocols.referee.client_ui import FRAME_OVERHEAD
+from rm_plugins.referee.interaction import InteractionLink
 
 MS = 1_000_000
 SEVEN = ref.drawing([ref.circle(b'C%02d' % i, (100, 100), 5) for i in range(7)])  # 120 B frames

@@ -7,6 +7,7 @@ docs/PROTOCOLS.md §6.
 """
 
 from rm_base.hardware.protocols.referee.client_ui import (
+    INTERACTION_CMD_ID,
     Color,
     DeleteOp,
     Figure,
@@ -61,6 +62,7 @@ from rm_base.hardware.protocols.referee.status import (
 from rm_base.hardware.protocols.referee.status_encode import encode_status
 
 __all__ = [
+    'INTERACTION_CMD_ID',
     'LAYOUTS',
     'REMOTE_FRAME_ID',
     'Cmd',

@@ -17,6 +17,11 @@ from rm_base.hardware.errors import ValueRangeError
 
 INTERACTION_CMD_ID = 0x0301
 MAX_CONTENT_LENGTH = 112
+#: Bytes of a frame besides its data: header 5, cmd id 2, CRC16 2.
+FRAME_OVERHEAD = 9
+#: The rules' limits on a robot's 0x0301 traffic: bytes (whole frames) and frames a second.
+MAX_BYTES_PER_S = 3720
+MAX_FRAMES_PER_S = 30
 CLIENT_ID_BASE = 0x0100
 SERVER_ID = 0x8080
 DELETE_FIGURES = 0x0100
