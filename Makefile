@@ -8,7 +8,7 @@ PYTEST_ARGS ?=
 # pytest-xdist workers of the suite's first pass: auto = one per CPU; 0 = this process
 export TEST_WORKERS ?= auto
 
-.PHONY: all setup test test-kernel run lint lock clean bench soak
+.PHONY: all setup test test-kernel run lint lock clean bench meter soak
 
 all: test
 
@@ -34,6 +34,10 @@ lint: setup
 
 bench: setup
 	@scripts/with_env.sh python bench/run.py $(BENCH_ARGS)
+
+## meter: CPU per loop component in lockstep (METER_ARGS='--against 8a56e03' for an A/B)
+meter: setup
+	@scripts/with_env.sh python bench/meter.py $(METER_ARGS)
 
 soak: setup
 	@scripts/with_env.sh python test/soak/run_soak.py $(SOAK_ARGS)

@@ -5,24 +5,17 @@ next one; ticks divided by the longer snapshot window came out short of the loop
 (998.9 for a loop that skipped nothing).
 """
 
-import importlib
 import pathlib
-import sys
 import time
 from types import SimpleNamespace
 
 import pytest
+from support.bench import bench_module
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 
 
-def _bench(name):
-    # bench/ is a package at the repository root, which is not on the test path
-    sys.path.insert(0, str(ROOT))
-    try:
-        return importlib.import_module(f'bench.{name}')
-    finally:
-        sys.path.remove(str(ROOT))
+_bench = bench_module
 
 
 class FakeScheduler:
