@@ -1,10 +1,13 @@
-"""The control loop's targets (issue #11): before, now and target, one line each.
+"""The loop's targets (issue #48): each a ratio against a reference of the same run.
 
-The *before* column holds what ``make bench`` measured on this 2-core VM on 2026-11-24,
-before the robot ran its plugins in the CAN loop and its simulator in a process of its
-own (3 runs, median; docs/PERFORMANCE.md has the context). *Now* is the median of this
-run's rows (bench.report); a ratio row divides two of them run by run. The verdict
-compares the median with the target.
+Absolute times drift by 2x between machines and by the hour on one, so every target
+divides a figure of the robot by one measured in the same run, run by run (runs are
+interleaved, so run i of every measurement shares its hour): the bare 1 kHz sleeper's
+gaps and period error, the EventsExecutor timer loop of the same actuators, the loop's own
+period, DDS's one-way latency of the same command messages, the robot in one process.
+
+*Before* is what ``make bench`` gave on main 8a56e03 (3 runs, median, issue #48); *now*
+the median of this run's ratios. The verdict compares the median with the target.
 """
 
 from __future__ import annotations
@@ -14,12 +17,14 @@ import statistics
 from dataclasses import dataclass
 from typing import Any
 
-from bench.report import _OPS, CPU_TARGET_PCT, _fmt
+from bench.report import _OPS, _fmt
+
+PERIOD_US = 1000.0  # the loop's period at 1 kHz [µs]
 
 
 @dataclass(frozen=True)
 class Target:
-    """One line: a row of bench.report (or the ratio of two), before, target."""
+    """One line: (row - minus) / per * scale, run by run, against a bound."""
 
     label: str
     key: str
@@ -27,48 +32,57 @@ class Target:
     op: str
     bound: float
     per: str | None = None  # divide by this row, run by run
+    minus: str | None = None  # subtract this row first, run by run
+    scale: float = 1.0
 
 
 TARGETS: tuple[Target, ...] = (
-    Target('scheduler ticks/s, one process (make run)', 'cpu.rate.scheduler', '855', '>=', 999),
-    Target('scheduler ticks/s, two processes', 'split.rate.scheduler', '961', '>=', 999),
-    Target('missed deadlines [%], one process', 'sched.missed', '14', '<', 0.1),
-    Target('missed deadlines [%], two processes', 'split.missed', '3.9', '<', 0.1),
-    Target('period error p99 / bare sleeper p99, one process', 'sched.p99', '3.1-4.7', '<=',
-           1.5, per='sched.canary.p99'),
-    Target('period error p99 / bare sleeper p99, two processes', 'split.p99', '1.2-1.8', '<=',
-           1.5, per='split.canary.p99'),
-    Target('/vel_cmd -> wheel frame p99 [ms], one process', 'lat.wheel.p99', '24', '<', 3.0),
-    Target('/vel_cmd -> wheel frame p99 [ms], two processes', 'split.lat.wheel.p99', '6.3', '<',
-           3.0),
-    Target('/gimbal_cmd -> yaw frame p99 [ms], one process', 'lat.yaw.p99', '6.7', '<', 3.0),
-    Target('/gimbal_cmd -> yaw frame p99 [ms], two processes', 'split.lat.yaw.p99', '6.9', '<',
-           3.0),
-    Target('CPU of the robot without the simulator, streaming [% of a core], one process',
-           'cpu.load.process', '57', '<', CPU_TARGET_PCT),
-    Target('CPU of the robot without the simulator, streaming [% of a core], two processes',
-           'split.cpu.host_bridge', '71', '<', CPU_TARGET_PCT),
-    Target('from the wire: wheel group frames per second (make run)', 'wire.rate', '901', '>=',
-           995.0),
-    Target('from the wire: gaps over 1.5 ms [%] (make run)', 'wire.gaps', '13', '<', 0.5),
-    Target('from the wire: command -> new mode, worst of the steps [ms] (make run)',
-           'wire.delay.max', '17', '<', 3.0),
+    Target('wire gaps over 1.5 ms, robot / bare sleeper (make run)', 'wire.gaps', '2.4',
+           '<=', 1.0, per='wire.canary.gaps'),
+    Target('robot CPU streaming / EventsExecutor timer loop of its actuators',
+           'cpu.load.host_bridge', '2.6', '<=', 1.0, per='bl.evt.cpu'),
+    Target('tick duration p99 / period', 'sched.tick.p99', '0.98', '<=', 0.3,
+           scale=1.0 / PERIOD_US),
+    Target('command -> first frame of the new mode, median - DDS one-way latency [periods]',
+           'wire.delay.median', '~1.5', '<=', 0.5, minus='wire.dds.median',
+           scale=1000.0 / PERIOD_US),
+    Target('period error p99 / bare sleeper p99', 'sched.p99', '0.40', '<=', 0.5,
+           per='sched.canary.p99'),
+    Target('two-process CPU / one-process CPU (robot without the simulator)',
+           'split.cpu.host_bridge', '1.9', '<=', 1.3, per='cpu.load.host_bridge'),
 )
+
+
+def _ratio(value: float | None, minus: float | None, per: float | None, t: Target
+           ) -> float | None:
+    if value is None or (t.minus is not None and minus is None):
+        return None
+    if t.minus is not None:
+        value -= minus
+    if t.per is not None:
+        if per is None:
+            return None
+        if per == 0:  # the reference saw none: equal when the robot saw none either
+            return 1.0 if value == 0 else math.inf
+        value /= per
+    return value * t.scale
 
 
 def evaluate_targets(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """Each target's median over runs (and min, max) from the evaluated rows, verdict."""
     by_key = {r['key']: r for r in rows}
+
+    def values(key: str | None, n: int) -> list[float | None]:
+        got = list(by_key.get(key, {}).get('values', [])) if key else []
+        return (got + [None] * n)[:n]
+
     out = []
     for t in TARGETS:
-        values = list(by_key.get(t.key, {}).get('values', []))
-        if t.per is not None:
-            divisors = by_key.get(t.per, {}).get('values', [])
-            values = [
-                v / d if v is not None and d else None
-                for v, d in zip(values, divisors, strict=False)
-            ]
-        numbers = [v for v in values if v is not None and not math.isnan(v)]
+        mine = list(by_key.get(t.key, {}).get('values', []))
+        n = len(mine)
+        ratios = [_ratio(v, m, d, t) for v, m, d in
+                  zip(mine, values(t.minus, n), values(t.per, n), strict=True)]
+        numbers = [v for v in ratios if v is not None and not math.isnan(v)]
         median = statistics.median(numbers) if numbers else None
         verdict = 'n/a' if median is None else (
             'PASS' if _OPS[t.op](median, t.bound) else 'MISS'
@@ -100,7 +114,7 @@ def format_targets(evaluated: list[dict[str, Any]], *, with_before: bool = True)
     """The lines as a Markdown table (without the *before* column for docs/PERFORMANCE.md)."""
     if with_before:
         lines = [
-            '**Control loop targets (before: 2026-11-24, 3 runs, median)**',
+            "**The loop's targets, ratios against references of this run (before: main 8a56e03)**",
             '',
             '| metric | before | now median (min-max) | target | result |',
             '|---|---|---|---|---|',

@@ -10,7 +10,9 @@ wall clock as it sends it) gives:
 - per switch, the first 0x200 frame that shows the new mode (PASSIVE: all four currents
   zero; RAW: one not zero) and its delay after the switch was published;
 - beside them, the share of gaps over 1.5 ms between the wake-ups of a bare 1 kHz sleeper
-  process (:mod:`bench.canary`) over the same switches: what the machine alone gives.
+  process (:mod:`bench.canary`) over the same switches: what the machine alone gives;
+- and DDS's one-way latency of the same /chassis_cmd messages to another process
+  (:mod:`bench.dds_probe`): the part of the delay that is not the robot's.
 """
 
 from __future__ import annotations
@@ -50,7 +52,7 @@ def run_once(plan: WirePlan, log_dir: Path, tag: str) -> dict[str, Any]:
     from rclpy.executors import SingleThreadedExecutor
     from rclpy.qos import qos_profile_sensor_data
 
-    from bench.robot import Child
+    from bench.robot import BenchError, Child
     from rm_msgs.msg import ChassisCmd, ChassisState
 
     workdir = Path(tempfile.mkdtemp(prefix='rm_wire_', dir=log_dir))
@@ -69,7 +71,7 @@ def run_once(plan: WirePlan, log_dir: Path, tag: str) -> dict[str, Any]:
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
     switches: list[tuple[float, int]] = []
-    canary = None
+    canary = probe = None
     try:
         states: list[Any] = []
         node.create_subscription(ChassisState, '/chassis_state', states.append,
@@ -90,11 +92,9 @@ def run_once(plan: WirePlan, log_dir: Path, tag: str) -> dict[str, Any]:
         next_switch = time.monotonic() + plan.settle_s
         next_publish = time.monotonic()
         # launched now, measuring from the first switch: its start-up stays out of the window
-        canary = Child(
-            'bench.canary',
-            [str(plan.steps * plan.period_s), repr(time.time() + plan.settle_s)],
-            workdir / 'canary.log',
-        )
+        window = [str(plan.steps * plan.period_s), repr(time.time() + plan.settle_s)]
+        canary = Child('bench.canary', window, workdir / 'canary.log')
+        probe = Child('bench.dds_probe', window, workdir / 'dds_probe.log')
         while len(switches) < plan.steps or time.monotonic() < next_switch:
             now = time.monotonic()
             if now >= next_switch:
@@ -112,9 +112,16 @@ def run_once(plan: WirePlan, log_dir: Path, tag: str) -> dict[str, Any]:
                 next_publish += 0.02
             executor.spin_once(timeout_sec=max(0.0, min(next_publish, next_switch) - now))
         sleeper = canary.wait(30.0) if canary is not None else {}
+        dds: dict[str, Any] = {}
+        if probe is not None:
+            try:
+                dds = probe.wait(30.0)
+            except BenchError as err:  # the delay is still measured; its ratio is n/a
+                dds = {'error': str(err)}
     finally:
-        if canary is not None:
-            canary.close()
+        for child in (canary, probe):
+            if child is not None:
+                child.close()
         executor.shutdown()
         node.destroy_node()
         context.try_shutdown()
@@ -128,6 +135,9 @@ def run_once(plan: WirePlan, log_dir: Path, tag: str) -> dict[str, Any]:
         out.close()
     result = analyse(workdir / 'can_can0.log', switches)
     result['canary_gap_pct'] = sleeper.get('late_gap_pct')
+    result['dds_ms'] = dds
+    if 'error' in dds:
+        result.setdefault('notes', []).append(f'DDS latency not measured: {dds["error"]}')
     return result
 
 

@@ -1,19 +1,12 @@
-"""The bench's target table: a value next to its bound is printed so the two differ."""
+"""The bench's target table: ratios run by run, printed so a value and its bound differ."""
 
-import importlib
-import pathlib
-import sys
+import math
 
-ROOT = pathlib.Path(__file__).resolve().parents[2]
+from support.bench import bench_module
 
 
 def _loop_targets():
-    # bench/ is a package at the repository root, which is not on the test path
-    sys.path.insert(0, str(ROOT))
-    try:
-        return importlib.import_module('bench.loop_targets')
-    finally:
-        sys.path.remove(str(ROOT))
+    return bench_module('loop_targets')
 
 
 def _line(table, label):
@@ -21,27 +14,65 @@ def _line(table, label):
     return line
 
 
+def _by_label(evaluated, start):
+    (e,) = [e for e in evaluated if e['label'].startswith(start)]
+    return e
+
+
+def test_each_ratio_divides_run_by_run_with_its_own_run_of_the_reference():
+    targets = _loop_targets()
+    rows = [
+        {'key': 'cpu.load.host_bridge', 'values': [40.0, 60.0, 30.0]},
+        {'key': 'bl.evt.cpu', 'values': [20.0, 60.0, 10.0]},
+        {'key': 'split.cpu.host_bridge', 'values': [48.0, 60.0, 45.0]},
+    ]
+    evaluated = targets.evaluate_targets(rows)
+    cpu = _by_label(evaluated, 'robot CPU streaming / EventsExecutor')
+    # 2.0, 1.0, 3.0 run by run (the ratio of the medians would be 40 / 20 = 2.0 too,
+    # but min and max tell them apart)
+    assert (cpu['median'], cpu['min'], cpu['max']) == (2.0, 1.0, 3.0)
+    assert cpu['verdict'] == 'MISS'
+    split = _by_label(evaluated, 'two-process CPU')
+    assert (split['median'], split['min'], split['max']) == (1.2, 1.0, 1.5)
+    assert split['verdict'] == 'PASS'
+    # rows the run did not measure: no verdict
+    assert _by_label(evaluated, 'wire gaps')['verdict'] == 'n/a'
+
+
+def test_a_difference_in_periods_and_a_reference_that_saw_nothing():
+    targets = _loop_targets()
+    rows = [
+        {'key': 'wire.delay.median', 'values': [1.9, 1.2]},
+        {'key': 'wire.dds.median', 'values': [1.5, None]},
+        {'key': 'sched.tick.p99', 'values': [250.0, 400.0]},
+        {'key': 'wire.gaps', 'values': [0.0, 0.3]},
+        {'key': 'wire.canary.gaps', 'values': [0.0, 0.0]},
+    ]
+    evaluated = targets.evaluate_targets(rows)
+    delay = _by_label(evaluated, 'command -> first frame')
+    assert math.isclose(delay['median'], 0.4) and delay['min'] == delay['max']  # one run
+    assert delay['verdict'] == 'PASS'
+    tick = _by_label(evaluated, 'tick duration p99 / period')
+    assert (tick['min'], tick['max']) == (0.25, 0.4)
+    gaps = _by_label(evaluated, 'wire gaps')
+    # none against none is as good as the sleeper; some against none is worse than any ratio
+    assert (gaps['min'], gaps['max']) == (1.0, math.inf)
+
+
 def test_a_value_that_would_read_as_its_bound_gets_the_digits_that_tell_them_apart():
     targets = _loop_targets()
     rows = [
-        {'key': 'cpu.rate.scheduler', 'values': [998.6, 999.46, 983.99]},
-        {'key': 'wire.rate', 'values': [997.64, 990.37, 996.01]},
-        {'key': 'sched.missed', 'values': [0.096, 0.1, 0.104]},
+        {'key': 'sched.p99', 'values': [50.2, 50.3, 49.6]},
+        {'key': 'sched.canary.p99', 'values': [100.0, 100.0, 100.0]},
     ]
     table = targets.format_targets(targets.evaluate_targets(rows))
-    ticks = _line(table, 'scheduler ticks/s, one process (make run)')
-    assert '| 998.6 (984-999.5) | >= 999 | MISS |' in ticks
-    wire = _line(table, 'from the wire: wheel group frames per second (make run)')
-    assert '| 996 (990-998) | >= 995 | PASS |' in wire  # far enough: printed as always
-    missed = _line(table, 'missed deadlines [%], one process')
-    assert '| 0.10 (0.096-0.104) | < 0.10 | MISS |' in missed  # at the bound: as always
+    line = _line(table, 'period error p99 / bare sleeper p99')
+    assert '| 0.502 (0.496-0.503) | <= 0.50 | MISS |' in line
 
 
 def test_the_docs_table_has_no_before_column():
-    from bench.loop_targets import evaluate_targets, format_targets
-
-    rows = [{'key': 'cpu.rate.scheduler', 'values': [999.5, 1000.0, 999.8]}]
-    table = format_targets(evaluate_targets(rows), with_before=False)
+    targets = _loop_targets()
+    rows = [{'key': 'sched.tick.p99', 'values': [200.0, 210.0, 190.0]}]
+    table = targets.format_targets(targets.evaluate_targets(rows), with_before=False)
     assert table.splitlines()[0] == '| metric | median (min-max) | target | result |'
-    assert '| scheduler ticks/s, one process (make run) | 1000 (1000-1000) | >= 999 | PASS |' \
-        in table
+    assert '| tick duration p99 / period | 0.20 (0.19-0.21) | <= 0.30 | PASS |' in table
