@@ -32,6 +32,7 @@ CACHE = Path(os.environ.get('XDG_CACHE_HOME', Path.home() / '.cache')) / 'rm_ros
 #: rows that are not one stage: (key, label)
 TOTALS = (
     ('loop_tick_ns', 'whole loop tick'),
+    ('meter_ns', "  the meter's own clock reads around the stages (estimated)"),
     ('rest_ns', '  rest of the tick (not a stage: after-tick calls; the old update, pack, send)'),
     ('publish_states_ns', 'state messages (edge thread, at its rate)'),
     ('world_step_ns', 'simulator step (not the robot)'),
@@ -88,8 +89,14 @@ def per_tick(result: dict[str, Any]) -> dict[str, float]:
     scale = 1000.0 / (ticks * ref)
     stages = {name: v['ns'] for name, v in result['stages'].items()}
     rows = {name: ns * scale for name, ns in stages.items()}
+    for topic, v in result.get('injected', {}).items():
+        rows[f'message callbacks {topic}'] = v['ns'] * scale
     rows['loop_tick_ns'] = result['loop_tick_ns'] * scale
-    rows['rest_ns'] = (result['loop_tick_ns'] - sum(stages.values())) * scale
+    # the meter's clock reads around each stage are in the tick but no stage's
+    calls = sum(v['calls'] for v in result['stages'].values())
+    meter_ns = result.get('wrapper_ns', 0.0) * calls
+    rows['meter_ns'] = meter_ns * scale
+    rows['rest_ns'] = (result['loop_tick_ns'] - sum(stages.values()) - meter_ns) * scale
     rows['publish_states_ns'] = result['publish_states_ns'] * scale
     rows['world_step_ns'] = result['world_step_ns'] * scale
     return rows
@@ -107,9 +114,10 @@ def summarise(results: list[dict[str, Any]]) -> dict[str, Any]:
 
 def _row_names(sides: list[dict[str, Any]]) -> list[tuple[str, str]]:
     total_keys = {k for k, _ in TOTALS}
-    stages = list(dict.fromkeys(
-        n for s in sides for n in s['units'] if n not in total_keys))
-    return [(n, f'  {n}') for n in stages] + list(TOTALS)
+    names = list(dict.fromkeys(n for s in sides for n in s['units'] if n not in total_keys))
+    stages = [(n, f'  {n}') for n in names if not n.startswith('message callbacks')]
+    messages = [(n, n) for n in names if n.startswith('message callbacks')]
+    return stages + list(TOTALS[:3]) + messages + list(TOTALS[3:])
 
 
 def format_table(new: dict[str, Any], old: dict[str, Any] | None, new_name: str,

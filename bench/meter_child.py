@@ -9,6 +9,8 @@ streaming the bench's commands at 100 Hz, and times on this thread's CPU clock
 
 - every component of the loop, by wrapping the scheduler's stages (any commit's layout);
 - the whole loop tick (``hardware.tick``) and the simulator's step apart;
+- each topic's messages handed to the plugins' callbacks (commands, /imu), which the
+  harness hands over between ticks where a running robot's loop takes them in a stage;
 - a fixed reference workload before each round, so every cost reads in units of it and
   two runs (two commits, two hours) compare on a noisy machine.
 
@@ -91,6 +93,26 @@ def wrap_stages(scheduler: Any, ledger: dict[str, list[int]]) -> str:
     return 'inputs/outputs'
 
 
+class _Noop:
+    name = 'noop'
+
+    def __call__(self, now_ns: int, dt: float) -> None:
+        return None
+
+
+def wrapper_cost_ns(calls: int = 20_000) -> float:
+    """What one Timed call adds to the thread's CPU beside the stage itself [ns]."""
+    bare, timed = _Noop(), Timed(_Noop(), {})
+    t0 = _THREAD_NS()
+    for _ in range(calls):
+        bare(0, 0.0)
+    t1 = _THREAD_NS()
+    for _ in range(calls):
+        timed(0, 0.0)
+    t2 = _THREAD_NS()
+    return max(0.0, ((t2 - t1) - (t1 - t0)) / calls)
+
+
 def timed_call(fn: Any, ledger: list[int]) -> Any:
     def call(*args: Any, **kwargs: Any) -> Any:
         t0 = _THREAD_NS()
@@ -99,6 +121,21 @@ def timed_call(fn: Any, ledger: list[int]) -> Any:
         finally:
             ledger[0] += _THREAD_NS() - t0
             ledger[1] += 1
+
+    return call
+
+
+def timed_inject(inject: Any, ledger: dict[str, list[int]]) -> Any:
+    """The host's inject, timed per topic: the callbacks a message runs in the plugins."""
+
+    def call(topic: str, msg: Any) -> Any:
+        t0 = _THREAD_NS()
+        try:
+            return inject(topic, msg)
+        finally:
+            entry = ledger.setdefault(topic, [0, 0])
+            entry[0] += _THREAD_NS() - t0
+            entry[1] += 1
 
     return call
 
@@ -130,6 +167,7 @@ def measure(checkout: Path, ticks: int, rounds: int, warmup: int) -> dict[str, A
     loop = [0, 0]
     world = [0, 0]
     states = [0, 0]
+    injected: dict[str, list[int]] = {}
     references: list[int] = []
     with LockstepRobot() as robot:
         stream_commands(robot)
@@ -138,6 +176,7 @@ def measure(checkout: Path, ticks: int, rounds: int, warmup: int) -> dict[str, A
         layout = wrap_stages(hw.scheduler, stages)
         hw.tick = timed_call(hw.tick, loop)
         robot.world.step = timed_call(robot.world.step, world)
+        robot.host.inject = timed_inject(robot.host.inject, injected)
         publish_states = timed_call(robot.bridge.publish_states, states)
         every = max(1, round(1000.0 / float(robot.bridge_parameters.get('publish_rate', 200.0))))
         step_cpu = 0
@@ -157,6 +196,8 @@ def measure(checkout: Path, ticks: int, rounds: int, warmup: int) -> dict[str, A
             'ticks': ticks * rounds,
             'reference_ns': sorted(references)[len(references) // 2],
             'references_ns': references,
+            # the meter's own clock reads around each stage, inside the loop tick
+            'wrapper_ns': wrapper_cost_ns(),
             'harness_step_ns': step_cpu,  # all the harness ran, sim and injection included
             'loop_tick_ns': loop[0],
             'world_step_ns': world[0],
@@ -165,6 +206,9 @@ def measure(checkout: Path, ticks: int, rounds: int, warmup: int) -> dict[str, A
             'stages': {
                 name: {'ns': v[0], 'calls': v[1], 'worked': v[2]} for name, v in stages.items()
             },
+            # messages handed to the plugins' callbacks (commands, /imu, /diagnostics): in
+            # a running robot the loop's commands and IMU stages do this work
+            'injected': {topic: {'ns': v[0], 'calls': v[1]} for topic, v in injected.items()},
         }
 
 
