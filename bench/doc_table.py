@@ -1,6 +1,6 @@
-"""The latest table of docs/PERFORMANCE.md, written by `make bench`.
+"""The latest table of README.md and docs/PERFORMANCE.md, written by `make bench`.
 
-The page holds the table between two marker comments; a full run (every measurement, the
+Each page holds the table between two marker comments; a full run (every measurement, the
 runs it was asked for, not --quick) replaces what is between them with its own target
 table and one line saying when, where and on which commit it was measured. The page is
 reference: it shows the latest run only, and git keeps the ones before.
@@ -10,6 +10,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+#: the pages that show the latest table (README's Performance and the reference page)
+PAGES = ('README.md', 'docs/PERFORMANCE.md')
 BEGIN = '<!-- make bench writes the table below -->'
 END = '<!-- end of the table make bench writes -->'
 

@@ -84,7 +84,7 @@ def main(argv: list[str] | None = None) -> int:
     os.environ['ROS_DOMAIN_ID'] = str(args.domain_id)
 
     from bench import baseline, robot, throughput, wire_check
-    from bench.doc_table import write_table
+    from bench.doc_table import PAGES, write_table
     from bench.loop_targets import evaluate_targets, format_targets
     from bench.machine import Window, machine_facts
     from bench.report import ROWS, evaluate, format_table
@@ -197,9 +197,10 @@ def main(argv: list[str] | None = None) -> int:
         # a full run is the page's latest table; a partial one would leave rows empty
         caption = (f'`make bench`, {runs} runs, median (min-max), commit {facts["commit"]}, '
                    f'{facts["cpu_model"]} ({facts["cores"]} cores), {facts["date"]}')
-        write_table(ROOT / 'docs' / 'PERFORMANCE.md', format_targets(targets, with_before=False),
-                    caption)
-        print("docs/PERFORMANCE.md: its latest table is this run's")
+        table = format_targets(targets, with_before=False)
+        for page in PAGES:
+            write_table(ROOT / page, table, caption)
+        print("README.md and docs/PERFORMANCE.md: their latest table is this run's")
     return 0 if all(raw[name] for name in only) else 1
 
 

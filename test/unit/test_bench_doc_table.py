@@ -4,7 +4,7 @@ import pathlib
 
 import pytest
 
-from bench.doc_table import BEGIN, END, MarkersMissingError, replace_table, write_table
+from bench.doc_table import BEGIN, END, PAGES, MarkersMissingError, replace_table, write_table
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 
@@ -25,9 +25,10 @@ def test_a_page_without_its_markers_is_refused(page):
         replace_table(page, '| x |', 'caption')
 
 
-def test_the_performance_page_has_its_markers(tmp_path):
-    page = (ROOT / 'docs' / 'PERFORMANCE.md').read_text()
-    copy = tmp_path / 'PERFORMANCE.md'
+@pytest.mark.parametrize('name', PAGES)
+def test_each_page_make_bench_writes_has_its_markers(tmp_path, name):
+    page = (ROOT / name).read_text()
+    copy = tmp_path / 'page.md'
     copy.write_text(page)
     write_table(copy, '| t |\n|---|\n| 1 |', 'caption')
     assert copy.read_text().count(BEGIN) == 1 and '| 1 |' in copy.read_text()
