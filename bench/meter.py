@@ -11,7 +11,8 @@ same process. With ``--against REV`` that commit is cloned into the cache
 (``~/.cache/rm_ros2/meter/<sha>``), set up with its own ``scripts/setup.sh`` once, and its
 runs alternate with this checkout's, so both see the same machine. The table gives each
 component's CPU per tick in reference units (thousandths of the reference workload),
-median over runs, and new / old.
+median over the rounds of all runs (each round against the reference timed just before
+it), and new / old.
 """
 
 from __future__ import annotations
@@ -37,6 +38,7 @@ TOTALS = (
     ('publish_states_ns', 'state messages (edge thread, at its rate)'),
     ('world_step_ns', 'simulator step (not the robot)'),
 )
+_NOT_STAGES = {k for k, _ in TOTALS}
 
 
 def log(text: str) -> None:
@@ -83,32 +85,26 @@ def run_child(checkout: Path, ticks: int, rounds: int, domain_id: int) -> dict[s
     return json.loads(lines[-1])
 
 
-def per_tick(result: dict[str, Any]) -> dict[str, float]:
-    """Each row's CPU per tick in reference units [thousandths of the reference]."""
-    ticks, ref = result['ticks'], result['reference_ns']
-    scale = 1000.0 / (ticks * ref)
-    stages = {name: v['ns'] for name, v in result['stages'].items()}
-    rows = {name: ns * scale for name, ns in stages.items()}
-    for topic, v in result.get('injected', {}).items():
-        rows[f'message callbacks {topic}'] = v['ns'] * scale
-    rows['loop_tick_ns'] = result['loop_tick_ns'] * scale
+def per_tick(rnd: dict[str, Any], wrapper_ns: float) -> dict[str, float]:
+    """One round's CPU per tick, each row in reference units [thousandths of its reference]."""
+    scale = 1000.0 / (rnd['ticks'] * rnd['reference_ns'])
+    rows = {name: ns * scale for name, ns in rnd['rows_ns'].items()}
+    stage_ns = sum(ns for name, ns in rnd['rows_ns'].items()
+                   if name not in _NOT_STAGES and not name.startswith('message callbacks'))
     # the meter's clock reads around each stage are in the tick but no stage's
-    calls = sum(v['calls'] for v in result['stages'].values())
-    meter_ns = result.get('wrapper_ns', 0.0) * calls
+    meter_ns = wrapper_ns * rnd['stage_calls']
     rows['meter_ns'] = meter_ns * scale
-    rows['rest_ns'] = (result['loop_tick_ns'] - sum(stages.values()) - meter_ns) * scale
-    rows['publish_states_ns'] = result['publish_states_ns'] * scale
-    rows['world_step_ns'] = result['world_step_ns'] * scale
+    rows['rest_ns'] = (rnd['rows_ns']['loop_tick_ns'] - stage_ns - meter_ns) * scale
     return rows
 
 
 def summarise(results: list[dict[str, Any]]) -> dict[str, Any]:
-    """Medians over runs: per-tick costs in reference units and in µs, the reference."""
-    rows = [per_tick(r) for r in results]
+    """Medians over every round of every run: per-tick costs in reference units."""
+    rows = [per_tick(rnd, r.get('wrapper_ns', 0.0)) for r in results for rnd in r['rounds']]
     names = list(dict.fromkeys(name for r in rows for name in r))
-    ref_us = statistics.median(r['reference_ns'] for r in results) / 1e3
+    ref_us = statistics.median(rnd['reference_ns'] for r in results for rnd in r['rounds']) / 1e3
     med = {n: statistics.median(r[n] for r in rows if n in r) for n in names}
-    return {'units': med, 'reference_us': ref_us, 'runs': len(results),
+    return {'units': med, 'reference_us': ref_us, 'runs': len(results), 'rounds': len(rows),
             'layout': results[0]['layout']}
 
 
@@ -144,7 +140,8 @@ def format_table(new: dict[str, Any], old: dict[str, Any] | None, new_name: str,
         lines.append(f'| {label} | ' + ' | '.join(cells) + ' |')
     lines.append('')
     lines.append(' '.join(
-        f'{name}: reference workload {s["reference_us"]:.0f} µs of CPU, {s["runs"]} runs, '
+        f'{name}: reference workload {s["reference_us"]:.0f} µs of CPU, {s["runs"]} runs '
+        f'({s["rounds"]} rounds), '
         f'loop layout "{s["layout"]}".' for name, s in zip((new_name, old_name), sides,
                                                           strict=False)))
     return '\n'.join(lines)
@@ -180,7 +177,7 @@ def main(argv: list[str] | None = None) -> int:
     new = summarise(new_runs)
     old = summarise(old_runs) if old_runs else None
     print(f'lockstep CPU meter: {args.runs} runs x {args.rounds} rounds x {args.ticks} ticks, '
-          'CPU per tick, median over runs')
+          'CPU per tick, median over rounds')
     print()
     print(format_table(new, old, f'{head or "this checkout"} (work tree)', args.against))
     if args.json:

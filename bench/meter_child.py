@@ -159,6 +159,17 @@ def stream_commands(robot: Any) -> None:
     robot.publish('/shoot_cmd', ShootCmd(mode=ShootCmd.READY, speed=15.0), rate_hz=100)
 
 
+def _counters(stages: dict[str, list[int]], injected: dict[str, list[int]], loop: list[int],
+              world: list[int], states: list[int]) -> dict[str, tuple[int, int]]:
+    """Every ledger's (CPU [ns], calls) now, by row name."""
+    rows = {name: (v[0], v[1]) for name, v in stages.items()}
+    rows.update({f'message callbacks {topic}': (v[0], v[1]) for topic, v in injected.items()})
+    rows['loop_tick_ns'] = (loop[0], loop[1])
+    rows['world_step_ns'] = (world[0], world[1])
+    rows['publish_states_ns'] = (states[0], states[1])
+    return rows
+
+
 def measure(checkout: Path, ticks: int, rounds: int, warmup: int) -> dict[str, Any]:
     sys.path.insert(0, str(checkout / 'test'))
     from support.lockstep import LockstepRobot
@@ -180,8 +191,11 @@ def measure(checkout: Path, ticks: int, rounds: int, warmup: int) -> dict[str, A
         publish_states = timed_call(robot.bridge.publish_states, states)
         every = max(1, round(1000.0 / float(robot.bridge_parameters.get('publish_rate', 200.0))))
         step_cpu = 0
+        per_round: list[dict[str, Any]] = []
         for _ in range(rounds):
-            references.append(time_reference(5))
+            reference = time_reference(5)
+            references.append(reference)
+            before = _counters(stages, injected, loop, world, states)
             t0 = _THREAD_NS()
             for i in range(ticks):
                 robot.step(1)
@@ -189,6 +203,15 @@ def measure(checkout: Path, ticks: int, rounds: int, warmup: int) -> dict[str, A
                     # the edge thread's work, at its rate: the loop's records to messages
                     publish_states()
             step_cpu += _THREAD_NS() - t0
+            after = _counters(stages, injected, loop, world, states)
+            # each round against the reference timed just before it: the machine's mood
+            # of the moment cancels out round by round
+            per_round.append({
+                'reference_ns': reference, 'ticks': ticks,
+                'rows_ns': {k: after[k][0] - before.get(k, (0, 0))[0] for k in after},
+                'stage_calls': sum(after[k][1] - before.get(k, (0, 0))[1]
+                                   for k in after if k in stages),
+            })
         # read before closing: shutting down runs a last tick of zero output
         return {
             'checkout': str(checkout),
@@ -196,6 +219,7 @@ def measure(checkout: Path, ticks: int, rounds: int, warmup: int) -> dict[str, A
             'ticks': ticks * rounds,
             'reference_ns': sorted(references)[len(references) // 2],
             'references_ns': references,
+            'rounds': per_round,
             # the meter's own clock reads around each stage, inside the loop tick
             'wrapper_ns': wrapper_cost_ns(),
             'harness_step_ns': step_cpu,  # all the harness ran, sim and injection included

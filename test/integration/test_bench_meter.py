@@ -44,6 +44,9 @@ def test_the_meter_times_every_stage_of_the_standard_robot(tmp_path):
     assert run['loop_tick_ns'] + run['world_step_ns'] <= run['harness_step_ns']
     assert run['publish_states_calls'] == ticks // 5  # the edge's 200 Hz
     assert run['reference_ns'] > 0
+    # round by round, the same ledgers
+    assert [r['ticks'] for r in run['rounds']] == [TICKS, TICKS]
+    assert sum(r['rows_ns']['loop_tick_ns'] for r in run['rounds']) == run['loop_tick_ns']
     for label in ('plugin chassis', 'feedback', 'send', 'whole loop tick', 'state messages'):
         assert any(line.startswith(f'|   {label} |') or line.startswith(f'| {label}')
                    for line in stdout.splitlines()), label

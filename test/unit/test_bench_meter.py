@@ -7,11 +7,13 @@ def _meter():
     return bench_module('meter')
 
 
-def _run(reference_ns, stages, loop_ns, layout='ordered'):
+def _run(reference_ns, stages, loop_ns, layout='ordered', rounds=1):
+    """A run of rounds alike: 1000 ticks each, stages and loop tick [ns per round]."""
+    rows = {**stages, 'loop_tick_ns': loop_ns, 'publish_states_ns': 0, 'world_step_ns': 0}
     return {
-        'ticks': 1000, 'reference_ns': reference_ns, 'layout': layout,
-        'loop_tick_ns': loop_ns, 'publish_states_ns': 0, 'world_step_ns': 0,
-        'stages': {name: {'ns': ns, 'calls': 1000, 'worked': 1000} for name, ns in stages.items()},
+        'layout': layout, 'wrapper_ns': 0.0,
+        'rounds': [{'reference_ns': reference_ns, 'ticks': 1000, 'rows_ns': dict(rows),
+                    'stage_calls': 1000 * len(stages)} for _ in range(rounds)],
     }
 
 
@@ -31,7 +33,14 @@ def test_costs_read_in_thousandths_of_the_reference_and_compare_side_by_side():
     assert rows['whole loop tick'].endswith('| 0.75 |')  # 150 units against 200
 
 
-def test_medians_over_runs():
+def test_medians_over_every_round_and_the_meters_own_reads_kept_apart():
     meter = _meter()
     runs = [_run(1_000_000, {'send': ns}, ns) for ns in (10_000_000, 30_000_000, 20_000_000)]
-    assert meter.summarise(runs)['units']['send'] == 20.0
+    runs[0]['rounds'].append(dict(runs[0]['rounds'][0], reference_ns=500_000))  # 20 units
+    summary = meter.summarise(runs)
+    assert summary['units']['send'] == 20.0 and summary['rounds'] == 4
+    # 1 µs of the meter's own per stage call: 1 µs a tick of the 20 µs tick is not the rest
+    run = _run(1_000_000, {'send': 15_000_000}, 20_000_000)
+    run['wrapper_ns'] = 1000.0
+    units = meter.summarise([run])['units']
+    assert units['meter_ns'] == 1.0 and units['rest_ns'] == 4.0
