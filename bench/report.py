@@ -25,7 +25,7 @@ SECTIONS = {
     'cpu': '3. CPU, % of one core (one process: bridge + host + sim, split by thread)',
     'throughput': '4. Feedback decode + dispatch (bridge code, rigs without physics)',
     'baseline': '5. Same 1 kHz loop on an rclpy timer (standard robot actuators, same run)',
-    'split': '6. Sections 1-3 again with can_bridge (+ rm_sim) and rm_robot in two processes',
+    'split': '6. Sections 1-3 again with can_bridge and rm_robot in two processes (rm_sim a third)',
     'wire': '7. From the wire: can0 log of bringup --sim, /chassis_cmd PASSIVE <-> RAW every 0.6 s',
 }
 
@@ -278,7 +278,7 @@ ROWS: tuple[Row, ...] = (
          _get('load', 'groups', 'host_bridge'), None, _LOAD),
         ('split.cpu.projected', '  every loop at its nominal rate (lower bound) [%]',
          _get('load', 'projected', 'host_bridge'), None, _LOAD),
-        ('split.cpu.bridge_proc', 'CPU bridge process (incl. sim physics), streaming [%]',
+        ('split.cpu.bridge_proc', 'CPU bridge process, streaming [%]',
          _get('load', 'process_pct_by_role', 'bridge'), None, _LOAD),
         ('split.cpu.host_proc', 'CPU host process, streaming [%]',
          _get('load', 'process_pct_by_role', 'host'), None, _LOAD),

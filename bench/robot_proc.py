@@ -127,11 +127,11 @@ class Robot:
             )
         )
         files = [*files, overlay]
-        # As make run lays it out: rm_sim (the motors) in a process of its own, reached
-        # through the rm_sim_socket interface; the two-process layout keeps it in the
-        # bridge's process, as the robot split over DDS did before.
+        # As make run and robot.launch.py split:=true lay it out: rm_sim (the motors) in a
+        # process of its own, reached through the rm_sim_socket interface, so neither
+        # layout's loop pays for the simulated motors' side of the bus.
         self.sim = None
-        if role == 'all':
+        if role in ('all', 'bridge'):
             self.sim = SimProcess(files, pathlib.Path(self._tmp) / 'sim')
             files = [*files, self.sim.bridge_overlay]
         args = ['bench_robot', '--ros-args']
