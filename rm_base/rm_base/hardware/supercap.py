@@ -31,7 +31,7 @@ from typing import Any
 
 import can
 
-from rm_base.config.schema import Schema, number, string
+from rm_base.config.schema import Schema, declare, keys, number, string
 from rm_base.errors import InputRejectedError
 from rm_base.hardware.errors import HardwareConfigError
 from rm_base.hardware.protocols import supercap as protocol
@@ -39,42 +39,36 @@ from rm_base.hardware.protocols import supercap as protocol
 _log = logging.getLogger(__name__)
 _NS_PER_S = 1_000_000_000
 
-#: ``supercap``: the super-capacitor controller (absent: none).
-SUPERCAP_SCHEMA = Schema((
-    string('bus', nonempty=True, description='name of the bus (a key of buses) it is on'),
-    string('group', 'chassis', nonempty=True,
-           description="the power-limit group it feeds: the chassis plugin's name"),
-    number('period_s', 0.01, unit='s', gt=0.0, le=0.1,
-           description="how often the referee's limit and buffer are sent to it"),
-    number('timeout_s', 0.05, unit='s', gt=0.0, le=1.0,
-           description='no feedback this long: offline, the referee limit alone'),
-    number('fault_clear_s', 0.5, unit='s', ge=0.0, le=60.0,
-           description='an error or a silence clears after this long of clean feedback'),
-    number('reserve', 0.3, ge=0.0, le=1.0,
-           description='energy kept (a fraction of full): a burst stops at it; below it '
-           'the chassis draws less until the capacitor is back to recharge_to'),
-    number('recharge_to', 0.5, ge=0.0, le=1.0,
-           description='energy (a fraction of full) to refill to once below the reserve'),
-    number('charge_w', 15.0, unit='W', ge=0.0,
-           description='how far under the referee limit the chassis stays while refilling'),
-    number('burst_w', 100.0, unit='W', ge=0.0,
-           description='most power a burst takes from the capacitor beyond the referee limit'),
-))
-
-
-@dataclasses.dataclass(frozen=True)
+@dataclasses.dataclass(frozen=True, kw_only=True)
 class SupercapConfig:
-    """The ``supercap`` table (keys, units and defaults: ``SUPERCAP_SCHEMA``)."""
+    """The ``supercap`` table: the super-capacitor controller (absent: none)."""
 
-    bus: str
-    group: str = 'chassis'
-    period_s: float = 0.01
-    timeout_s: float = 0.05
-    fault_clear_s: float = 0.5
-    reserve: float = 0.3
-    recharge_to: float = 0.5
-    charge_w: float = 15.0
-    burst_w: float = 100.0
+    bus: str = declare(string, nonempty=True,
+                       description='name of the bus (a key of buses) it is on')
+    group: str = declare(string, 'chassis', nonempty=True,
+                         description="the power-limit group it feeds: the chassis plugin's name")
+    period_s: float = declare(number, 0.01, unit='s', gt=0.0, le=0.1,
+                              description="how often the referee's limit and buffer are sent "
+                              'to it')
+    timeout_s: float = declare(number, 0.05, unit='s', gt=0.0, le=1.0,
+                               description='no feedback this long: offline, the referee limit '
+                               'alone')
+    fault_clear_s: float = declare(number, 0.5, unit='s', ge=0.0, le=60.0,
+                                   description='an error or a silence clears after this long '
+                                   'of clean feedback')
+    reserve: float = declare(number, 0.3, ge=0.0, le=1.0,
+                             description='energy kept (a fraction of full): a burst stops at '
+                             'it; below it the chassis draws less until the capacitor is back '
+                             'to recharge_to')
+    recharge_to: float = declare(number, 0.5, ge=0.0, le=1.0,
+                                 description='energy (a fraction of full) to refill to once '
+                                 'below the reserve')
+    charge_w: float = declare(number, 15.0, unit='W', ge=0.0,
+                              description='how far under the referee limit the chassis stays '
+                              'while refilling')
+    burst_w: float = declare(number, 100.0, unit='W', ge=0.0,
+                             description='most power a burst takes from the capacitor beyond '
+                             'the referee limit')
 
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> SupercapConfig:
@@ -87,6 +81,10 @@ class SupercapConfig:
         if values['recharge_to'] < values['reserve']:
             raise HardwareConfigError('supercap.recharge_to must be >= supercap.reserve')
         return cls(**values)
+
+
+#: ``supercap``'s keys as a table reader (and the parameter reference's rows)
+SUPERCAP_SCHEMA = Schema(tuple(key for _, key in keys(SupercapConfig)))
 
 
 @dataclasses.dataclass(frozen=True)
