@@ -30,15 +30,19 @@ ROOT = Path(__file__).resolve().parents[1]
 CHILD = ROOT / 'bench' / 'meter_child.py'
 CACHE = Path(os.environ.get('XDG_CACHE_HOME', Path.home() / '.cache')) / 'rm_ros2' / 'meter'
 
-#: rows that are not one stage: (key, label)
-TOTALS = (
+#: rows that are not one stage, (key, label): the tick's, after its stages; the others
+#: after the message callbacks
+TICK_ROWS = (
     ('loop_tick_ns', 'whole loop tick'),
     ('meter_ns', "  the meter's own clock reads around the stages (estimated)"),
     ('rest_ns', '  rest of the tick (not a stage: after-tick calls; the old update, pack, send)'),
+)
+OTHER_ROWS = (
     ('publish_states_ns', 'state messages (edge thread, at its rate)'),
     ('world_step_ns', 'simulator step (not the robot)'),
 )
-_NOT_STAGES = {k for k, _ in TOTALS}
+_NOT_STAGES = {k for k, _ in TICK_ROWS + OTHER_ROWS}
+_MESSAGES = 'message callbacks'
 
 
 def log(text: str) -> None:
@@ -90,7 +94,7 @@ def per_tick(rnd: dict[str, Any], wrapper_ns: float) -> dict[str, float]:
     scale = 1000.0 / (rnd['ticks'] * rnd['reference_ns'])
     rows = {name: ns * scale for name, ns in rnd['rows_ns'].items()}
     stage_ns = sum(ns for name, ns in rnd['rows_ns'].items()
-                   if name not in _NOT_STAGES and not name.startswith('message callbacks'))
+                   if name not in _NOT_STAGES and not name.startswith(_MESSAGES))
     # the meter's clock reads around each stage are in the tick but no stage's
     meter_ns = wrapper_ns * rnd['stage_calls']
     rows['meter_ns'] = meter_ns * scale
@@ -109,11 +113,10 @@ def summarise(results: list[dict[str, Any]]) -> dict[str, Any]:
 
 
 def _row_names(sides: list[dict[str, Any]]) -> list[tuple[str, str]]:
-    total_keys = {k for k, _ in TOTALS}
-    names = list(dict.fromkeys(n for s in sides for n in s['units'] if n not in total_keys))
-    stages = [(n, f'  {n}') for n in names if not n.startswith('message callbacks')]
-    messages = [(n, n) for n in names if n.startswith('message callbacks')]
-    return stages + list(TOTALS[:3]) + messages + list(TOTALS[3:])
+    names = list(dict.fromkeys(n for s in sides for n in s['units'] if n not in _NOT_STAGES))
+    stages = [(n, f'  {n}') for n in names if not n.startswith(_MESSAGES)]
+    messages = [(n, n) for n in names if n.startswith(_MESSAGES)]
+    return stages + list(TICK_ROWS) + messages + list(OTHER_ROWS)
 
 
 def format_table(new: dict[str, Any], old: dict[str, Any] | None, new_name: str,
