@@ -5,12 +5,14 @@ behind the executor's thread (docs/PERFORMANCE.md). The inbox's subscriptions li
 node that no executor spins (``rm_base.ros.node_main.inbox_node`` makes one beside the owner).
 The inbox's own thread waits on them (rclpy's wait set, the GIL released while it waits),
 takes what arrives (:class:`rm_base.ros.take.TakeBuffer`: the GIL released while rcl
-takes) and appends its serialised bytes to the subscription's queue. The loop's first
-stage, :meth:`Inbox.__call__`, deserialises every queued message, stamps it with the
-tick's receive time and hands it to the plugin's callback, the same callback a
-subscription or ``inject`` runs, so a command reaches its plugin at the next tick.
-Deserialising is most of a take's cost, and the loop pays it with its caches warm: in a
-thread that wakes for each message it cost several times as much (docs/PERFORMANCE.md).
+takes), deserialises it and appends the message to the subscription's queue. The loop's
+first stage, :meth:`Inbox.__call__`, stamps every queued message with the tick's receive
+time and hands it to the plugin's callback, the same callback a subscription or
+``inject`` runs, so a command reaches its plugin at the next tick. Deserialising is most
+of a take's cost; done here, in the loop's sleep, it stays out of the tick: a tick's
+commands stage costs a third of what it did, the process as much CPU as before
+(docs/PERFORMANCE.md, "Commands arrive deserialised"). A message that does not
+deserialise is counted in ``errors``, logged, and never queued.
 
 The loop itself never takes from DDS: a take can wait a third of a second for Fast DDS's locks
 when another node joins (docs/PERFORMANCE.md, "No DDS call from the loop"), and
@@ -82,8 +84,8 @@ class _Subscription(NamedTuple):
     msg_type: type
     callback: Callable[[Any, int], Any]
     topic: str
-    # serialised messages, appended by the inbox thread, handed out by the loop
-    queue: collections.deque[bytes]
+    # messages deserialised by the inbox thread, handed out by the loop
+    queue: collections.deque[Any]
     gaps: SequenceGaps  # messages lost before the inbox thread took them
 
 
@@ -195,7 +197,7 @@ class Inbox:
                 taken += 1
                 counts[entry.topic] += 1
                 try:
-                    entry.callback(deserialize_message(data, entry.msg_type), receive_ns)
+                    entry.callback(data, receive_ns)
                 except Exception:  # a plugin's callback must not stop the loop
                     self._callback_failed(entry.topic)
         return taken > 0
@@ -262,9 +264,20 @@ class Inbox:
                     _log.warning('%s: %d message(s) lost before they could be taken so far '
                                  "(DDS's keep-last history overwritten: a flood?)%s",
                                  entry.topic, gaps.lost, more)
+            try:
+                msg = deserialize_message(data, entry.msg_type)
+            except Exception:  # counted and said; the thread takes on
+                self._malformed(entry.topic)
+                continue
             if len(queue) == queue.maxlen:
                 self._dropped(entry.topic, queue.maxlen)
-            queue.append(data)
+            queue.append(msg)
+
+    def _malformed(self, topic: str) -> None:
+        self.errors += 1
+        more = self._error_log.due(time.monotonic_ns())
+        if more is not None:
+            _log.exception('a message on %s could not be deserialised%s', topic, more)
 
     def _dropped(self, topic: str, depth: int | None) -> None:
         self.dropped_by_topic[topic] += 1

@@ -149,6 +149,40 @@ def test_input_stages_of_plugins_run_before_the_plugins_and_leave_on_release(ros
     node.destroy_node()
 
 
+def test_messages_are_deserialised_by_the_inbox_thread_and_a_malformed_one_is_counted(
+    ros_context, monkeypatch, caplog
+):
+    # Deserialising is most of a take's cost: it stays out of the loop's tick.
+    from rm_base.plugin import inbox as inbox_module
+
+    real = inbox_module.deserialize_message
+    threads = []
+
+    def deserialize(data, msg_type):
+        threads.append(threading.get_ident())
+        if len(threads) == 1:
+            raise ValueError('malformed')
+        return real(data, msg_type)
+
+    monkeypatch.setattr(inbox_module, 'deserialize_message', deserialize)
+    node = Node('inbox_test', context=ros_context)
+    inbox = Inbox(inbox_node(node), node.get_clock())
+    got = []
+    inbox.subscribe(UInt32, '/inbox_raw', lambda msg, ns: got.append(msg.data), 10)
+    pub = node.create_publisher(UInt32, '/inbox_raw', 10)
+    assert wait_until(lambda: pub.get_subscription_count() == 1, 5.0)
+    with caplog.at_level(logging.ERROR, logger='rm_base.plugin.inbox'):
+        pub.publish(UInt32(data=7))
+        pub.publish(UInt32(data=8))
+        assert wait_until(lambda: inbox.pending == 1 and inbox.errors == 1, 5.0)
+    assert 'a message on /inbox_raw could not be deserialised' in caplog.text
+    assert inbox(0, 0.001) is True
+    assert got == [8] and inbox.taken == 1
+    assert len(threads) == 2 and threading.get_ident() not in threads
+    inbox.destroy()
+    node.destroy_node()
+
+
 def test_the_loop_never_takes_from_dds_and_runs_on_while_a_take_blocks(ros_context, monkeypatch):
     # A take can wait a third of a second for Fast DDS's locks when a node joins
     # (docs/PERFORMANCE.md): only the inbox's thread may wait, never the loop.
