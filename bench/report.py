@@ -246,6 +246,8 @@ ROWS: tuple[Row, ...] = (
          _get('scheduler_thread', 'scheduler', 'missed_pct'), None, _ALL),
         ('bl.ste.missed', 'rclpy timer, SingleThreadedExecutor: missed [%]',
          _get('rclpy_single_threaded', 'scheduler', 'missed_pct'), None, _STE),
+        ('bl.thread.tick.p99', 'scheduler thread: tick duration p99 [µs]',
+         _get('scheduler_thread', 'scheduler', 'tick_us', 'p99'), None, _ALL),
         ('bl.thread.cpu', 'scheduler thread: CPU [%]',
          _get('scheduler_thread', 'loop_cpu_pct'), None, _ALL),
         ('bl.ste.cpu', 'rclpy timer, SingleThreadedExecutor: CPU [%]',

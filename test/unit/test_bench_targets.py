@@ -2,6 +2,7 @@
 
 import math
 
+import pytest
 from support.bench import bench_module
 
 
@@ -67,12 +68,38 @@ def test_a_value_that_would_read_as_its_bound_gets_the_digits_that_tell_them_apa
     ]
     table = targets.format_targets(targets.evaluate_targets(rows))
     line = _line(table, 'period error p99 / bare sleeper p99')
-    assert '| 0.502 (0.496-0.503) | <= 0.50 | MISS |' in line
+    assert '| 0.502 (0.496-0.503) | - | <= 0.50 | MISS |' in line
 
 
 def test_the_docs_table_has_no_before_column():
     targets = _loop_targets()
     rows = [{'key': 'sched.tick.p99', 'values': [200.0, 210.0, 190.0]}]
     table = targets.format_targets(targets.evaluate_targets(rows), with_before=False)
-    assert table.splitlines()[0] == '| metric | median (min-max) | target | result |'
-    assert '| tick duration p99 / period | 0.20 (0.19-0.21) | <= 0.30 | PASS |' in table
+    assert table.splitlines()[0] == (
+        '| metric | median (min-max) | floor (min-max) | target | result |'
+    )
+    assert '| tick duration p99 / period | 0.20 (0.19-0.21) | - | <= 0.30 | PASS |' in table
+
+
+def test_a_floor_is_the_same_ratio_for_the_loop_with_only_its_actuators_run_by_run():
+    targets = _loop_targets()
+    rows = [
+        {'key': 'sched.tick.p99', 'values': [800.0, 900.0, 850.0]},
+        {'key': 'bl.thread.tick.p99', 'values': [350.0, 230.0, 310.0]},
+        {'key': 'cpu.load.host_bridge', 'values': [40.0, 60.0, 30.0]},
+        {'key': 'bl.thread.cpu', 'values': [22.0, 30.0, 9.0]},
+        {'key': 'bl.evt.cpu', 'values': [20.0, 60.0, 10.0]},
+    ]
+    evaluated = targets.evaluate_targets(rows)
+    tick = _by_label(evaluated, 'tick duration p99 / period')
+    assert (tick['floor'], tick['floor_min'], tick['floor_max']) == pytest.approx(
+        (0.31, 0.23, 0.35))
+    cpu = _by_label(evaluated, 'robot CPU streaming / EventsExecutor')
+    # 1.1, 0.5, 0.9: each run's loop against the same run's EventsExecutor loop
+    assert (cpu['floor'], cpu['floor_min'], cpu['floor_max']) == pytest.approx((0.9, 0.5, 1.1))
+    table = targets.format_targets(evaluated)
+    # the floor printed beside the target it sits above
+    assert '| 0.85 (0.80-0.90) | 0.31 (0.23-0.35) | <= 0.30 | MISS |' in _line(
+        table, 'tick duration p99 / period')
+    # a line without a floor, or a floor the run did not measure, shows a dash
+    assert '| - |' in _line(table, 'period error p99 / bare sleeper p99')
