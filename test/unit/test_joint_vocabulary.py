@@ -4,6 +4,8 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given
+from hypothesis import strategies as st
 from rm_base.joints import (
     InvalidTargetError,
     JointState,
@@ -51,6 +53,40 @@ def test_a_target_built_elsewhere_is_checked_field_by_field():
         checked((Mode.VELOCITY, 2.0))
     with pytest.raises(InvalidTargetError, match='velocity is not a finite number'):
         checked(JointTarget.with_velocity(math.inf))
+
+
+_FIELD_VALUES = st.one_of(
+    st.floats(allow_nan=True, allow_infinity=True), st.integers(-3, 3), st.booleans(),
+    st.just('1.0'), st.just(np.float32(0.5)),
+)
+
+
+@given(mode=st.one_of(st.sampled_from(Mode), st.integers(-1, 6)),
+       fields=st.one_of(st.tuples(*[_FIELD_VALUES] * 5), st.tuples(*[st.floats()] * 5)))
+def test_checked_agrees_with_the_field_by_field_check(mode, fields):
+    # checked() returns an already valid target as it is; that must change no verdict.
+    position, velocity, effort, kp, kd = fields
+    target = JointTarget(mode, position, velocity, effort, kp, kd)
+    try:
+        expected = check_target(
+            mode, position=position, velocity=velocity, effort=effort, kp=kp, kd=kd
+        )
+    except InvalidTargetError as err:
+        with pytest.raises(InvalidTargetError) as info:
+            checked(target)
+        assert info.value.problem is err.problem
+    else:
+        got = checked(target)
+        assert got == expected and got.mode is expected.mode
+        assert all(type(getattr(got, name)) is float
+                   for name in ('position', 'velocity', 'effort', 'kp', 'kd'))
+
+
+def test_a_valid_target_is_passed_on_as_it_is():
+    target = JointTarget.with_mit(1e308, 1e308, 0.0, 1.0, 0.5)  # sums past inf, still valid
+    assert checked(target) == target
+    target = JointTarget.with_velocity(2.0)
+    assert checked(target) is target
 
 
 def test_a_state_without_a_stamp_was_never_measured():
