@@ -332,8 +332,10 @@ class PluginBase:
     @property
     def state(self) -> Enum:
         """The current state."""
-        self._require_init()
-        state: Enum = self._sm.state
+        machine = self._machine  # read several times a run: one lookup, not three calls
+        if machine is None:
+            raise self._not_initialised()
+        state: Enum = machine.state
         return state
 
     @property
@@ -668,7 +670,10 @@ class PluginBase:
 
     def _require_init(self) -> None:
         if self._machine is None:
-            raise RuntimeError(f'{type(self).__name__}: call init() first')
+            raise self._not_initialised()
+
+    def _not_initialised(self) -> RuntimeError:
+        return RuntimeError(f'{type(self).__name__}: call init() first')
 
     # -- framework: parameters ------------------------------------------------------------
 
@@ -721,7 +726,7 @@ class PluginBase:
     def params(self) -> PluginParams:
         """The plugin's parameters (``<name>.<key>``); from ``init`` on."""
         if self._params is None:
-            raise RuntimeError(f'{type(self).__name__}: call init() first')
+            raise self._not_initialised()
         return self._params
 
     @property
@@ -733,7 +738,7 @@ class PluginBase:
     @property
     def _nio(self) -> NodeIO:
         if self._io is None:
-            raise RuntimeError(f'{type(self).__name__}: call init() first')
+            raise self._not_initialised()
         return self._io
 
     def _where(self) -> str:

@@ -73,6 +73,14 @@ def test_after_init_the_plugin_is_disabled_in_its_safe_state(plugin):
     assert plugin.gain == 2.0
 
 
+def test_before_init_the_state_and_the_joints_say_init_is_missing():
+    plugin = WheelPlugin()
+    with pytest.raises(RuntimeError, match=r'WheelPlugin: call init\(\) first'):
+        _ = plugin.state
+    with pytest.raises(RuntimeError, match=r'call init\(\) first'):
+        plugin.zero_output()
+
+
 def test_run_while_disabled_does_nothing(plugin, sent):
     command(plugin, 1.0, T0)
     plugin.run(at(T0))
