@@ -4,14 +4,16 @@ A test node publishes a fixed schedule on two topics (one rm_msgs type, one std 
 while `rmcli bag record` runs; the bag must hold the same messages in the same order with
 the same gaps, and `rmcli bag play` must give them back to a test subscriber the same way.
 
-Timing tolerance: every gap between consecutive messages may differ by GAP_TOLERANCE_S
-(80 ms) from the original: the recorded gaps from the gaps between the publish calls, the
-played gaps from the recorded ones. On a quiet machine they agree within a few ms; the
-margin is for the 2-vCPU VM under CPU steal or a parallel test run, where a process can
-wait tens of ms for a core.
+Timing tolerance: each message's time, less the original's (the recorded times less the
+publish calls', the played times less the recorded ones), may spread over TIMING_TOLERANCE_S
+(300 ms) across the schedule (1.15 s, gaps of 50-300 ms). On a quiet machine they agree
+within a few ms; the margin is for the 2-vCPU VM under CPU steal or a parallel test run,
+where the recorder or the subscriber can wait 100 ms for a core and then take two messages
+at once: their gap shrinks to nothing, but neither is more than the wait late. A recorder
+or player that lost the timing (every message at once, or at twice the rate) is 0.58 s or
+more off.
 """
 
-import itertools
 import signal
 import subprocess
 import sys
@@ -33,7 +35,7 @@ from rm_msgs.msg import ChassisCmd
 pytestmark = [pytest.mark.ros, pytest.mark.slow]
 
 TIMEOUT_S = 30.0
-GAP_TOLERANCE_S = 0.08
+TIMING_TOLERANCE_S = 0.3
 CMD_TOPIC = '/cli_bag/chassis_cmd'
 TEXT_TOPIC = '/cli_bag/chatter'
 # (time from start [s], topic): gaps of 50..300 ms, alternating topics and not.
@@ -68,8 +70,10 @@ def schedule_message(index, topic):
     return String(data=f'text {index}')
 
 
-def gaps(times):
-    return [b - a for a, b in itertools.pairwise(times)]
+def timing_spread(times, originals):
+    """How far apart the messages' delays are [s] (0: every gap kept exactly)."""
+    delays = [t - o for t, o in zip(times, originals, strict=True)]
+    return max(delays) - min(delays)
 
 
 class Graph:
@@ -177,9 +181,8 @@ def recording(tmp_path_factory):
 def test_record_keeps_every_message_in_order_with_its_timing(recording):
     recorded = read_bag(recording['bag'])
     assert [(topic, msg) for topic, msg, _ in recorded] == recording['sent']
-    expected = gaps(recording['sent_at'])
-    for got, want in zip(gaps([t for _, _, t in recorded]), expected, strict=True):
-        assert got == pytest.approx(want, abs=GAP_TOLERANCE_S)
+    recorded_at = [t for _, _, t in recorded]
+    assert timing_spread(recorded_at, recording['sent_at']) <= TIMING_TOLERANCE_S
 
 
 def test_recorded_bag_has_type_hashes_and_offered_qos(recording):
@@ -200,9 +203,8 @@ def test_recorded_bag_has_type_hashes_and_offered_qos(recording):
 def test_play_gives_back_the_same_messages_in_order_with_their_timing(recording):
     received = play(recording['bag'])
     assert [(topic, msg) for _, topic, msg in received] == recording['sent']
-    recorded_gaps = gaps([t for _, _, t in read_bag(recording['bag'])])
-    for got, want in zip(gaps([t for t, _, _ in received]), recorded_gaps, strict=True):
-        assert got == pytest.approx(want, abs=GAP_TOLERANCE_S)
+    recorded_at = [t for _, _, t in read_bag(recording['bag'])]
+    assert timing_spread([t for t, _, _ in received], recorded_at) <= TIMING_TOLERANCE_S
 
 
 def test_play_at_rate_2_halves_the_duration(recording):
@@ -212,7 +214,7 @@ def test_play_at_rate_2_halves_the_duration(recording):
     recorded_span = recorded[-1][2] - recorded[0][2]  # ~1.15 s
     played_span = received[-1][0] - received[0][0]
     # Half of ~1.15 s is ~0.58 s; 1x playback (~1.15 s) would be ~0.58 s off, far outside.
-    assert played_span == pytest.approx(recorded_span / 2, abs=2 * GAP_TOLERANCE_S)
+    assert played_span == pytest.approx(recorded_span / 2, abs=TIMING_TOLERANCE_S)
 
 
 def test_sqlite3_storage_records_and_plays_back(tmp_path):
