@@ -18,7 +18,7 @@ from support.ros import wait_until
 from support.terminal import Terminal
 from support.user_session import user_environment
 
-from rm_msgs.msg import ChassisCmd, RemoteInput, ShootCmd
+from rm_msgs.msg import ChassisCmd, GimbalCmd, RemoteInput, ShootCmd
 
 pytestmark = pytest.mark.ros
 
@@ -31,6 +31,8 @@ def test_without_sim_the_mapping_runs_in_teleop_and_its_commands_go_to_the_topic
     node.create_subscription(Twist, '/vel_cmd', vel.append, 10)
     node.create_subscription(ChassisCmd, '/chassis_cmd', chassis.append, 10)
     node.create_subscription(ShootCmd, '/shoot_cmd', shoot.append, 10)
+    # a robot subscribes all four: teleop takes keys once each of its topics has a subscriber
+    node.create_subscription(GimbalCmd, '/gimbal_cmd', lambda _m: None, 10)
     keyboard = Terminal(f'exec {sys.executable} -m rm_bringup.cli teleop', user_environment())
     try:
         assert wait_until(lambda: chassis, WAIT_S, spin=executor.spin_once), keyboard.screen

@@ -40,6 +40,8 @@ from .teleop_keys import Hands, TerminalKeys
 SIM_REMOTE_TOPIC = '/rm_sim/remote'
 #: How long Ctrl-C keeps sending PASSIVE before leaving [s] (several of rm_manual's frames).
 _STOP_S = 0.3
+# How long teleop waits for its frames' subscriber before it takes keys anyway [s].
+_HEARD_WAIT_S = 15.0
 _COMMAND_TOPICS = ('chassis_cmd', 'vel_cmd', 'gimbal_cmd', 'shoot_cmd')
 
 
@@ -127,10 +129,14 @@ def run(args: argparse.Namespace) -> int:
     except MappingError as err:
         raise CliError(str(err)) from None
     with cli_node('teleop') as node:
-        send = _sender(node, args.sim)
+        send, heard = _sender(node, args.sim)
         target = args.sim or ', '.join(f'/{t}' for t in _COMMAND_TOPICS)
-        print(f'teleop -> {target}\r\n'
-              'W A S D move, SHIFT (capitals) / CTRL gears, Q E and arrows are the mouse, '
+        print(f'teleop -> {target}: waiting for its subscriber\r', flush=True)
+        # Keys pressed before discovery matched would be published to no one.
+        if not wait_until_heard(heard, _HEARD_WAIT_S):
+            print(f'nobody subscribes {target} yet (is the robot running?): '
+                  'keys are sent anyway\r', flush=True)
+        print('W A S D move, SHIFT (capitals) / CTRL gears, Q E and arrows are the mouse, '
               'space fires,\r\nR friction, F GYRO, G TWIST, P PASSIVE on/off, Ctrl-C quits\r',
               flush=True)
         with keyboard_terminal(fd):
@@ -138,8 +144,26 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _sender(node: Any, sim_topic: str | None) -> Callable[[DbusFrame, Commands], None]:
-    """What sends one frame's worth: the frame to rm_sim, or the commands to the topics."""
+def wait_until_heard(
+    heard: Callable[[], bool], timeout_s: float, sleep: Callable[[float], None] = time.sleep,
+    clock: Callable[[], float] = time.monotonic,
+) -> bool:
+    """Wait until heard() is true (every publisher has a subscriber), at most timeout_s."""
+    deadline = clock() + timeout_s
+    while not heard():
+        if clock() >= deadline:
+            return False
+        sleep(0.05)
+    return True
+
+
+def _sender(
+    node: Any, sim_topic: str | None
+) -> tuple[Callable[[DbusFrame, Commands], None], Callable[[], bool]]:
+    """What sends one frame's worth, and whether each of its publishers is heard yet.
+
+    The frame goes to rm_sim's receiver, or the commands to their topics.
+    """
     from geometry_msgs.msg import Twist
     from rclpy.qos import QoSProfile, ReliabilityPolicy
 
@@ -148,7 +172,8 @@ def _sender(node: Any, sim_topic: str | None) -> Callable[[DbusFrame, Commands],
     if sim_topic is not None:
         qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
         remote = node.create_publisher(RemoteInput, sim_topic, qos)
-        return lambda frame, _c: remote.publish(remote_message(frame))
+        return (lambda frame, _c: remote.publish(remote_message(frame)),
+                lambda: remote.get_subscription_count() > 0)
     types = dict(zip(_COMMAND_TOPICS, (ChassisCmd, Twist, GimbalCmd, ShootCmd), strict=True))
     publishers = {t: node.create_publisher(types[t], f'/{t}', 10) for t in _COMMAND_TOPICS}
 
@@ -157,7 +182,7 @@ def _sender(node: Any, sim_topic: str | None) -> Callable[[DbusFrame, Commands],
         for topic, msg in command_messages(c, stamp).items():
             publishers[topic].publish(msg)
 
-    return publish
+    return publish, lambda: all(p.get_subscription_count() > 0 for p in publishers.values())
 
 
 def _drive(fd: int, mapping: ManualMapping, send: Callable[[DbusFrame, Commands], None],

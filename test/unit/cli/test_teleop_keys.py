@@ -85,3 +85,19 @@ def test_the_frame_puts_the_right_switch_where_the_mapping_says_and_the_mapping_
     assert describe(down, mapping, commands).endswith(
         '-> chassis PASSIVE NORMAL v +0.0 +0.0 | gimbal PASSIVE yaw +0.0 pitch +0.0 | '
         'shooter PASSIVE')
+
+
+def test_teleop_waits_for_a_subscriber_then_takes_keys_or_gives_up_at_the_timeout():
+    from rm_bringup.cli.teleop import wait_until_heard
+
+    now = [0.0]
+
+    def sleep(s):
+        now[0] += s
+
+    answers = iter([False, False, True])
+    assert wait_until_heard(lambda: next(answers), 1.0, sleep, lambda: now[0])
+    assert now[0] == pytest.approx(0.1)
+    now[0] = 0.0
+    assert not wait_until_heard(lambda: False, 1.0, sleep, lambda: now[0])
+    assert 1.0 <= now[0] < 1.1
