@@ -56,7 +56,6 @@ DEFAULT_WAIT_FOR_SUBSCRIBERS_S = 5.0
 DEFAULT_CLOCK_HZ = 40.0
 CLOCK_TOPIC = '/clock'
 _ACK_TIMEOUT_S = 2.0
-_POLL_S = 0.02
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -137,7 +136,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Play the bag (again and again with --loop) until done or SIGINT/SIGTERM."""
     from .qos import offer_for_recorded
-    from .ros_node import cli_node, stop_on_signals
+    from .ros_node import cli_node, stop_on_signals, wait_until_heard
 
     path = Path(args.bag_path)
     remaps = parse_remaps(args.remap)
@@ -174,7 +173,7 @@ def run(args: argparse.Namespace) -> int:
                 clock = ClockPublisher(node, args.clock)
             # /clock too: a sim-time subscriber that matched late would miss the first ticks
             waited = [*publishers.values(), *([clock.publisher] if clock is not None else [])]
-            _wait_for_subscribers(waited, args.wait_for_subscribers, stop)
+            wait_until_heard(waited, args.wait_for_subscribers, stop.is_set)
             options = PlayOptions(args.rate, args.loop, args.start_offset, args.delay)
             played = play(
                 reader, path, playable, publishers, options=options, stop=stop, clock=clock,
@@ -184,14 +183,6 @@ def run(args: argparse.Namespace) -> int:
                 _flush(publisher)
     print(f'Played {played} messages on {len(publishers)} topics')
     return 0
-
-
-def _wait_for_subscribers(publishers, timeout_s: float, stop) -> None:
-    deadline = time.monotonic() + timeout_s
-    while not stop.is_set() and time.monotonic() < deadline:
-        if all(p.get_subscription_count() > 0 for p in publishers):
-            return
-        time.sleep(_POLL_S)
 
 
 class ClockPublisher:

@@ -6,7 +6,7 @@ import os
 import signal
 import threading
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from typing import TYPE_CHECKING, Any
 
@@ -106,6 +106,23 @@ def wait_for_topic_types(node: Node, topic: str, timeout_s: float | None) -> lis
         if deadline is not None and time.monotonic() >= deadline:
             return []
         time.sleep(_POLL_PERIOD_S)
+
+
+def wait_until_heard(
+    publishers: Iterable[Any], timeout_s: float, stop: Callable[[], bool] = lambda: False,
+    sleep: Callable[[float], None] = time.sleep, clock: Callable[[], float] = time.monotonic,
+) -> bool:
+    """Wait until every publisher has a subscriber, at most timeout_s or until stop().
+
+    Returns whether they all have one.
+    """
+    publishers = list(publishers)
+    deadline = clock() + timeout_s
+    while not all(p.get_subscription_count() > 0 for p in publishers):
+        if stop() or clock() >= deadline:
+            return False
+        sleep(_POLL_PERIOD_S)
+    return True
 
 
 def resolve_topic_type(

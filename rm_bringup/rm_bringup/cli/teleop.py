@@ -32,7 +32,7 @@ from rm_plugins.manual.mapping import ManualMapping, MappingError, load_mapping
 from .errors import CliError
 from .message_yaml import message_constants
 from .options import positive_float
-from .ros_node import cli_node
+from .ros_node import cli_node, wait_until_heard
 from .teleop_keys import Hands, TerminalKeys
 
 #: rm_sim's receiver input (rm_base.bridge.sim_remote); can_bridge's in-process sim has
@@ -129,11 +129,11 @@ def run(args: argparse.Namespace) -> int:
     except MappingError as err:
         raise CliError(str(err)) from None
     with cli_node('teleop') as node:
-        send, heard = _sender(node, args.sim)
+        send, publishers = _sender(node, args.sim)
         target = args.sim or ', '.join(f'/{t}' for t in _COMMAND_TOPICS)
         print(f'teleop -> {target}: waiting for its subscriber\r', flush=True)
         # Keys pressed before discovery matched would be published to no one.
-        if not wait_until_heard(heard, _HEARD_WAIT_S):
+        if not wait_until_heard(publishers, _HEARD_WAIT_S):
             print(f'nobody subscribes {target} yet (is the robot running?): '
                   'keys are sent anyway\r', flush=True)
         print('W A S D move, SHIFT (capitals) / CTRL gears, Q E and arrows are the mouse, '
@@ -144,23 +144,10 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def wait_until_heard(
-    heard: Callable[[], bool], timeout_s: float, sleep: Callable[[float], None] = time.sleep,
-    clock: Callable[[], float] = time.monotonic,
-) -> bool:
-    """Wait until heard() is true (every publisher has a subscriber), at most timeout_s."""
-    deadline = clock() + timeout_s
-    while not heard():
-        if clock() >= deadline:
-            return False
-        sleep(0.05)
-    return True
-
-
 def _sender(
     node: Any, sim_topic: str | None
-) -> tuple[Callable[[DbusFrame, Commands], None], Callable[[], bool]]:
-    """What sends one frame's worth, and whether each of its publishers is heard yet.
+) -> tuple[Callable[[DbusFrame, Commands], None], list[Any]]:
+    """What sends one frame's worth, and the publishers it sends with.
 
     The frame goes to rm_sim's receiver, or the commands to their topics.
     """
@@ -172,8 +159,7 @@ def _sender(
     if sim_topic is not None:
         qos = QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT)
         remote = node.create_publisher(RemoteInput, sim_topic, qos)
-        return (lambda frame, _c: remote.publish(remote_message(frame)),
-                lambda: remote.get_subscription_count() > 0)
+        return (lambda frame, _c: remote.publish(remote_message(frame))), [remote]
     types = dict(zip(_COMMAND_TOPICS, (ChassisCmd, Twist, GimbalCmd, ShootCmd), strict=True))
     publishers = {t: node.create_publisher(types[t], f'/{t}', 10) for t in _COMMAND_TOPICS}
 
@@ -182,7 +168,7 @@ def _sender(
         for topic, msg in command_messages(c, stamp).items():
             publishers[topic].publish(msg)
 
-    return publish, lambda: all(p.get_subscription_count() > 0 for p in publishers.values())
+    return publish, list(publishers.values())
 
 
 def _drive(fd: int, mapping: ManualMapping, send: Callable[[DbusFrame, Commands], None],

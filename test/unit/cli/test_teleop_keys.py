@@ -87,17 +87,32 @@ def test_the_frame_puts_the_right_switch_where_the_mapping_says_and_the_mapping_
         'shooter PASSIVE')
 
 
+
+class _Publisher:
+    def __init__(self, counts):
+        self._counts = iter(counts)
+
+    def get_subscription_count(self):
+        return next(self._counts)
+
+
 def test_teleop_waits_for_a_subscriber_then_takes_keys_or_gives_up_at_the_timeout():
-    from rm_bringup.cli.teleop import wait_until_heard
+    from rm_bringup.cli.ros_node import wait_until_heard
 
     now = [0.0]
 
     def sleep(s):
         now[0] += s
 
-    answers = iter([False, False, True])
-    assert wait_until_heard(lambda: next(answers), 1.0, sleep, lambda: now[0])
+    def clock():
+        return now[0]
+
+    assert wait_until_heard([_Publisher([0, 0, 1])], 1.0, sleep=sleep, clock=clock)
     assert now[0] == pytest.approx(0.1)
     now[0] = 0.0
-    assert not wait_until_heard(lambda: False, 1.0, sleep, lambda: now[0])
+    never = _Publisher(iter(lambda: 0, 1))
+    assert not wait_until_heard([never], 1.0, sleep=sleep, clock=clock)
     assert 1.0 <= now[0] < 1.1
+    now[0] = 0.0  # a stop (bag play's Ctrl-C) ends the wait at once
+    assert not wait_until_heard([never], 1.0, stop=lambda: True, sleep=sleep, clock=clock)
+    assert now[0] == 0.0
