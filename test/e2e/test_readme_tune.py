@@ -16,14 +16,16 @@ from support.user_session import UserSession, readme_blocks
 pytestmark = [pytest.mark.ros, pytest.mark.slow, pytest.mark.realtime]
 
 FIGURES = re.compile(
-    r'rise time \(10-90 %\) +(?P<rise>[\d.]+) s\n'
+    r'rise time \(10-90 %\) +(?:(?P<rise>[\d.]+) s|not reached 90 %)\n'
     r'overshoot +(?P<overshoot>[\d.]+) %\n'
-    r'settling time \(2 %\) +(?P<settling>[\d.]+) s\n'
+    r'settling time \(2 %\) +(?:(?P<settling>[\d.]+) s|not settled)\n'
     r'steady-state error +(?P<error>[-+][\d.]+) rad\n')
 
 
 def figures(said: str) -> list[dict[str, float]]:
-    return [{k: float(v) for k, v in m.groupdict().items()} for m in FIGURES.finditer(said)]
+    """Each step's figures; a time not reached (90 %, settled) is inf."""
+    return [{k: float(v if v is not None else 'inf') for k, v in m.groupdict().items()}
+            for m in FIGURES.finditer(said)]
 
 
 def test_a_live_key_is_set_a_step_is_measured_and_the_dump_starts_the_next_run(tmp_path):
@@ -57,15 +59,20 @@ def test_a_live_key_is_set_a_step_is_measured_and_the_dump_starts_the_next_run(t
 def _measure_steps(user, step):
     """README's step block, and the two refusals."""
     said = user.type(step, wait=True, cwd=user.workdir(), timeout=120.0)
-    first, soft, kept = figures(said)
+    measured = figures(said)
+    assert len(measured) == 3, said
+    first, soft, kept = measured
     assert 'step yaw position +0.000 -> +0.500 (kp 15, ki 0, kd 0), owner gimbal' in said
     assert '(kp 5, ki 0, kd 0)' in said and '(kp 30, ki 0, kd 0)' in said, said
     # the simulated turret: kp 15 rises in ~0.14 s, kp 5 in ~0.4 s; kp 30 overshoots
     # ~50 % against ~17 % (measured); the bounds leave room for a loaded machine
     assert soft['rise'] > 1.5 * first['rise'], said
     assert kept['overshoot'] > first['overshoot'] + 10.0, said
-    for f in (first, soft, kept):
+    for f in (first, kept):
         assert abs(f['error']) < 0.01, said
+    # kp 5 settles near the end of its 1.5 s; on a starved machine the simulated world
+    # slips behind the wall clock and it is still closing in (0.04 rad off, seen under load)
+    assert abs(soft['error']) < 0.1, said
     for name in ('step_yaw', 'soft', 'kp30'):
         assert (user.workdir() / f'{name}.png').read_bytes()[:4] == b'\x89PNG'
         rows = (user.workdir() / f'{name}.csv').read_text().splitlines()
