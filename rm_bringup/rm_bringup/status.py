@@ -96,7 +96,7 @@ def format_status(latest: Mapping[str, Any]) -> str:
         parts.append(_referee_part(referee))
     diagnostics = latest.get('diagnostics')
     if diagnostics:
-        loads, overruns, charge, cap = [], None, {}, None
+        loads, overruns, charge, cap, slipped = [], None, {}, None, 0.0
         for status in diagnostics.values():
             values = _diag_values(status)
             kind = status.name.split(': ', 1)[-1]  # 'can_bridge: bus can0' -> 'bus can0'
@@ -111,6 +111,8 @@ def format_status(latest: Mapping[str, Any]) -> str:
                 overruns = values.get('overruns')
             elif kind == 'supercap':
                 cap = _supercap_part(values)
+            elif kind == 'simulator':
+                slipped = float(values.get('slipped [s]', 0.0))
             elif kind == 'command sources':
                 charge = {k.removesuffix(' in charge'): v or '-' for k, v in values.items()
                           if k.endswith(' in charge')}
@@ -123,6 +125,8 @@ def format_status(latest: Mapping[str, Any]) -> str:
             parts.append(f'overruns {rate:.0f}/s')
         elif overruns is not None:
             parts.append(f'overruns {overruns}')
+        if slipped > 0.0:  # a starved simulator: its robot moves slower than the clock says
+            parts.append(f'sim slipped {slipped:.1f} s')
         if charge:  # who commands: one name when one source has every topic
             names = set(charge.values())
             parts.append('cmd ' + (names.pop() if len(names) == 1 else ' '.join(

@@ -297,7 +297,7 @@ def test_states_nobody_subscribes_are_not_built_and_the_next_subscriber_gets_the
     assert built == []  # /actuator_states has still nobody: only JointState is built
 
 
-def test_diagnostics_report_joints_bus_scheduler_commands_and_inbox(make_rig):
+def test_diagnostics_report_joints_bus_scheduler_commands_inbox_and_simulator(make_rig):
     rig = make_rig()
     rig.spin_up()
     # a report from after the first 100 ms of running
@@ -318,6 +318,8 @@ def test_diagnostics_report_joints_bus_scheduler_commands_and_inbox(make_rig):
     assert int(rig.values('commands')['accepted']) > 0
     inbox = rig.values('inbox')  # /actuator_cmd as the bridge's inbox took it
     assert int(inbox['/actuator_cmd taken']) > 0 and inbox['/actuator_cmd dropped'] == '0'
+    simulator = rig.values('simulator')  # the real-time world's clock, next to the loop's
+    assert float(simulator['time [s]']) > 0.1 and 'slipped [s]' in simulator
 
 
 def test_malformed_commands_are_rejected_whole_and_counted(make_rig):

@@ -16,6 +16,9 @@ Levels:
 * scheduler: WARN when deadlines were missed since the previous report, ERROR when a
   tick raised since then.
 * commands: WARN when /actuator_cmd messages were rejected since the previous report.
+* simulator (a real-time simulated world only): WARN when its simulated time slipped
+  behind the wall clock since the previous report (a starved CPU): what is measured on it
+  then runs slower than the wall clock says.
 """
 
 from __future__ import annotations
@@ -75,6 +78,21 @@ class CommandStats:
         return sum(self.rejected.values())
 
 
+@dataclasses.dataclass(frozen=True)
+class SimulatorStats:
+    """How a real-time simulated world kept up with the wall clock (monotonic counters).
+
+    Attributes:
+        time_ns: simulated time since the world was made.
+        slips: times it fell too far behind to catch up and skipped ahead.
+        slipped_ns: the wall-clock time those skips left unsimulated.
+    """
+
+    time_ns: int
+    slips: int
+    slipped_ns: int
+
+
 class DiagnosticsReporter:
     """Builds the DiagnosticArray; remembers counters to report what changed since last time.
 
@@ -89,6 +107,7 @@ class DiagnosticsReporter:
         self._last_overruns = 0
         self._last_errors = 0
         self._last_rejected = 0
+        self._last_slips = 0
 
     def build(
         self,
@@ -96,6 +115,7 @@ class DiagnosticsReporter:
         states: Sequence[JointState],
         commands: CommandStats,
         stamp: Time,
+        simulator: SimulatorStats | None = None,
     ) -> DiagnosticArray:
         """One DiagnosticArray.
 
@@ -104,6 +124,7 @@ class DiagnosticsReporter:
             states: ``CanHardware.states()``.
             commands: the /actuator_cmd counters.
             stamp: header stamp.
+            simulator: the real-time simulated world's clock, if the bridge runs one.
         """
         msg = DiagnosticArray()
         msg.header.stamp = stamp
@@ -116,7 +137,25 @@ class DiagnosticsReporter:
         msg.status.append(self._commands(commands))
         if hardware.get('supercap') is not None:
             msg.status.append(self._supercap(hardware['supercap']))
+        if simulator is not None:
+            msg.status.append(self._simulator(simulator))
         return msg
+
+    def _simulator(self, stats: SimulatorStats) -> DiagnosticStatus:
+        new_slips = stats.slips - self._last_slips
+        self._last_slips = stats.slips
+        if new_slips > 0:
+            level, message = WARN, (
+                f'simulated time slipped {new_slips} time(s) since the last report (CPU '
+                'starved): it ran slower than the wall clock')
+        else:
+            level, message = OK, 'keeping up with the wall clock'
+        values = {
+            'time [s]': stats.time_ns / 1e9,
+            'slips': stats.slips,
+            'slipped [s]': stats.slipped_ns / 1e9,
+        }
+        return diagnostic_status(f'{self._prefix}simulator', level, message, 'rm_sim', values)
 
     def _supercap(self, report: Mapping[str, Any]) -> DiagnosticStatus:
         state = report['state']

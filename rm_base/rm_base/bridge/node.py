@@ -23,7 +23,7 @@ from std_srvs.srv import Trigger
 
 from rm_base import motors as motor_families
 from rm_base.bridge.command_input import ActuatorCmdInput
-from rm_base.bridge.diagnostics import CommandStats, DiagnosticsReporter
+from rm_base.bridge.diagnostics import CommandStats, DiagnosticsReporter, SimulatorStats
 from rm_base.bridge.errors import BridgeConfigError, PowerLimitRejectedError
 from rm_base.bridge.frames import FrameTap
 from rm_base.bridge.live_gains import LiveGains
@@ -413,11 +413,14 @@ class CanBridgeNode(Node):
     def diagnostics_message(self) -> DiagnosticArray:
         """What /diagnostics says now."""
         assert self.hardware is not None
+        world = self.sim_world
         msg = self._diagnostics.build(
             self.hardware.diagnostics(),
             self.hardware.states(),
             self.command_stats(),
             self.get_clock().now().to_msg(),
+            SimulatorStats(world.time_ns, world.overruns, world.slipped_ns)
+            if world is not None and world.timing is Timing.REALTIME else None,
         )
         inbox = self._inbox
         if inbox is not None:  # /actuator_cmd taken and dropped

@@ -84,6 +84,8 @@ class SimWorld:
         lock: serialises physics ticks and bus traffic.
         body: the robot body (an empty one until :meth:`set_body`).
         overruns: times the real-time loop fell too far behind and skipped ahead.
+        slipped_ns: wall-clock time those skips left unsimulated [ns]: simulated time
+            plus this is the wall-clock time the physics thread has run.
         error: the exception that stopped the physics thread, if any.
         serial: the devices on serial ports (:mod:`rm_base.sim.serial_devices`); also as
             :attr:`referee`, :attr:`remote`, :attr:`image_link`, :attr:`serial_sink`.
@@ -128,6 +130,7 @@ class SimWorld:
         self.lock = threading.RLock()
         self.body = RobotBody()
         self.overruns = 0
+        self.slipped_ns = 0
         self.error: BaseException | None = None
         self.seed = seed
         self._on_error = on_error or _default_on_error
@@ -584,6 +587,7 @@ class SimWorld:
                 # Too far behind (CPU starved): let simulation time slip instead of
                 # bursting hundreds of ticks.
                 self.overruns += 1
+                self.slipped_ns -= remaining
                 deadline = time.perf_counter_ns()
             deadline += period
 

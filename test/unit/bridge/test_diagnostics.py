@@ -5,7 +5,7 @@ import math
 
 import pytest
 from diagnostic_msgs.msg import DiagnosticStatus
-from rm_base.bridge.diagnostics import CommandStats, DiagnosticsReporter
+from rm_base.bridge.diagnostics import CommandStats, DiagnosticsReporter, SimulatorStats
 from rm_base.bridge.messages import time_msg
 from rm_base.hardware import BusStats, JointState
 from rm_base.hardware.can_link import LinkReport
@@ -247,3 +247,30 @@ def test_the_supercap_is_a_status_of_its_own_and_warns_when_the_chassis_falls_ba
     status = {s.name: s for s in reporter.build(hardware, [state], CommandStats(),
                                                 time_msg(0)).status}['can_bridge: supercap']
     assert values(status)['referee limit [W]'] == '80'
+
+
+def simulator_status(reporter, slips, slipped_ns):
+    msg = reporter.build({'joints': {}, 'buses': {}, 'scheduler': scheduler_stats()}, [],
+                         CommandStats(), time_msg(0), SimulatorStats(2_500_000_000, slips,
+                                                                     slipped_ns))
+    return {s.name: s for s in msg.status}['b: simulator']
+
+
+def test_a_simulator_that_slipped_warns_once_with_what_it_lost():
+    reporter = DiagnosticsReporter('b')
+    kept_up = simulator_status(reporter, 0, 0)
+    assert (kept_up.level, kept_up.message) == (OK, 'keeping up with the wall clock')
+    slipped = simulator_status(reporter, 2, 400_000_000)
+    assert slipped.level == WARN
+    assert slipped.message == ('simulated time slipped 2 time(s) since the last report (CPU '
+                               'starved): it ran slower than the wall clock')
+    assert {v.key: v.value for v in slipped.values} == {
+        'time [s]': '2.5', 'slips': '2', 'slipped [s]': '0.4'}
+    assert simulator_status(reporter, 2, 400_000_000).level == OK
+
+
+def test_a_bridge_without_a_realtime_world_reports_no_simulator():
+    reporter = DiagnosticsReporter('b')
+    msg = reporter.build({'joints': {}, 'buses': {}, 'scheduler': scheduler_stats()}, [],
+                         CommandStats(), time_msg(0))
+    assert not [s for s in msg.status if s.name == 'b: simulator']

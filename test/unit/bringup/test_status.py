@@ -48,6 +48,15 @@ def test_when_every_source_reports_expect_one_line_with_all_of_them():
     )
 
 
+def test_a_simulator_that_slipped_says_how_far_and_one_that_kept_up_nothing():
+    def line(slipped):
+        status = _status('can_bridge: simulator', {'slips': 3, 'slipped [s]': slipped})
+        return format_status({'diagnostics': {status.name: status}})
+
+    assert line(0.4173) == 'sim slipped 0.4 s'
+    assert line(0.0) == 'waiting for the robot...'  # nothing else said anything
+
+
 def test_when_a_shooter_faults_expect_fault_shown():
     line = format_status({'shooter': ShooterState(state=0, fault=True), 'diagnostics': {}})
     assert line == 'shooter PASSIVE 0 shots FAULT'

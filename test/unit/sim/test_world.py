@@ -143,6 +143,20 @@ def test_realtime_world_advances_with_the_wall_clock():
 
 
 @pytest.mark.realtime
+def test_a_starved_realtime_world_lets_its_time_slip_and_counts_it():
+    # Held off the CPU (here: the world lock, taken from outside) for 0.3 s, far beyond
+    # the 50 ticks it catches up, the world skips ahead instead of bursting 300 ticks.
+    with SimWorld() as world:
+        world.start()
+        assert wait_until(lambda: world.time_ns > 0, timeout=10.0)
+        slips, slipped = world.overruns, world.slipped_ns
+        with world.lock:
+            time.sleep(0.3)
+        assert wait_until(lambda: world.overruns > slips, timeout=10.0)
+        assert world.slipped_ns - slipped >= 250_000_000  # the 0.3 s less its 50 ticks
+
+
+@pytest.mark.realtime
 def test_when_the_physics_tick_holds_the_lock_expect_send_not_to_wait():
     # A sender waiting for the world lock gives up the GIL and has to win it back; the
     # CAN scheduler lost most of its deadlines that way (bench/). The frame is handed to
