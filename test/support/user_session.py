@@ -152,8 +152,13 @@ class UserSession:
             try:
                 process.wait(timeout=timeout)
             except subprocess.TimeoutExpired:
-                os.killpg(process.pid, signal.SIGTERM)
-                raise
+                _stop(process)
+                # what the user saw, and the robot's side, for the flake seen once
+                raise AssertionError(
+                    f'{commands!r} did not end in {timeout:g} s; it printed:\n'
+                    f'{out.read_text()}\n--- the robot, last lines:\n{self.log[-3000:]}'
+                    f'\n--- its status lines, last:\n' + '\n'.join(self.status.lines[-5:])
+                ) from None
             text = out.read_text()
             assert process.returncode == 0, text
             return text
@@ -165,11 +170,7 @@ class UserSession:
             if process.poll() is None:
                 os.killpg(process.pid, signal.SIGTERM)
         for process in self._scripts:
-            try:
-                process.wait(timeout=30)
-            except subprocess.TimeoutExpired:
-                os.killpg(process.pid, signal.SIGKILL)
-                process.wait()
+            _stop(process)
         if self.robot.poll() is None:
             os.killpg(self.robot.pid, signal.SIGINT)
         try:
@@ -177,3 +178,14 @@ class UserSession:
         except subprocess.TimeoutExpired:
             os.killpg(self.robot.pid, signal.SIGKILL)
             self.robot.wait()
+
+
+def _stop(process: subprocess.Popen) -> None:
+    """SIGTERM to a typed script's process group; SIGKILL if it is not gone in 30 s."""
+    if process.poll() is None:
+        os.killpg(process.pid, signal.SIGTERM)
+    try:
+        process.wait(timeout=30)
+    except subprocess.TimeoutExpired:
+        os.killpg(process.pid, signal.SIGKILL)
+        process.wait()
