@@ -85,7 +85,7 @@ class SimWorld:
         body: the robot body (an empty one until :meth:`set_body`).
         overruns: times the real-time loop fell too far behind and skipped ahead.
         slipped_ns: wall-clock time those skips left unsimulated [ns]: simulated time
-            plus this is the wall-clock time the physics thread has run.
+            plus this is about the wall-clock time the physics thread has run.
         error: the exception that stopped the physics thread, if any.
         serial: the devices on serial ports (:mod:`rm_base.sim.serial_devices`); also as
             :attr:`referee`, :attr:`remote`, :attr:`image_link`, :attr:`serial_sink`.
