@@ -16,9 +16,10 @@ Levels:
 * scheduler: WARN when deadlines were missed since the previous report, ERROR when a
   tick raised since then.
 * commands: WARN when /actuator_cmd messages were rejected since the previous report.
-* simulator (a real-time simulated world only): WARN when its simulated time slipped
-  behind the wall clock since the previous report (a starved CPU): what is measured on it
-  then runs slower than the wall clock says.
+* simulator (a real-time simulated world only; ``rm_sim: simulator`` when the world runs in
+  rm_sim's process): WARN when its simulated time slipped behind the wall clock since the
+  previous report (a starved CPU): what is measured on it then runs slower than the wall
+  clock says.
 """
 
 from __future__ import annotations
@@ -93,6 +94,40 @@ class SimulatorStats:
     slipped_ns: int
 
 
+class SimulatorReporter:
+    """The ``<node>: simulator`` status (the bridge's own world, or rm_sim's).
+
+    Args:
+        node_name: the node that reports it (prefix of the status name).
+    """
+
+    def __init__(self, node_name: str) -> None:
+        self._name = f'{node_name}: simulator'
+        self._last_slips = 0
+
+    def status(self, stats: SimulatorStats) -> DiagnosticStatus:
+        """The status now: WARN if it slipped since the previous one."""
+        new_slips = stats.slips - self._last_slips
+        self._last_slips = stats.slips
+        if new_slips > 0:
+            level, message = WARN, (
+                f'simulated time slipped {new_slips} time(s) since the last report (CPU '
+                'starved): it ran slower than the wall clock')
+        else:
+            level, message = OK, 'keeping up with the wall clock'
+        values = {
+            'time [s]': stats.time_ns / 1e9,
+            'slips': stats.slips,
+            'slipped [s]': stats.slipped_ns / 1e9,
+        }
+        return diagnostic_status(self._name, level, message, 'rm_sim', values)
+
+    @staticmethod
+    def stats(world: Any) -> SimulatorStats:
+        """A real-time SimWorld's counters."""
+        return SimulatorStats(world.time_ns, world.overruns, world.slipped_ns)
+
+
 class DiagnosticsReporter:
     """Builds the DiagnosticArray; remembers counters to report what changed since last time.
 
@@ -107,7 +142,7 @@ class DiagnosticsReporter:
         self._last_overruns = 0
         self._last_errors = 0
         self._last_rejected = 0
-        self._last_slips = 0
+        self._simulator = SimulatorReporter(node_name)
 
     def build(
         self,
@@ -138,24 +173,8 @@ class DiagnosticsReporter:
         if hardware.get('supercap') is not None:
             msg.status.append(self._supercap(hardware['supercap']))
         if simulator is not None:
-            msg.status.append(self._simulator(simulator))
+            msg.status.append(self._simulator.status(simulator))
         return msg
-
-    def _simulator(self, stats: SimulatorStats) -> DiagnosticStatus:
-        new_slips = stats.slips - self._last_slips
-        self._last_slips = stats.slips
-        if new_slips > 0:
-            level, message = WARN, (
-                f'simulated time slipped {new_slips} time(s) since the last report (CPU '
-                'starved): it ran slower than the wall clock')
-        else:
-            level, message = OK, 'keeping up with the wall clock'
-        values = {
-            'time [s]': stats.time_ns / 1e9,
-            'slips': stats.slips,
-            'slipped [s]': stats.slipped_ns / 1e9,
-        }
-        return diagnostic_status(f'{self._prefix}simulator', level, message, 'rm_sim', values)
 
     def _supercap(self, report: Mapping[str, Any]) -> DiagnosticStatus:
         state = report['state']

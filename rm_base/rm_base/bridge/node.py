@@ -23,7 +23,7 @@ from std_srvs.srv import Trigger
 
 from rm_base import motors as motor_families
 from rm_base.bridge.command_input import ActuatorCmdInput
-from rm_base.bridge.diagnostics import CommandStats, DiagnosticsReporter, SimulatorStats
+from rm_base.bridge.diagnostics import CommandStats, DiagnosticsReporter, SimulatorReporter
 from rm_base.bridge.errors import BridgeConfigError, PowerLimitRejectedError
 from rm_base.bridge.frames import FrameTap
 from rm_base.bridge.live_gains import LiveGains
@@ -419,7 +419,7 @@ class CanBridgeNode(Node):
             self.hardware.states(),
             self.command_stats(),
             self.get_clock().now().to_msg(),
-            SimulatorStats(world.time_ns, world.overruns, world.slipped_ns)
+            SimulatorReporter.stats(world)
             if world is not None and world.timing is Timing.REALTIME else None,
         )
         inbox = self._inbox

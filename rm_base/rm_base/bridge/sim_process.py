@@ -12,8 +12,10 @@ kernel's vcan0 ..., where the robot's own socketcan buses are; :mod:`rm_base.sim
 The world runs in real time on its own physics thread; the simulated Hi220 writes to its
 pty as on a robot; a node ``rm_sim`` serves the fault services (``/rm_sim/<joint>/offline``,
 ``.../jam``, ``.../over_temperature``, ``.../garbage``, ``/rm_sim/<bus>/bus_off``;
-:mod:`rm_base.bridge.sim_services`) and takes the operator's remote on ``/rm_sim/remote``
-(:mod:`rm_base.bridge.sim_remote`). Runs until SIGINT/SIGTERM (or ``--duration``).
+:mod:`rm_base.bridge.sim_services`), takes the operator's remote on ``/rm_sim/remote``
+(:mod:`rm_base.bridge.sim_remote`) and reports how its clock keeps up with the wall clock
+on /diagnostics (``rm_sim: simulator``, at the bridge's ``diagnostics_rate``). Runs until
+SIGINT/SIGTERM (or ``--duration``).
 """
 
 from __future__ import annotations
@@ -27,9 +29,11 @@ from typing import Any
 
 import can
 import rclpy
+from diagnostic_msgs.msg import DiagnosticArray
 from rclpy.executors import SingleThreadedExecutor
 from rclpy.node import Node
 
+from rm_base.bridge.diagnostics import SimulatorReporter
 from rm_base.bridge.params import settings_from_parameters
 from rm_base.bridge.sim_config import world_config
 from rm_base.bridge.sim_remote import SimRemoteInput
@@ -80,6 +84,19 @@ def build_world(params: Mapping[str, Any]) -> tuple[SimWorld, Any]:
         raise ConfigError('sim settings missing although sim is true')
     world = SimWorld.from_config(world_config(settings.hardware_config, settings.sim))
     return world, settings
+
+
+def _report_clock(node: Node, world: SimWorld, rate_hz: float) -> None:
+    """Publish ``rm_sim: simulator`` on /diagnostics at the bridge's diagnostics rate."""
+    publisher = node.create_publisher(DiagnosticArray, '/diagnostics', 10)
+    reporter = SimulatorReporter(NODE_NAME)
+
+    def report() -> None:
+        msg = DiagnosticArray(status=[reporter.status(SimulatorReporter.stats(world))])
+        msg.header.stamp = node.get_clock().now().to_msg()
+        publisher.publish(msg)
+
+    node.create_timer(1.0 / rate_hz, report)
 
 
 def _serve(world: SimWorld, interface: str | None, path: str) -> SimServer | BusPeer:
@@ -141,6 +158,7 @@ def main(argv: list[str] | None = None) -> int:
     )
     if world.remote is not None:  # the node keeps its subscription and timer
         SimRemoteInput(node, world, prefix='~/')
+    _report_clock(node, world, settings.diagnostics_rate_hz)
     # Only the fault services and the remote's input run on this executor; the physics and
     # the sockets have threads of their own.
     executor = SingleThreadedExecutor()
