@@ -7,11 +7,14 @@ then what the command refuses: a joint whose plugin drives it, a target beyond t
 plugin's limits.
 """
 
+import os
 import re
+import signal
+import time
 
 import pytest
 import yaml
-from support.user_session import UserSession, readme_blocks
+from support.user_session import WAIT, UserSession, readme_blocks
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow, pytest.mark.realtime]
 
@@ -91,3 +94,24 @@ def _measure_steps(user, step):
     assert "joint 'yaw' is driven by plugin 'gimbal', now RATE: command it PASSIVE " \
         'first' in driven, driven
     assert 'exit 1' in driven, driven
+
+
+def test_a_step_on_a_starved_simulator_says_its_figures_ran_slow(tmp_path):
+    with UserSession(tmp_path) as user:
+        user.wait_for_robot()
+        user.type('rmcli tune step yaw 0.3 --from 0 -o starved', cwd=user.workdir())
+        said = lambda: user.output(0)  # noqa: E731
+        deadline = time.monotonic() + WAIT
+        while 'step yaw position' not in said() and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert 'step yaw position' in said(), said()
+        time.sleep(1.5)  # past the 1 s hold: the step is being recorded
+        # the robot's processes (the simulated world among them) off the CPU for 0.6 s
+        os.killpg(user.robot.pid, signal.SIGSTOP)
+        time.sleep(0.6)
+        os.killpg(user.robot.pid, signal.SIGCONT)
+        user.wait_typed(0, timeout=WAIT)
+        found = re.search(r'rmcli: warning: the simulated world slipped ([\d.]+) s behind '
+                          r'the wall clock during the step \(CPU starved\): these figures '
+                          r'ran slow', said())
+        assert found and float(found.group(1)) >= 0.4, said()

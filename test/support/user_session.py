@@ -148,21 +148,25 @@ class UserSession:
                                    stdout=open(out, 'w'), stderr=subprocess.STDOUT,
                                    start_new_session=True)
         self._scripts.append(process)
-        if wait:
-            try:
-                process.wait(timeout=timeout)
-            except subprocess.TimeoutExpired:
-                _stop(process)
-                # what the user saw, and the robot's side, for the flake seen once
-                raise AssertionError(
-                    f'{commands!r} did not end in {timeout:g} s; it printed:\n'
-                    f'{out.read_text()}\n--- the robot, last lines:\n{self.log[-3000:]}'
-                    f'\n--- its status lines, last:\n' + '\n'.join(self.status.lines[-5:])
-                ) from None
-            text = out.read_text()
-            assert process.returncode == 0, text
-            return text
-        return ''
+        return self.wait_typed(n, timeout) if wait else ''
+
+    def wait_typed(self, n: int, timeout: float = WAIT) -> str:
+        """Until the n-th typed script ends (with success): its output."""
+        process, out = self._scripts[n], self.tmp / f'user-{n}.log'
+        try:
+            process.wait(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            _stop(process)
+            # what the user saw, and the robot's side, for the flake seen once
+            raise AssertionError(
+                f'{(self.tmp / f"user-{n}.sh").read_text()!r} did not end in {timeout:g} s; '
+                f'it printed:\n{out.read_text()}\n--- the robot, last lines:\n'
+                f'{self.log[-3000:]}\n--- its status lines, last:\n'
+                + '\n'.join(self.status.lines[-5:])
+            ) from None
+        text = out.read_text()
+        assert process.returncode == 0, text
+        return text
 
     def close(self) -> None:
         """Stop the typed scripts, then the robot with Ctrl-C."""

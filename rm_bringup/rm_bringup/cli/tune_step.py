@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 import csv
 import math
+import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -29,6 +30,7 @@ from rm_base.control.step_response import StepError, StepFigures, step_figures
 from .errors import CliError
 from .options import positive_float
 from .ros_node import DISCOVERY_TIMEOUT_S, cli_node
+from .sim_slip import SlipWatch
 
 _PUBLISH_PERIOD_S = 0.005  # commands well inside the bridge's command_timeout_s (0.1 s)
 _PLUGIN_STATE = 'rm_msgs/msg/PluginState'
@@ -101,6 +103,7 @@ def _run(args: argparse.Namespace, node: Any, executor: Any) -> int:
     old = {g: bridge.get(prefix + g) for g in _GAINS}
     if old['kp'] is None:
         raise CliError(f'joint {joint!r} has no {loop} loop ({prefix}kp is not set)')
+    slips = SlipWatch(node, lambda: executor.spin_once(timeout_sec=0.05))
     owner = _owner(node, executor, joint, deadline)
     response = _Response(node, executor, joint, loop, deadline)
     start = args.start if args.start is not None else response.now()
@@ -108,6 +111,8 @@ def _run(args: argparse.Namespace, node: Any, executor: Any) -> int:
         {'--from': args.start} if args.start is not None else {}), bridge)
     new = {g: getattr(args, g) for g in _GAINS if getattr(args, g) is not None}
     gains = {**old, **new}
+    # a simulator in the bridge (its sim parameter) or in a process of its own (rm_sim)
+    slipped_before = slips.start(bool(bridge.get('sim')) or 'rm_sim' in node.get_node_names())
     print(f'step {joint} {loop} {start:+.3f} -> {args.target:+.3f} '
           f"({', '.join(f'{g} {gains[g]:g}' for g in _GAINS)}), "
           f'owner {owner.plugin if owner else "none"}', flush=True)
@@ -137,6 +142,11 @@ def _run(args: argparse.Namespace, node: Any, executor: Any) -> int:
         raise CliError(f'no step response to measure: {err}') from None
     unit = 'rad' if loop == 'position' else 'rad/s'
     print(format_figures(figures, unit))
+    slipped = slips.since(slipped_before)
+    if slipped:  # the figures are on the wall clock, the joint on the simulated one
+        print(f'rmcli: warning: the simulated world slipped {slipped:.2f} s behind the wall '
+              'clock during the step (CPU starved): these figures ran slow',
+              file=sys.stderr, flush=True)
     out = Path(args.output or f'step_{joint}')
     _write(out, t, y, args.target)
     _plot(out.with_suffix('.png'), t, y, start, args.target, figures=figures,
