@@ -5,7 +5,8 @@ tuned value. Measure a step: the simulated yaw on its position loop (kp 15); a k
 one run rises slower, a kp of 30 kept with `param set` overshoots more on the next step;
 then what the command refuses: a joint whose plugin drives it, a target beyond the
 plugin's limits. And a step during which the robot's processes stood still 0.6 s (the
-simulated world slipped behind the wall clock) says that its figures ran slow.
+simulated world slipped behind the wall clock) says that its figures ran slow, and the
+status line says how far the world slipped.
 """
 
 import os
@@ -115,3 +116,7 @@ def test_a_step_on_a_starved_simulator_says_its_figures_ran_slow(tmp_path):
                           r'the wall clock during the step \(CPU starved\): these figures '
                           r'ran slow', said)
         assert found and float(found.group(1)) >= 0.4, said
+        # and make run's status line says so too
+        line = user.status.wait_for(lambda s: 'sim slipped' in s)
+        assert line and float(re.search(r'sim slipped ([\d.]+) s', line).group(1)) >= 0.4, \
+            user.status.lines[-3:]
