@@ -112,7 +112,10 @@ def format_status(latest: Mapping[str, Any]) -> str:
             elif kind == 'supercap':
                 cap = _supercap_part(values)
             elif kind == 'simulator':
-                slipped = float(values.get('slipped [s]', 0.0))
+                try:  # another node's report: a value that is no number says nothing
+                    slipped = float(values.get('slipped [s]', 0.0))
+                except ValueError:
+                    slipped = 0.0
             elif kind == 'command sources':
                 charge = {k.removesuffix(' in charge'): v or '-' for k, v in values.items()
                           if k.endswith(' in charge')}

@@ -54,6 +54,7 @@ def test_a_simulator_that_slipped_says_how_far_and_one_that_kept_up_nothing():
         return format_status({'diagnostics': {status.name: status}})
 
     assert line(0.4173) == 'sim slipped 0.4 s'
+    assert line('fast') == 'waiting for the robot...'  # not a number: nothing said
     assert line(0.0) == 'waiting for the robot...'  # nothing else said anything
 
 
