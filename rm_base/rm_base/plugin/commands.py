@@ -165,6 +165,7 @@ class CommandInput(Generic[M]):
         self._rejected = 0
         self._parse = parse
         self._rejection = ''  # why the newest message was refused, if it was
+        self._logged_rejection = ''  # the last rejection that got its own log line
         self._stale_log = LogThrottle(round(log_period * _NS_PER_S))
         # Run-thread side: whether the current "no command" episode has been reported, and
         # its kind and reason.
@@ -228,10 +229,15 @@ class CommandInput(Generic[M]):
             self._rejected += 1
             self._rejection = reason
             more = self._stale_log.due(receive_ns)
+            stands = self._msg is not None
+            if more is not None:
+                self._logged_rejection = reason
         if more is not None:
-            self._logger.warning(
-                f'{reason}; the last valid command stands until its timeout{more}'
+            outcome = (
+                'the last valid command stands until its timeout' if stands
+                else 'no valid command has come yet'
             )
+            self._logger.warning(f'{reason}; {outcome}{more}')
 
     def status(self, now_ns: int) -> tuple[CommandStatus, str]:
         """Return the status at now_ns and, unless FRESH, why there is no command."""
@@ -290,7 +296,11 @@ class CommandInput(Generic[M]):
         if self._episode is None or self._episode[0] != key:
             self._reported_missing = True
             self._episode = (key, reason)
-            self._logger.warning(reason)
+            with self._lock:
+                # a rejection's own line already said it: one bad message, one warning
+                said = status is CommandStatus.NEVER_RECEIVED and reason == self._logged_rejection
+            if not said:
+                self._logger.warning(reason)
         return self._episode[1]
 
     def stamp_ns(self) -> int | None:
@@ -304,5 +314,6 @@ class CommandInput(Generic[M]):
             self._msg = None
             self._stamp_ns = 0
             self._rejection = ''
+            self._logged_rejection = ''
         self._reported_missing = False
         self._episode = None
