@@ -34,10 +34,11 @@ def _describe(path: Path) -> str:
     return str(files[0]) if len(files) == 1 else str(path)
 
 
-def _reason(err: BaseException) -> str:
+def _reason(err: BaseException, path: Path) -> str:
     text = ' '.join(str(err).split()) or type(err).__name__
     if 'end magic' in text:
-        text += ' (truncated: the recording did not stop cleanly)'
+        folder = path if path.is_dir() else path.parent
+        text += f' (truncated: the recording did not stop cleanly): rmcli bag reindex {folder}'
     return text
 
 
@@ -71,7 +72,7 @@ def open_bag(
         reader = AnyReader([path], default_typestore=default_typestore) if typed else Reader(path)
         reader.open()
     except Exception as err:
-        raise BagError(f'cannot read bag {_describe(path)}: {_reason(err)}') from None
+        raise BagError(f'cannot read bag {_describe(path)}: {_reason(err, path)}') from None
     try:
         yield reader
     finally:
@@ -97,7 +98,8 @@ def read_messages(
         except StopIteration:
             return
         except Exception as err:
-            raise BagError(f'cannot read bag {_describe(Path(path))}: {_reason(err)}') from None
+            where = Path(path)
+            raise BagError(f'cannot read bag {_describe(where)}: {_reason(err, where)}') from None
         if not isinstance(item[1], int) or not isinstance(item[2], bytes | bytearray | memoryview):
             # a damaged sqlite3 row comes back with NULL columns, not as an error
             raise BagError(f'cannot read bag {_describe(Path(path))}: a message without '

@@ -45,6 +45,11 @@ def test_truncated_mcap_is_one_clear_line_naming_the_file(good_bag, capsys):
     assert line.startswith('rmcli: error: cannot read bag')
     assert str(data_file) in line
     assert 'truncated' in line
+    # the line names the command that mends it, and that command does
+    assert line.endswith(f'rmcli bag reindex {good_bag}')
+    assert main(['bag', 'reindex', str(good_bag)]) == 0
+    capsys.readouterr()
+    assert main(['bag', 'info', str(good_bag)]) == 0
 
 
 def test_garbage_inside_an_mcap_is_one_clear_line(write_bag, make, tmp_path, capsys):
