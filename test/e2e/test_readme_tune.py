@@ -1,7 +1,7 @@
 """README's "Tune it live" and "Measure a step", typed as written into one `make run`.
 
-Tune it live: a live key changes, the others refuse, the dump starts the next run with the
-tuned value. Measure a step: the simulated yaw on its position loop (kp 15); a kp of 5 for
+Tune it live: a live key changes, the others refuse, a file keyed as the robot's config
+loads, the dump starts the next run with the tuned value. Measure a step: the simulated yaw on its position loop (kp 15); a kp of 5 for
 one run rises slower, a kp of 30 kept with `param set` overshoots more on the next step;
 then what the command refuses: a joint whose plugin drives it, a target beyond the
 plugin's limits. And a step during which the robot's processes stood still 0.6 s (the
@@ -50,6 +50,12 @@ def test_a_live_key_is_set_a_step_is_measured_and_the_dump_starts_the_next_run(t
         assert 'set shooter.max_hz = 8.0 (from the next run on)' in user.log
         dumped = yaml.safe_load((user.workdir() / 'tuned.yaml').read_text())
         assert dumped['/rm_robot']['ros__parameters']['shooter']['max_hz'] == 8.0
+        # load takes a section keyed as rm_bringup/config/ keys it, as README says
+        (user.workdir() / 'config_style.yaml').write_text(
+            'rm_robot:\n  ros__parameters:\n    shooter:\n      max_hz: 6.0\n')
+        said = user.type('rmcli param load /rm_robot config_style.yaml && '
+                         'rmcli param get /rm_robot shooter.max_hz', wait=True, cwd=user.workdir())
+        assert said == 'Set parameter shooter.max_hz successful\nDouble value is: 6.0\n', said
         _measure_steps(user, step)
     # the next run, from the dump: README's own line, in the same folder
     again = tmp_path / 'again'

@@ -88,6 +88,46 @@ def test_a_dump_loads_back_and_is_a_parameter_file(tuned, tmp_path):
     assert out == 'Set parameter loop.kp failed: loop.kp must be >= 0.0, got -5.0\n'
 
 
+def test_a_config_keyed_by_the_relative_name_loads_as_rcl_reads_it(tuned, tmp_path):
+    # rm_bringup/config/ writes 'rm_robot:'; ros2 param load would take only '/rm_robot:'
+    path = tmp_path / 'robot.yaml'
+    path.write_text(yaml.safe_dump({
+        'other': {'ros__parameters': {'loop': {'kp': 99.0}}},
+        '/**': {'ros__parameters': {'loop': {'kp': 1.0}}},
+        'tuned': {'ros__parameters': {'loop': {'kp': 7.5}}},
+    }))
+    code, out, err = rmcli('param', 'load', '/tuned', str(path))
+    assert (code, out) == (0, 'Set parameter loop.kp successful\n'), err
+    assert tuned.get_parameter('loop.kp').value == 7.5
+    # a name the node does not declare is refused by the node and said plainly; the rest
+    # of the file still loads (one undeclared name used to make the node answer no values)
+    path.write_text(yaml.safe_dump({'tuned': {'ros__parameters': {
+        'loop': {'kp': 6.0}, 'nobody': {'gain': 1.0}}}}))
+    code, out, err = rmcli('param', 'load', '/tuned', str(path))
+    assert code == 1, err
+    assert sorted(out.splitlines()) == [
+        'Set parameter loop.kp successful',
+        'Set parameter nobody.gain failed: /tuned has no such parameter',
+    ]
+    assert tuned.get_parameter('loop.kp').value == 6.0
+
+
+@pytest.mark.parametrize(('text', 'says'), [
+    ('tuned:\n  ros__parameters:\n    loop.kp: [\n', 'line 4, column 1: not YAML'),
+    ('other:\n  ros__parameters:\n    loop.kp: 1.0\n', 'no parameters for /tuned'),
+    ('tuned:\n  ros__parameters:\n    loop.kp:\n', 'loop.kp has no value'),
+    ('tuned:\n  ros__parameters:\n    loop.limits: [1, 2.0, x]\n', 'loop.limits'),
+])
+def test_a_bad_parameter_file_is_one_line_and_sets_nothing(tuned, tmp_path, text, says):
+    path = tmp_path / 'bad.yaml'
+    path.write_text(text)
+    code, out, err = rmcli('param', 'load', '/tuned', str(path))
+    assert code == 1 and out == ''
+    assert err.startswith(f'rmcli: error: {path}: ') and says in err, err
+    assert len(err.splitlines()) == 1, err
+    assert tuned.get_parameter('loop.kp').value == 2.0
+
+
 def test_a_node_that_is_not_there_is_one_line_and_exit_1(ros_context):
     code, _, err = rmcli('param', 'list', '/nobody', '--timeout', '1')
     assert code == 1 and err == 'rmcli: error: node not found: /nobody (waited 1 s)\n'

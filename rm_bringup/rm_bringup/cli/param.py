@@ -21,6 +21,7 @@ import yaml
 from .errors import CliError
 from .graph import Verb
 from .options import positive_float
+from .param_file import node_parameters
 from .ros_node import cli_node
 
 DEFAULT_TIMEOUT_S = 10.0
@@ -227,35 +228,54 @@ def run_load(args: argparse.Namespace) -> int:
     Values equal to the node's are left alone, so a dump of the node loads back whole
     (its read-only values included); exit 1 if the node refused one.
     """
-    from rclpy.parameter import parameter_dict_from_yaml_file
+    from rclpy.parameter import Parameter
 
     path = args.parameter_file
     if not path.is_file():
         raise CliError(f'no parameter file {path}')
     node = args.node_name if args.node_name.startswith('/') else '/' + args.node_name
     try:
-        parameters = parameter_dict_from_yaml_file(str(path), target_nodes=[node])
-    except RuntimeError as err:
-        raise CliError(f'{path}: {err}') from None
+        document = yaml.safe_load(path.read_text())
+    except (OSError, yaml.YAMLError) as err:
+        raise CliError(f'{path}: {_yaml_problem(err)}') from None
+    parameters = {}
+    for name, value in node_parameters(document, node, str(path)).items():
+        if value is None:  # 'key:' with nothing after it: a file cannot unset a parameter
+            raise CliError(f'{path}: {name} has no value')
+        try:
+            parameters[name] = Parameter(name, value=value)
+        except TypeError as err:  # e.g. a list mixing types: no parameter type holds it
+            raise CliError(f'{path}: {name}: {err}') from None
 
     def work(client: Any, wait: Callable[[Any], Any]) -> int:
-        from rclpy.parameter import Parameter
-
         failed = 0
-        names = list(parameters)
-        current = dict(zip(names, wait(client.get_parameters(names)).values, strict=True))
-        for name, msg in parameters.items():
-            if current[name].type != 0 and _value(current[name]) == _value(msg.value):
+        # only declared names: one undeclared name makes the node answer with no values
+        declared = sorted(set(parameters) & set(_names(client, wait)))
+        current = dict(zip(declared, wait(client.get_parameters(declared)).values, strict=True))
+        for name, parameter in parameters.items():
+            wanted = parameter.get_parameter_value()
+            if name in current and _value(current[name]) == _value(wanted):
                 continue  # no change: a dump loads back even with its read-only values
-            result = _set(client, wait, [Parameter.from_parameter_msg(msg)])[0]
+            result = _set(client, wait, [parameter])[0]
             if result.successful:
                 print(f'Set parameter {name} successful')
             else:
                 failed += 1
-                print(f'Set parameter {name} failed: {result.reason}')
+                # rclpy's own reason for an undeclared name lists no names
+                reason = result.reason if name in current else f'{node} has no such parameter'
+                print(f'Set parameter {name} failed: {reason}')
         return 1 if failed else 0
 
     return _call(args.node_name, args.timeout, work)
+
+
+def _yaml_problem(err: Exception) -> str:
+    """One line for why a file did not read as YAML: where, and what PyYAML found."""
+    mark = getattr(err, 'problem_mark', None)
+    problem = getattr(err, 'problem', None)
+    if mark is None or problem is None:
+        return f'not a YAML file: {" ".join(str(err).split())}'
+    return f'line {mark.line + 1}, column {mark.column + 1}: not YAML: {problem}'
 
 
 VERBS = {

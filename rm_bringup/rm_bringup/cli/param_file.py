@@ -1,0 +1,62 @@
+"""The section of a ROS 2 parameter file that is for one node, as rcl picks it.
+
+``ros2 param load`` only takes a section keyed by the node's absolute name (``/rm_robot:``),
+while rcl, reading the same file at start-up, also takes the relative name (``rm_robot:``,
+as rm_bringup/config/ writes it) and the wildcard ``/**``. rmcli takes what rcl takes, so
+a robot's own config loads into the running node. No rclpy here.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from rm_base.config.param_files import flatten
+
+from .errors import CliError
+
+WILDCARD = '/**'
+
+
+def node_keys(node: str) -> tuple[str, ...]:
+    """The top-level keys that hold node's parameters, lowest priority first.
+
+    Args:
+        node: the node's absolute name (``/rm_robot``, ``/ns/rm_robot``).
+    """
+    return (WILDCARD, node.lstrip('/'), node)
+
+
+def node_parameters(document: Any, node: str, source: str) -> dict[str, Any]:
+    """{parameter name: value} that a parameter file gives node; a later key overrides.
+
+    Args:
+        document: the file as YAML loaded it.
+        node: the node's absolute name.
+        source: the file's name, for errors.
+
+    Raises:
+        CliError: the file is not a mapping of nodes, has no section for node, or a section
+            without ``ros__parameters``.
+    """
+    if not isinstance(document, Mapping):
+        raise CliError(f'{source}: not a ROS parameter file (a mapping of node names)')
+    parameters: dict[str, Any] = {}
+    found = False
+    for key in node_keys(node):
+        if key not in document:
+            continue
+        section = document[key]
+        if not isinstance(section, Mapping) or not isinstance(
+            section.get('ros__parameters'), Mapping
+        ):
+            raise CliError(f"{source}: '{key}' has no 'ros__parameters' mapping")
+        found = True
+        parameters.update(flatten(section['ros__parameters']))
+    if not found:
+        nodes = ', '.join(str(k) for k in document) or 'none'
+        raise CliError(
+            f'{source}: no parameters for {node} (keys {node.lstrip("/")}, {node} or '
+            f'{WILDCARD}); the file has: {nodes}'
+        )
+    return parameters
