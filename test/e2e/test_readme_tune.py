@@ -1,12 +1,12 @@
 """README's "Tune it live" and "Measure a step", typed as written into one `make run`.
 
 Tune it live: a live key changes, the others refuse, a file keyed as the robot's config
-loads, the dump starts the next run with the tuned value. Measure a step: the simulated yaw on its position loop (kp 15); a kp of 5 for
-one run rises slower, a kp of 30 kept with `param set` overshoots more on the next step;
-then what the command refuses: a joint whose plugin drives it, a target beyond the
-plugin's limits. And a step during which the robot's processes stood still 0.6 s (the
-simulated world slipped behind the wall clock) says that its figures ran slow, and the
-status line says how far the world slipped.
+loads, the dump starts the next run with the tuned value. Measure a step: the simulated
+yaw on its position loop (kp 15); a kp of 5 for one run rises slower, a kp of 30 kept with
+`param set` overshoots more on the next step; then what the command refuses: a joint whose
+plugin drives it, a target beyond the plugin's limits. And a step during which the robot's
+processes stood still 0.6 s (the simulated world slipped behind the wall clock) says that
+its figures ran slow, and the status line says how far the world slipped.
 """
 
 import os
