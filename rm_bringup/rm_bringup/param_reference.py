@@ -35,7 +35,9 @@ Every parameter that can_bridge, rm_robot and rm_manual (the operator's commande
 declare, as declared in the code: type, SI
 unit, default (or *required*: the robot config must set it), the bounds a value must keep
 and what it is. A value that breaks them stops the node at start-up with a message naming
-the key. A parameter marked *live* may be set while the robot runs (`ros2 param set`,
+the key; so does a key that no node declares (a typo, or a block under the wrong plugin),
+with the declared key nearest to it, while the section of a plugin that `plugins` leaves
+out is only named. A parameter marked *live* may be set while the robot runs (`ros2 param set`,
 through the parameter services): it is checked as at start-up, the values of one call are
 applied together between two runs of the plugin, and a refusal names the key and the
 bound. The others are read once, at start-up: setting one is refused with "needs a

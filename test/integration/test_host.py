@@ -340,6 +340,13 @@ def test_plugins_disabled_in_the_config_start_disabled(harness):
     assert h.host.plugin('a').count == 0
 
 
+def test_the_config_of_a_plugin_not_loaded_is_named_not_refused(harness):
+    # a robot file's ui: section under an overlay whose plugin list leaves ui out
+    h = harness(plugins=['a'], **counter('a', 100.0), **{
+        'ui.type': 'rm_plugins/ClientUi', 'ui.rate': 8.0, 'ui.aim_x': 960})
+    assert h.host.plugin_names == ['a']
+
+
 def test_state_is_published_periodically(harness):
     h = harness(plugins=['a'], state_period=0.05, **counter('a', 100.0))
     states = h.collect(PluginState, '/rm_robot/a/state', STATE_QOS)
@@ -426,10 +433,17 @@ def test_shutdown_disables_every_plugin_with_zero_output(harness):
             JointClaimError,
             r"^plugin 'right' cannot drive joint 'left_wheel' \(already driven by plugin 'left'\)",
         ),
+        (
+            # rclpy would keep a value nobody declares and say nothing
+            {**echo(), 'plugins': ['echo'], 'echo.ratee': 50.0, 'state_perod': 0.5},
+            ParameterError,
+            r"^rm_robot: unknown parameter\(s\) 'echo.ratee' \(did you mean 'echo.rate'\?\), "
+            r"'state_perod' \(did you mean 'state_period'\?\): no plugin",
+        ),
     ],
     ids=[
         'unknown-type', 'init-fails', 'missing-key', 'ill-typed-key', 'missing-type',
-        'no-plugins', 'bad-name', 'joint-twice',
+        'no-plugins', 'bad-name', 'joint-twice', 'misspelled-keys',
     ],
 )
 def test_a_bad_config_gives_one_clear_error(ros_context, extra_plugins, overrides, error, message):

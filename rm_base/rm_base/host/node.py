@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import functools
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 from enum import Enum
 from typing import Any
 
@@ -21,6 +21,7 @@ from rm_base.hardware import CanHardware
 from rm_base.host.command_sources import read_command_sources
 from rm_base.host.plugin_task import PluginTask, TickInputs
 from rm_base.host.process_params import process_settings
+from rm_base.host.unread_keys import unknown_keys_error, unread_keys
 from rm_base.loop import Scheduler
 from rm_base.loop.data import PUBLISHED
 from rm_base.plugin import PluginBase, PluginLoader, PluginParams
@@ -317,12 +318,30 @@ class RobotHost(Node):
                     + (f', joints: {", ".join(plugin.joints)}' if plugin.joints else '')
                 )
                 loop.add_stage(task)
+        self._check_unread_keys(names)
         # derived from what each component reads and writes (rm_base.loop.order)
         self.get_logger().info(f'loop order: {" -> ".join(loop.order())}')
         # after every declaration: rclpy calls it for the declarations too
         self.add_on_set_parameters_callback(self._on_set_parameters)
         if self._own_loop:
             loop.start()
+
+    def _check_unread_keys(self, plugins: Collection[str]) -> None:
+        """Refuse keys of the files that nothing declared (rm_base.host.unread_keys)."""
+        # rclpy keeps the files' values for the node in this attribute and offers no
+        # public view of them (rclpy 7.1.6, pinned)
+        given = getattr(self, '_parameter_overrides', {})
+        declared = set(self.list_parameters([], 0).names)
+        found = unread_keys(given, declared, plugins)
+        if found.unknown:
+            first = found.unknown[0]
+            raise ParameterError(
+                unknown_keys_error(self.get_name(), found.unknown, declared), key=first
+            )
+        if found.idle_plugins:
+            self.get_logger().info(
+                f"the config of {', '.join(found.idle_plugins)} is not read: not in 'plugins'"
+            )
 
     # -- callbacks (executor thread) ----------------------------------------------------
 
