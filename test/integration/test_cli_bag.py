@@ -252,6 +252,28 @@ def test_play_remaps_a_recorded_topic_onto_another(recording):
 
 
 
+def test_play_onto_a_topic_of_another_type_says_its_subscribers_get_nothing(recording):
+    # the commands remapped onto a topic the robot takes as another type: DDS drops them all
+    wrong = '/cli_bag/typed_otherwise'
+    with rclpy_context() as context:
+        graph = Graph(context)
+        try:
+            got = []
+            graph.node.create_subscription(String, wrong, got.append, 10)
+            graph.node.create_subscription(String, TEXT_TOPIC, lambda msg: None, 10)
+            player = rmcli('bag', 'play', str(recording['bag']), '--remap',
+                           f'{CMD_TOPIC}:={wrong}', '--wait-for-subscribers', '3')
+            graph.wait(lambda: player.poll() is not None)
+            out, err = player.communicate(timeout=TIMEOUT_S)
+        finally:
+            graph.close()
+    assert player.returncode == 0, out + err
+    assert (f'rmcli: warning: {wrong} is subscribed as std_msgs/msg/String (/cli_bag_test), '
+            'not as rm_msgs/msg/ChassisCmd: those subscribers never get these messages') in err
+    assert err.count('rmcli: warning:') == 1, err  # the text topic matched: not named
+    assert not got
+
+
 def test_play_with_clock_publishes_the_bag_time_while_it_plays(recording):
     # --clock 50: the bag's time on /clock every 20 ms of playback, between messages too
     from rosgraph_msgs.msg import Clock

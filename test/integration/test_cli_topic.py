@@ -94,6 +94,55 @@ def test_pub_times_publishes_that_many_messages(test_node):
     assert 'publishing #' not in out  # -p 0
 
 
+def _stderr_when(proc, said, executor):
+    """Spin until the process's stderr holds said (or TIMEOUT_S); stop it; its output."""
+    err_lines = []
+
+    def read():
+        for line in proc.stderr:
+            err_lines.append(line)
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    wait_until(lambda: any(said in line for line in err_lines), TIMEOUT_S,
+               spin=executor.spin_once)
+    proc.send_signal(signal.SIGINT)
+    try:
+        proc.wait(timeout=TIMEOUT_S)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    reader.join(5.0)
+    return ''.join(err_lines)
+
+
+def test_pub_of_another_type_than_the_subscribers_says_they_get_nothing(test_node):
+    # DDS matches no subscription of another type and says nothing: the user would stream
+    # Twist on /chassis_cmd and wonder why the chassis stays PASSIVE
+    node, executor = test_node
+    received = []
+    node.create_subscription(ChassisCmd, '/cli_test/typed', received.append, 10)
+    proc = rmcli('topic', 'pub', '-r', '20', '-p', '0', '/cli_test/typed',
+                 'geometry_msgs/msg/Twist', '{linear: {x: 1.0}}')
+    err = _stderr_when(proc, 'rmcli: warning:', executor)
+    assert ('rmcli: warning: /cli_test/typed is subscribed as rm_msgs/msg/ChassisCmd '
+            '(/test_cli_topic), not as geometry_msgs/msg/Twist: those subscribers never get '
+            'these messages\n') in err, err
+    assert err.count('rmcli: warning:') == 1, err  # once, not every period
+    assert not received
+
+
+def test_pub_whose_qos_no_subscriber_accepts_says_so(test_node):
+    node, executor = test_node
+    node.create_subscription(String, '/cli_test/reliable', lambda msg: None, 10)  # reliable
+    proc = rmcli('topic', 'pub', '-r', '20', '-p', '0', '--qos-reliability', 'best_effort',
+                 '/cli_test/reliable', 'std_msgs/msg/String', 'data: hi')
+    err = _stderr_when(proc, 'rmcli: warning:', executor)
+    assert ('rmcli: warning: /cli_test/reliable: QoS that no subscriber accepts '
+            '(/test_cli_topic: Best effort publisher and reliable subscription): they never '
+            'get these messages\n') in err, err
+
+
 def test_pub_to_an_unknown_topic_without_type_is_one_clear_error():
     proc = rmcli('topic', 'pub', '--discovery-timeout', '0.5', '/cli_test/nobody', '{}')
     code, _, err = finish(proc)

@@ -136,7 +136,7 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 def run(args: argparse.Namespace) -> int:
     """Play the bag (again and again with --loop) until done or SIGINT/SIGTERM."""
     from .qos import offer_for_recorded
-    from .ros_node import cli_node, stop_on_signals, wait_until_heard
+    from .ros_node import cli_node, stop_on_signals, wait_until_heard, why_unheard
 
     path = Path(args.bag_path)
     remaps = parse_remaps(args.remap)
@@ -173,7 +173,15 @@ def run(args: argparse.Namespace) -> int:
                 clock = ClockPublisher(node, args.clock)
             # /clock too: a sim-time subscriber that matched late would miss the first ticks
             waited = [*publishers.values(), *([clock.publisher] if clock is not None else [])]
-            wait_until_heard(waited, args.wait_for_subscribers, stop.is_set)
+            if not wait_until_heard(waited, args.wait_for_subscribers, stop.is_set):
+                recorded = by_topic(playable)
+                for topic, publisher in publishers.items():
+                    if publisher.get_subscription_count() > 0:
+                        continue
+                    # a subscriber of another type (or QoS) would get none of them, silently
+                    reason = why_unheard(node, publisher, recorded[topic][0].msgtype)
+                    if reason is not None:
+                        print(f'rmcli: warning: {reason}', file=sys.stderr)
             options = PlayOptions(args.rate, args.loop, args.start_offset, args.delay)
             played = play(
                 reader, path, playable, publishers, options=options, stop=stop, clock=clock,

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import signal
+import sys
 import threading
 import time
 from collections.abc import Callable, Iterable, Iterator
@@ -123,6 +124,82 @@ def wait_until_heard(
             return False
         sleep(_POLL_PERIOD_S)
     return True
+
+
+def why_unheard(node: Node, publisher: Any, type_name: str) -> str | None:
+    """Why the subscribers the graph shows on a publisher's topic do not match it, if so.
+
+    DDS matches a publisher only with subscriptions of its type and of compatible QoS, and
+    says nothing about the others: a message of the wrong type goes nowhere, silently.
+
+    Args:
+        node: the node the publisher belongs to.
+        publisher: the rclpy publisher.
+        type_name: its message type, ``pkg/msg/Name``.
+
+    Returns:
+        The subscribers' other types or the QoS conflict, naming their nodes; None when
+        no subscriber is seen, or every one it sees could match.
+    """
+    from rclpy.qos import QoSCompatibility, qos_check_compatible
+
+    topic = publisher.topic_name
+    mine = node.get_fully_qualified_name()
+    # the graph's view of our own QoS: a local profile leaves deadline and lease unset
+    # where the graph gives them as infinite, and the check would take that for a conflict
+    offered = [
+        info.qos_profile for info in node.get_publishers_info_by_topic(topic)
+        if f'{info.node_namespace.rstrip("/")}/{info.node_name}' == mine
+    ]
+    others: list[str] = []
+    conflicts: list[str] = []
+    for info in node.get_subscriptions_info_by_topic(topic):
+        who = f'{info.node_namespace.rstrip("/")}/{info.node_name}'
+        if who == mine:
+            continue
+        if info.topic_type != type_name:
+            others.append(f'{info.topic_type} ({who})')
+            continue
+        if not offered:
+            continue
+        compatible, reason = qos_check_compatible(offered[0], info.qos_profile)
+        if compatible == QoSCompatibility.ERROR:
+            conflicts.append(f'{who}: {reason.replace("ERROR: ", "").strip().rstrip(";")}')
+    if others:
+        return (f'{topic} is subscribed as {", ".join(sorted(set(others)))}, not as '
+                f'{type_name}: those subscribers never get these messages')
+    if conflicts:
+        return (f'{topic}: QoS that no subscriber accepts ({"; ".join(sorted(set(conflicts)))})'
+                ': they never get these messages')
+    return None
+
+
+class UnheardWarning:
+    """Says once, on stderr, when a publisher's subscribers cannot match it (why_unheard).
+
+    Polled from a verb's loop while nothing has matched: discovery brings the others'
+    subscriptions within a few announcement periods, so the first look may see none.
+    """
+
+    def __init__(self, node: Node, publisher: Any, type_name: str, period_s: float = 1.0,
+                 clock: Callable[[], float] = time.monotonic) -> None:
+        self._node, self._publisher, self._type_name = node, publisher, type_name
+        self._period_s, self._clock = period_s, clock
+        self._next = clock()
+        self.said: str | None = None
+
+    def poll(self) -> None:
+        """Look at the graph at most once a period while no subscription matched."""
+        now = self._clock()
+        if self.said is not None or now < self._next:
+            return
+        self._next = now + self._period_s
+        if self._publisher.get_subscription_count() > 0:
+            return
+        reason = why_unheard(self._node, self._publisher, self._type_name)
+        if reason is not None:
+            self.said = reason
+            print(f'rmcli: warning: {reason}', file=sys.stderr, flush=True)
 
 
 def resolve_topic_type(

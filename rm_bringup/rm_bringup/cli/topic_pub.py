@@ -11,11 +11,17 @@ import argparse
 import time
 
 from .errors import CliError, UsageError
-from .interfaces import get_message_class, looks_like_type_name
+from .interfaces import get_message_class, looks_like_type_name, type_name_of
 from .message_yaml import fill_message, parse_values
 from .options import nonnegative_int, positive_float
 from .qos import add_qos_arguments, profile_from_args
-from .ros_node import DISCOVERY_TIMEOUT_S, cli_node, expand_topic, resolve_topic_type
+from .ros_node import (
+    DISCOVERY_TIMEOUT_S,
+    UnheardWarning,
+    cli_node,
+    expand_topic,
+    resolve_topic_type,
+)
 
 _WAIT_LOG_PERIOD_S = 1.0
 _WAIT_POLL_S = 0.1
@@ -140,7 +146,8 @@ def run(args: argparse.Namespace) -> int:
             msg = msg_class()
             stamp_setters = fill_message(msg, values)
         publisher = node.create_publisher(msg_class, topic, profile_from_args(args))
-        _wait_for_subscriptions(publisher, wait_subscriptions, args.max_wait_time_secs)
+        unheard = UnheardWarning(node, publisher, type_name_of(msg_class))
+        _wait_for_subscriptions(publisher, wait_subscriptions, args.max_wait_time_secs, unheard)
         print('publisher: beginning loop', flush=True)
         count = 0
         period_s = 1.0 / args.rate
@@ -156,6 +163,7 @@ def run(args: argparse.Namespace) -> int:
             publisher.publish(msg)
             if times and count >= times:
                 break
+            unheard.poll()  # a subscriber of another type or QoS would get none of these
             # Absolute deadlines keep the rate; after a stall, restart instead of bursting.
             next_due = max(next_due + period_s, time.monotonic())
             time.sleep(max(0.0, next_due - time.monotonic()))
@@ -163,7 +171,9 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _wait_for_subscriptions(publisher, count: int, max_wait_s: float | None) -> None:
+def _wait_for_subscriptions(
+    publisher, count: int, max_wait_s: float | None, unheard: UnheardWarning
+) -> None:
     start = time.monotonic()
     last_log = None
     while publisher.get_subscription_count() < count:
@@ -171,6 +181,7 @@ def _wait_for_subscriptions(publisher, count: int, max_wait_s: float | None) -> 
         if last_log is None or now - last_log >= _WAIT_LOG_PERIOD_S:
             print(f'Waiting for at least {count} matching subscription(s)...', flush=True)
             last_log = now
+        unheard.poll()
         if max_wait_s is not None and now - start >= max_wait_s:
             raise CliError(
                 f'timed out waiting for subscribers: expected {count} subscriber(s) but only got '
