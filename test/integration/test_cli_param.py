@@ -66,6 +66,24 @@ def test_set_goes_through_the_nodes_check_and_a_refusal_is_exit_1_with_its_reaso
     assert tuned.get_parameter('joint').value == 'yaw'
 
 
+def test_set_reads_30_and_1e_3_as_the_numbers_a_double_parameter_wants(tuned):
+    # YAML reads 30 as an integer and 1e-3 as a string: ros2 param set sends them so, and a
+    # double parameter refuses both as the wrong type
+    for text, expected in (('30', 30.0), ('1e-3', 0.001)):
+        code, out, err = rmcli('param', 'set', '/tuned', 'loop.kp', text)
+        assert (code, out) == (0, 'Set parameter successful\n'), err
+        assert tuned.get_parameter('loop.kp').value == expected
+    code, _, err = rmcli('param', 'set', '/tuned', 'loop.kp', 'fast')
+    assert code == 1 and 'Wrong parameter type' in err, err
+
+
+def test_set_of_a_name_the_node_lacks_names_the_nearest_ones(tuned):
+    code, _, err = rmcli('param', 'set', '/tuned', 'loop.kq', '1.0')
+    assert code == 1
+    assert err == ('rmcli: error: Setting parameter failed: /tuned has no parameter loop.kq '
+                   '(did you mean loop.kp?)\n')
+
+
 def test_a_dump_loads_back_and_is_a_parameter_file(tuned, tmp_path):
     code, out, err = rmcli('param', 'dump', '/tuned')
     assert code == 0, err

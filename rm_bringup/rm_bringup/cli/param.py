@@ -10,6 +10,7 @@ announcement period of the others).
 from __future__ import annotations
 
 import argparse
+import difflib
 import re
 import time
 from collections.abc import Callable, Sequence
@@ -163,17 +164,44 @@ def run_set(args: argparse.Namespace) -> int:
     """Set one parameter; print the node's answer (exit 1 when it refuses)."""
     from rclpy.parameter import Parameter, get_parameter_value
 
+    name = args.parameter_name
     value = get_parameter_value(args.value)  # YAML, as ros2 param set reads it
-    parameter = Parameter.from_parameter_msg(_msg(args.parameter_name, value))
 
     def work(client: Any, wait: Callable[[Any], Any]) -> int:
-        result = _set(client, wait, [parameter])[0]
+        current = wait(client.get_parameters([name])).values
+        wanted = _as_double(args.value, value) if current and current[0].type == 3 else value
+        result = _set(client, wait, [Parameter.from_parameter_msg(_msg(name, wanted))])[0]
         if result.successful:
             print('Set parameter successful')
             return 0
+        if not current:  # rclpy's reason for an undeclared name lists no names
+            declared = _names(client, wait)
+            close = difflib.get_close_matches(name, declared, n=3)
+            hint = f' (did you mean {", ".join(close)}?)' if close else ''
+            raise CliError(f'Setting parameter failed: {args.node_name} has no parameter '
+                           f'{name}{hint}')
         raise CliError(f'Setting parameter failed: {result.reason}')
 
     return _call(args.node_name, args.timeout, work)
+
+
+def _as_double(text: str, value: Any) -> Any:
+    """The value for a double parameter: ``30`` and ``1e-3`` as the numbers they are.
+
+    YAML (ros2 param set's reading) makes ``30`` an integer and ``1e-3`` a string, which a
+    double parameter refuses as the wrong type; anything else is left as it was read.
+    """
+    from rcl_interfaces.msg import ParameterValue
+
+    if value.type == 2:  # integer
+        return ParameterValue(type=3, double_value=float(value.integer_value))
+    if value.type == 4:  # string
+        try:
+            number = float(text)
+        except ValueError:
+            return value
+        return ParameterValue(type=3, double_value=number)
+    return value
 
 
 def _msg(name: str, value: Any) -> Any:
