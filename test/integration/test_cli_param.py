@@ -112,11 +112,11 @@ def test_a_config_keyed_by_the_relative_name_loads_as_rcl_reads_it(tuned, tmp_pa
     path.write_text(yaml.safe_dump({
         'other': {'ros__parameters': {'loop': {'kp': 99.0}}},
         '/**': {'ros__parameters': {'loop': {'kp': 1.0}}},
-        'tuned': {'ros__parameters': {'loop': {'kp': 7.5}}},
+        'tuned': {'ros__parameters': {'loop': {'kp': 7}}},  # an integer, as set reads it
     }))
     code, out, err = rmcli('param', 'load', '/tuned', str(path))
     assert (code, out) == (0, 'Set parameter loop.kp successful\n'), err
-    assert tuned.get_parameter('loop.kp').value == 7.5
+    assert tuned.get_parameter('loop.kp').value == 7.0
     # a name the node does not declare is refused by the node and said plainly; the rest
     # of the file still loads (one undeclared name used to make the node answer no values)
     path.write_text(yaml.safe_dump({'tuned': {'ros__parameters': {

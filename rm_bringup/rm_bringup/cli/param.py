@@ -282,9 +282,11 @@ def run_load(args: argparse.Namespace) -> int:
         current = dict(zip(declared, wait(client.get_parameters(declared)).values, strict=True))
         for name, parameter in parameters.items():
             wanted = parameter.get_parameter_value()
+            if name in current and current[name].type == 3:  # as set reads a double
+                wanted = _as_double(str(parameter.value), wanted)
             if name in current and _value(current[name]) == _value(wanted):
                 continue  # no change: a dump loads back even with its read-only values
-            result = _set(client, wait, [parameter])[0]
+            result = _set(client, wait, [Parameter.from_parameter_msg(_msg(name, wanted))])[0]
             if result.successful:
                 print(f'Set parameter {name} successful')
             else:
