@@ -20,6 +20,7 @@ import rclpy
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus
 from fixtures.extra_plugins import install_extra_plugins
 from geometry_msgs.msg import TwistStamped
+from rclpy.duration import Duration
 from rclpy.experimental import EventsExecutor
 from rclpy.parameter import Parameter
 from rm_base.errors import ConfigError
@@ -378,6 +379,35 @@ def test_the_inbox_reports_what_it_took_per_topic_on_diagnostics(harness):
     status = inbox_status()
     assert (status.level, status.message) == (DiagnosticStatus.OK, 'ok')
     assert {kv.key: kv.value for kv in status.values}['/echo_cmd dropped'] == '0'
+
+
+def test_commands_the_plugins_refused_are_counted_on_diagnostics(harness):
+    h = harness(plugins=['echo'], state_period=0.05, **echo(rate=50.0, command_timeout=0.5))
+    diagnostics = h.collect(DiagnosticArray, '/diagnostics')
+    h.start()
+    publisher = h.probe.create_publisher(TwistStamped, 'echo_cmd', 10)
+    assert wait_until(lambda: publisher.get_subscription_count() > 0, WAIT)
+    stale = TwistStamped()
+    stale.header.stamp = (h.probe.get_clock().now() - Duration(seconds=10.0)).to_msg()
+    for _ in range(2):
+        publisher.publish(stale)
+
+    def commands_statuses():
+        return [s for m in diagnostics for s in m.status if s.name == 'rm_robot: commands']
+
+    def rejected(status):
+        return {kv.key: kv.value for kv in status.values}['echo /echo_cmd rejected']
+
+    assert wait_until(lambda: any(rejected(s) == '2' for s in commands_statuses()), WAIT)
+    # one report, or two if one fell between the messages: each says what was new
+    warned = [s for s in commands_statuses() if s.level == DiagnosticStatus.WARN]
+    assert warned and all(
+        re.fullmatch(r'rejected since the last report: [12] on /echo_cmd \(echo\), the newest: '
+                     r'stale: stamp is 10\.\d{3} s old, timeout 0\.500 s', s.message)
+        for s in warned), [s.message for s in warned]
+    # the next report has nothing new: OK, the count kept
+    assert wait_until(lambda: commands_statuses()[-1].level == DiagnosticStatus.OK, WAIT)
+    assert rejected(commands_statuses()[-1]) == '2'
 
 
 def test_shutdown_disables_every_plugin_with_zero_output(harness):

@@ -27,6 +27,7 @@ from rm_base.loop.data import PUBLISHED
 from rm_base.plugin import PluginBase, PluginLoader, PluginParams
 from rm_base.plugin.command_mux import CommandMux
 from rm_base.plugin.command_mux_status import command_sources_status
+from rm_base.plugin.command_status import CommandReport
 from rm_base.plugin.errors import ParameterError
 from rm_base.plugin.inbox import STAGE_NAME as INBOX_STAGE
 from rm_base.plugin.inbox import Inbox
@@ -142,6 +143,7 @@ class RobotHost(Node):
         self._inbox = Inbox(inbox_node(self), self.get_clock()) if take_from_dds else None
         io.inbox = self._inbox
         self._inbox_report = InboxReport(node_name)
+        self._command_report = CommandReport(node_name)
         self._diagnostics_pub = self._outbox.wrap(
             self.create_publisher(DiagnosticArray, '/diagnostics', 10))
         self._warned_foreign: set[str] = set()
@@ -415,12 +417,16 @@ class RobotHost(Node):
         for task in self._tasks.values():
             task.plugin.publish_state()
         inbox, mux = self._inbox, self._io.command_mux
-        if (inbox is not None or mux is not None) and self._diagnostics_pub.heard():
+        inputs = [(name, command) for name, task in self._tasks.items()
+                  for command in task.plugin.command_inputs]
+        if (inbox is not None or mux is not None or inputs) and self._diagnostics_pub.heard():
             now = self.get_clock().now()
             msg = DiagnosticArray()
             msg.header.stamp = now.to_msg()
             if inbox is not None:
                 msg.status.append(self._inbox_report.status(inbox))
+            if inputs:
+                msg.status.append(self._command_report.status(inputs))
             if mux is not None and mux.topics:  # rm_manual takes no command: nothing to say
                 msg.status.append(
                     command_sources_status(self.get_name(), mux, now.nanoseconds))

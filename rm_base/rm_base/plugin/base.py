@@ -390,6 +390,11 @@ class PluginBase:
 
     # -- helpers for on_init / update ---------------------------------------------------
 
+    @property
+    def command_inputs(self) -> tuple[CommandInput[Any], ...]:
+        """The command inputs this plugin subscribed (``subscribe_command``), in order."""
+        return tuple(self._inputs)
+
     def subscribe_command(
         self,
         topic: str,

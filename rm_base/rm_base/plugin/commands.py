@@ -166,6 +166,7 @@ class CommandInput(Generic[M]):
         self._parse = parse
         self._rejection = ''  # why the newest message was refused, if it was
         self._logged_rejection = ''  # the last rejection that got its own log line
+        self._last_rejection = ''  # the newest rejection's reason, kept past valid messages
         self._stale_log = LogThrottle(round(log_period * _NS_PER_S))
         # Run-thread side: whether the current "no command" episode has been reported, and
         # its kind and reason.
@@ -177,6 +178,11 @@ class CommandInput(Generic[M]):
         """Number of messages rejected (stale, from the future, or invalid) since start."""
         with self._lock:
             return self._rejected
+
+    def rejections(self) -> tuple[int, str]:
+        """The messages rejected since start and why the newest was ('' if none was)."""
+        with self._lock:
+            return self._rejected, self._last_rejection
 
     def handle(self, msg: Any, receive_ns: int) -> bool:
         """Take a message from the subscription: check it once and keep its record.
@@ -195,19 +201,18 @@ class CommandInput(Generic[M]):
         # A stamp more than a timeout in the future means the sender's clock is off; using
         # it would keep the command alive past its timeout.
         if age_ns > self._timeout_ns or -age_ns > self._timeout_ns:
+            when = (
+                f'{age_ns / _NS_PER_S:.3f} s old'
+                if age_ns > 0
+                else f'{-age_ns / _NS_PER_S:.3f} s in the future (clocks out of sync?)'
+            )
+            stale = f'stamp is {when}, timeout {self.timeout:.3f} s'
             with self._lock:
                 self._rejected += 1
+                self._last_rejection = f'stale: {stale}'
                 more = self._stale_log.due(receive_ns)
             if more is not None:
-                when = (
-                    f'{age_ns / _NS_PER_S:.3f} s old'
-                    if age_ns > 0
-                    else f'{-age_ns / _NS_PER_S:.3f} s in the future (clocks out of sync?)'
-                )
-                self._logger.warning(
-                    f'rejected stale command on {self.topic}: stamp is {when}, '
-                    f'timeout {self.timeout:.3f} s{more}'
-                )
+                self._logger.warning(f'rejected stale command on {self.topic}: {stale}{more}')
             return False
         record: M = msg
         if self._parse is not None:
@@ -227,7 +232,7 @@ class CommandInput(Generic[M]):
     def _reject(self, reason: str, receive_ns: int) -> None:
         with self._lock:
             self._rejected += 1
-            self._rejection = reason
+            self._rejection = self._last_rejection = reason
             more = self._stale_log.due(receive_ns)
             stands = self._msg is not None
             if more is not None:
