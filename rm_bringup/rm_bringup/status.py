@@ -16,13 +16,16 @@ from __future__ import annotations
 
 import math
 import threading
-from collections.abc import Mapping
+import time
+from collections.abc import Callable, Mapping
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray
 from nav_msgs.msg import Odometry
 from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
+from rm_base.plugin.command_status import NEW_KEY as REFUSED_NOW
+from rm_base.plugin.command_status import STATUS_NAME as COMMANDS_STATUS
 
 from rm_msgs.msg import (
     ActuatorState,
@@ -63,7 +66,8 @@ def format_status(latest: Mapping[str, Any]) -> str:
         latest: the latest message per source: ``chassis`` (ChassisState), ``gimbal``,
             ``odom`` (Odometry), ``shooter``, ``referee`` (RefereeRobotStatus),
             ``actuators`` (ActuatorState) and ``diagnostics`` (status name ->
-            DiagnosticStatus).
+            DiagnosticStatus); ``refused``: the command topics a plugin refused a
+            moment ago, comma-separated.
     """
     parts = []
     chassis = latest.get('chassis')
@@ -135,6 +139,10 @@ def format_status(latest: Mapping[str, Any]) -> str:
             parts.append('cmd ' + (names.pop() if len(names) == 1 else ' '.join(
                 f'{topic.lstrip("/").removesuffix("_cmd")}:{name}'
                 for topic, name in sorted(charge.items()))))
+    refused = latest.get('refused', '')
+    if refused:  # commands a plugin refused a moment ago: the log says why
+        parts.append('refused ' + ' '.join(
+            t.lstrip('/').removesuffix('_cmd') for t in refused.split(',')))
     actuators = latest.get('actuators')
     if actuators is not None:
         offline = [n for n, ok in zip(actuators.name, actuators.online, strict=False) if not ok]
@@ -176,6 +184,10 @@ def _referee_part(status: Any) -> str:
     return text + (' power off ' + ','.join(off) if off else '')
 
 
+#: How long the line names the topics of a refused command [s]: a few of its refreshes.
+REFUSED_HOLD_S = 3.0
+
+
 #: What a narrow terminal leaves out first: the wheels' speeds, news of nothing (no
 #: overrun, nothing offline), the bus loads, then who commands.
 _DROP_FIRST = (
@@ -203,11 +215,14 @@ class StatusView:
 
     Args:
         node: node to create the subscriptions on (callbacks run on its executor).
+        clock: monotonic time [s] (tests pass their own).
     """
 
-    def __init__(self, node: Node) -> None:
+    def __init__(self, node: Node, clock: Callable[[], float] = time.monotonic) -> None:
         self._lock = threading.Lock()
+        self._clock = clock
         self._latest: dict[str, Any] = {'diagnostics': {}}
+        self._refused: tuple[str, float] | None = None  # (topics, when seen [s])
         self._last_overruns: tuple[int, float] | None = None  # (total, stamp [s])
         qos = qos_profile_sensor_data
         node.create_subscription(ChassisState, '/chassis_state', self._keep('chassis'), qos)
@@ -234,6 +249,14 @@ class StatusView:
                 self._latest['diagnostics'][status.name] = status
                 if status.name.endswith(': scheduler'):
                     self._note_overruns(status, stamp)
+                elif status.name.endswith(f': {COMMANDS_STATUS}'):
+                    self._note_refused(status)
+
+    def _note_refused(self, status: Any) -> None:
+        # one report a second says it; the line may be drawn just before and after that
+        topics = _diag_values(status).get(REFUSED_NOW, '')
+        if topics:
+            self._refused = (topics, self._clock())
 
     def _note_overruns(self, status: Any, stamp: float) -> None:
         try:
@@ -250,4 +273,7 @@ class StatusView:
         with self._lock:
             latest = dict(self._latest)
             latest['diagnostics'] = dict(latest['diagnostics'])
+            refused = self._refused
+        if refused is not None and self._clock() - refused[1] < REFUSED_HOLD_S:
+            latest['refused'] = refused[0]
         return format_status(latest)

@@ -116,3 +116,23 @@ def test_readme_from_driving_to_replay_does_what_it_says(tmp_path):
         line = user.status.wait_for(lambda s: 'chassis GYRO' in s and commanded(s))
         assert line, (user.status.lines[-3:], user.log[-2000:])
         assert not replayed_stale(user.log), replayed_stale(user.log)
+
+
+def test_a_command_the_robot_refuses_is_one_warning_and_shown_on_the_status_line(tmp_path):
+    # README, "Drive the simulated robot": the status line says `refused chassis` after a
+    # refused command, and the log why, once
+    with UserSession(tmp_path) as user:
+        user.wait_for_robot()
+        said = user.type("rmcli topic pub --once /chassis_cmd rm_msgs/msg/ChassisCmd "
+                         "'{header: auto, mode: 250}'", wait=True)
+        assert 'publishing #1' in said, said
+        line = user.status.wait_for(lambda s: 'refused chassis' in s)
+        assert line and 'chassis PASSIVE' in line, user.status.lines[-3:]
+        warnings = [text for text in user.log.splitlines()
+                    if '[WARN]' in text and 'unknown mode 250' in text]
+        assert len(warnings) == 1, warnings
+        assert warnings[0].endswith('rejected /chassis_cmd: unknown mode 250 (known: 0=PASSIVE, '
+                                    '1=RAW, 2=FOLLOW, 3=TWIST, 4=GYRO, 5=POSITION); no valid '
+                                    'command has come yet'), warnings
+        # the next report has no new refusal: the part goes
+        assert user.status.wait_for(lambda s: s.startswith('chassis ') and 'refused' not in s)

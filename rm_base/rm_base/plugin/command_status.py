@@ -18,6 +18,8 @@ from rm_base.ros.diagnostics import diagnostic_status
 
 #: The status's name after ``<node>: ``.
 STATUS_NAME = 'commands'
+#: Its value naming the topics with refusals since the last report (comma-separated).
+NEW_KEY = 'rejected since the last report'
 
 
 class CommandReport:
@@ -35,6 +37,7 @@ class CommandReport:
         """The status of the plugins' command inputs, as ``(plugin, input)`` pairs."""
         values: dict[str, object] = {}
         news = []
+        topics = []
         counts = {}
         for plugin, command in inputs:
             key = f'{plugin} {command.topic}'
@@ -44,7 +47,9 @@ class CommandReport:
             new = count - self._last.get(key, 0)
             if new > 0:
                 news.append(f'{new} on {command.topic} ({plugin}), the newest: {reason}')
+                topics.append(command.topic)
         self._last = counts
+        values[NEW_KEY] = ','.join(sorted(set(topics)))
         if news:
             level = DiagnosticStatus.WARN
             message = 'rejected since the last report: ' + '; '.join(news)

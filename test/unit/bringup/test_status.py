@@ -2,8 +2,8 @@
 
 import math
 
-from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
-from rm_bringup.status import format_status
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rm_bringup.status import REFUSED_HOLD_S, StatusView, format_status
 
 from rm_msgs.msg import ActuatorState, ChassisCmd, ChassisState, GimbalState, ShooterState
 
@@ -56,6 +56,33 @@ def test_a_simulator_that_slipped_says_how_far_and_one_that_kept_up_nothing():
     assert line(0.4173) == 'sim slipped 0.4 s'
     assert line('fast') == 'waiting for the robot...'  # not a number: nothing said
     assert line(0.0) == 'waiting for the robot...'  # nothing else said anything
+
+
+def test_commands_refused_a_moment_ago_are_named():
+    assert format_status({'refused': '/chassis_cmd,/vel_cmd', 'diagnostics': {}}) == \
+        'refused chassis vel'
+    assert format_status({'refused': '', 'diagnostics': {}}) == 'waiting for the robot...'
+
+
+def test_the_view_holds_a_refusal_for_a_few_seconds_after_its_report():
+    class Node:
+        def create_subscription(self, *args):
+            pass
+
+    now = [100.0]
+    view = StatusView(Node(), clock=lambda: now[0])
+
+    def report(refused):
+        msg = DiagnosticArray(status=[_status('rm_robot: commands', {
+            'chassis /chassis_cmd rejected': 3, 'rejected since the last report': refused})])
+        view._on_diagnostics(msg)
+
+    report('/chassis_cmd')
+    report('')  # the next report, a second later: nothing new, the refusal still shown
+    now[0] += REFUSED_HOLD_S - 0.1
+    assert view.line() == 'refused chassis'
+    now[0] += 0.2
+    assert view.line() == 'waiting for the robot...'
 
 
 def test_when_a_shooter_faults_expect_fault_shown():

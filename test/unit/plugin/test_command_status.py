@@ -38,7 +38,8 @@ def test_new_rejections_warn_with_the_newest_reason_then_the_count_stays():
     assert (first.level, first.message) == (
         DiagnosticStatus.OK, 'no command rejected since the last report')
     assert values(first) == {'chassis /chassis_cmd rejected': '0',
-                             'gimbal /gimbal_cmd rejected': '0'}
+                             'gimbal /gimbal_cmd rejected': '0',
+                             'rejected since the last report': ''}
 
     assert not chassis.handle(command(100, 1), 100 * S)         # invalid
     assert chassis.handle(command(100, 2), 100 * S)             # valid: the count stays
@@ -51,8 +52,9 @@ def test_new_rejections_warn_with_the_newest_reason_then_the_count_stays():
         '/chassis_cmd: odd nanoseconds; 2 on /gimbal_cmd (gimbal), the newest: stale: stamp '
         'is 1.000 s in the future (clocks out of sync?), timeout 0.500 s')
     assert values(second) == {'chassis /chassis_cmd rejected': '1',
-                              'gimbal /gimbal_cmd rejected': '2'}
+                              'gimbal /gimbal_cmd rejected': '2',
+                              'rejected since the last report': '/chassis_cmd,/gimbal_cmd'}
 
     third = report.status(inputs)
     assert third.level == DiagnosticStatus.OK
-    assert values(third) == values(second)
+    assert values(third) == {**values(second), 'rejected since the last report': ''}
