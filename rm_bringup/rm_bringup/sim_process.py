@@ -26,6 +26,7 @@ from collections.abc import Sequence
 import yaml
 from rm_base.bridge.sim_process import BRIDGE_SECTION, bridge_parameters
 from rm_base.errors import ConfigError
+from rm_base.sim.socket_bus import INTERFACE_NAME
 
 #: How long rm_sim may take to build its world and listen [s].
 START_TIMEOUT_S = 20.0
@@ -56,7 +57,7 @@ class SimProcess:
         parameters: dict[str, object] = {'sim': False}
         if interface is None:
             parameters['buses'] = {
-                bus: {'interface': 'rm_sim_socket', 'options': {'socket': self.socket}}
+                bus: {'interface': INTERFACE_NAME, 'options': {'socket': self.socket}}
                 for bus in buses
             }
         self.bridge_overlay = workdir / 'rm_sim_bridge.yaml'

@@ -121,7 +121,7 @@ def test_a_step_on_a_starved_simulator_says_its_figures_ran_slow(tmp_path):
         found = re.search(r'rmcli: warning: the simulated world slipped ([\d.]+) s behind '
                           r'the wall clock during the step \(CPU starved\): these figures '
                           r'ran slow', said)
-        assert found and float(found.group(1)) >= 0.4, said
+        assert found and float(found.group(1)) >= 0.4, (said, user.status.lines[-3:])
         # and make run's status line says so too
         line = user.status.wait_for(lambda s: 'sim slipped' in s)
         assert line and float(re.search(r'sim slipped ([\d.]+) s', line).group(1)) >= 0.4, \

@@ -28,6 +28,8 @@ from can.typechecking import CanFilters
 from rm_base.sim import wire
 
 #: The receive buffer asked for [bytes]: a second of feedback of a busy channel.
+#: The python-can interface name this bus registers under (rm_base's setup.py).
+INTERFACE_NAME = 'rm_sim_socket'
 _RCVBUF_BYTES = 4 * 1024 * 1024
 #: How long to wait for rm_sim's answer to the hello [s].
 _HELLO_TIMEOUT_S = 5.0

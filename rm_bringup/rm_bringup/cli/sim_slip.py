@@ -15,6 +15,9 @@ from typing import Any
 
 _KEY = 'slipped [s]'
 _REPORT_WAIT_S = 2.5  # the bridge reports at 1 Hz; a report after this long is not coming
+# The first report also waits for discovery of the simulator's node: a new process
+# regularly needs 2-2.5 s for it (rm_bringup.cli.ros_node.DISCOVERY_TIMEOUT_S).
+_FIRST_REPORT_WAIT_S = 6.0
 
 
 def slipped_s(msg: Any) -> float | None:
@@ -60,7 +63,7 @@ class SlipWatch:
             simulated: whether the robot runs on a simulator: then a first report is
                 waited for; else none is.
         """
-        end = self._clock() + _REPORT_WAIT_S
+        end = self._clock() + _FIRST_REPORT_WAIT_S
         while simulated and self._last is None and self._clock() < end:
             self._spin()
         return None if self._last is None else self._last[1]

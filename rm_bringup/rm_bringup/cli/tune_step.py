@@ -111,8 +111,7 @@ def _run(args: argparse.Namespace, node: Any, executor: Any) -> int:
         {'--from': args.start} if args.start is not None else {}), bridge)
     new = {g: getattr(args, g) for g in _GAINS if getattr(args, g) is not None}
     gains = {**old, **new}
-    # a simulator in the bridge (its sim parameter) or in a process of its own (rm_sim)
-    slipped_before = slips.start(bool(bridge.get('sim')) or 'rm_sim' in node.get_node_names())
+    slipped_before = slips.start(_simulated(node, bridge, joint))
     print(f'step {joint} {loop} {start:+.3f} -> {args.target:+.3f} '
           f"({', '.join(f'{g} {gains[g]:g}' for g in _GAINS)}), "
           f'owner {owner.plugin if owner else "none"}', flush=True)
@@ -355,6 +354,23 @@ class _Drive:
             self._executor.spin_once(timeout_sec=max(0.0, next_send - time.monotonic()))
         assert first is not None
         return first
+
+
+def _simulated(node: Any, bridge: _Params, joint: str) -> bool:
+    """Whether the joint's motor is simulated, so a slip report is worth waiting for.
+
+    The world runs in the bridge (its ``sim`` parameter) or in rm_sim, reached through the
+    joint's bus (interface ``rm_sim_socket``) or, with ``--sim-can``, through a kernel
+    interface: then only rm_sim's node says so, and discovery may not have brought it yet.
+    """
+    from rm_base.sim.socket_bus import INTERFACE_NAME  # python-can: only for this verb
+
+    if bridge.get('sim'):
+        return True
+    bus = bridge.get(f'joints.{joint}.bus')
+    if bus is not None and bridge.get(f'buses.{bus}.interface') == INTERFACE_NAME:
+        return True
+    return 'rm_sim' in node.get_node_names()
 
 
 def _write(out: Path, t: list[float], y: list[float], target: float) -> None:

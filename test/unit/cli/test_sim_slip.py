@@ -65,8 +65,18 @@ def test_a_simulator_that_never_reports_costs_one_wait_and_no_verdict():
     robot = Robot([(0.5, report())])
     watch = robot.watch()
     assert watch.start(True) is None
-    assert 2.5 <= robot.now < 2.7
+    assert 6.0 <= robot.now < 6.2  # discovery and a report period
     assert watch.since(None) is None
+
+
+def test_a_first_report_that_discovery_delays_is_waited_for():
+    # a new CLI process can take 2-2.5 s to discover rm_sim, then up to a report period
+    robot = Robot([(3.4, report('0.1')), (4.4, report('0.1')), (5.4, report('0.7'))])
+    watch = robot.watch()
+    assert watch.start(True) == 0.1 and robot.now < 3.5
+    while robot.now < 5.0:  # the step: the CLI spins, taking the report at 4.4 s
+        robot.spin()
+    assert abs(watch.since(0.1) - 0.6) < 1e-9  # from the one at 5.4 s
 
 
 def test_without_a_report_after_the_run_the_last_one_is_used():
