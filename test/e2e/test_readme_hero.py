@@ -1,8 +1,8 @@
-"""README's drive examples on the hero (`ROBOT=hero make run`), held for 45 seconds.
+"""README's drive examples on the hero (`ROBOT=hero make run`), held for 30 seconds.
 
 The finding: about 10 s into READY/PUSH the hero's simulated referee destroyed the robot
 (every motor offline for good) and nothing said why. Here README's two blocks run as typed,
-and for 45 s (four times as long as the robot lasted) every status line must show the robot
+and for 30 s (three times as long as the robot lasted) every status line must show the robot
 whole: full HP, no output off, no motor offline, and the burst's five shots, no more.
 """
 
@@ -11,7 +11,7 @@ from support.user_session import UserSession, readme_blocks, shots
 
 pytestmark = [pytest.mark.ros, pytest.mark.slow, pytest.mark.realtime]
 
-SECONDS = 45.0
+SECONDS = 30.0
 
 
 def test_the_hero_runs_readmes_shooter_examples_and_stays_whole(tmp_path):

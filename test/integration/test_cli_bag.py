@@ -262,7 +262,7 @@ def test_play_onto_a_topic_of_another_type_says_its_subscribers_get_nothing(reco
             graph.node.create_subscription(String, wrong, got.append, 10)
             graph.node.create_subscription(String, TEXT_TOPIC, lambda msg: None, 10)
             player = rmcli('bag', 'play', str(recording['bag']), '--remap',
-                           f'{CMD_TOPIC}:={wrong}', '--wait-for-subscribers', '3')
+                           f'{CMD_TOPIC}:={wrong}', '--wait-for-subscribers', '3', '-r', '4')
             graph.wait(lambda: player.poll() is not None)
             out, err = player.communicate(timeout=TIMEOUT_S)
         finally:
