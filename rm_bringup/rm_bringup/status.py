@@ -184,8 +184,8 @@ def _referee_part(status: Any) -> str:
     return text + (' power off ' + ','.join(off) if off else '')
 
 
-#: How long the line names the topics of a refused command [s]: a few of its refreshes.
-REFUSED_HOLD_S = 3.0
+#: How long the line names the topics of a refused command [s]: two of bringup's lines.
+REFUSED_HOLD_S = 4.0
 
 
 #: What a narrow terminal leaves out first: the wheels' speeds, news of nothing (no
