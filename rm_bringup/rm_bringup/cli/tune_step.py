@@ -26,6 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from rm_base.control.step_response import StepError, StepFigures, step_figures
+from rm_base.sim.socket_bus import INTERFACE_NAME as SIM_INTERFACE
 
 from .errors import CliError
 from .options import positive_float
@@ -363,12 +364,10 @@ def _simulated(node: Any, bridge: _Params, joint: str) -> bool:
     joint's bus (interface ``rm_sim_socket``) or, with ``--sim-can``, through a kernel
     interface: then only rm_sim's node says so, and discovery may not have brought it yet.
     """
-    from rm_base.sim.socket_bus import INTERFACE_NAME  # python-can: only for this verb
-
     if bridge.get('sim'):
         return True
     bus = bridge.get(f'joints.{joint}.bus')
-    if bus is not None and bridge.get(f'buses.{bus}.interface') == INTERFACE_NAME:
+    if bus is not None and bridge.get(f'buses.{bus}.interface') == SIM_INTERFACE:
         return True
     return 'rm_sim' in node.get_node_names()
 
