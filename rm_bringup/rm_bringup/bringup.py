@@ -39,6 +39,7 @@ from rm_base.bridge import CanBridgeNode
 from rm_base.bridge.node import NODE_NAME as BRIDGE_NODE_NAME
 from rm_base.errors import ConfigError
 from rm_base.host.node import RobotHost
+from rm_base.ros.env import bounded_teardown
 from rm_base.ros.log import forward_package_logging
 from rm_base.ros.node_main import init_ros, spin_until_shutdown
 from rm_base.runtime.realtime import prepare_loop_process
@@ -316,11 +317,12 @@ def _run(args: argparse.Namespace, files: list[pathlib.Path], console: Console |
             manual.shutdown()
         host.shutdown()
         bridge.shutdown()
-        executor.shutdown()
-        for node in (manual, host, bridge):
-            if node is not None:
-                node.destroy_node()
-        rclpy.try_shutdown()
+        with bounded_teardown():
+            executor.shutdown()
+            for node in (manual, host, bridge):
+                if node is not None:
+                    node.destroy_node()
+            rclpy.try_shutdown()
         print('[bringup] stopped: zero output sent', file=sys.stderr)
     return 0
 

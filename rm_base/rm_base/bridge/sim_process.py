@@ -41,7 +41,7 @@ from rm_base.bridge.sim_services import SimFaultServices
 from rm_base.config.param_files import load_parameters
 from rm_base.errors import ConfigError
 from rm_base.hardware.config import SAFETY_SCHEMA
-from rm_base.ros.env import die_with_parent
+from rm_base.ros.env import bounded_teardown, die_with_parent
 from rm_base.ros.node_main import init_ros, spin_until_shutdown
 from rm_base.sim import SimWorld
 from rm_base.sim.bus_peer import BusPeer
@@ -175,9 +175,10 @@ def main(argv: list[str] | None = None) -> int:
     finally:
         server.stop()
         world.close()
-        executor.shutdown()
-        node.destroy_node()
-        rclpy.try_shutdown()
+        with bounded_teardown():
+            executor.shutdown()
+            node.destroy_node()
+            rclpy.try_shutdown()
     return 0
 
 

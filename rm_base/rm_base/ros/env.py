@@ -19,9 +19,11 @@ No rclpy import here (PyYAML only, to check parameter files before rcl reads the
 from __future__ import annotations
 
 import ctypes
+import faulthandler
 import os
 import signal
-from collections.abc import MutableMapping, Sequence
+from collections.abc import Iterator, MutableMapping, Sequence
+from contextlib import contextmanager
 from types import FrameType
 
 import yaml
@@ -48,6 +50,27 @@ def prepare_ros_process(environ: MutableMapping[str, str] | None = None) -> None
     use_localhost_discovery(environ)
     signal.signal(signal.SIGINT, signal.default_int_handler)
     signal.signal(signal.SIGTERM, _raise_keyboard_interrupt)
+
+
+#: Longest a process's ROS teardown (nodes destroyed, context shut down) may take [s].
+SHUTDOWN_TIMEOUT_S = 5.0
+
+
+@contextmanager
+def bounded_teardown(timeout_s: float = SHUTDOWN_TIMEOUT_S) -> Iterator[None]:
+    """Exit the process (status 1, every thread's stack on stderr) if the block hangs.
+
+    Destroying a Fast DDS participant while one of its discovery callbacks runs can spin
+    at 100 % of a core for good (Fast DDS issue 6513; seen here when an `rmcli topic pub`
+    and the robot it fed stopped together: it ran on, orphaned, for 11 minutes). The
+    stuck call holds the interpreter lock, so the watchdog is faulthandler's own C thread.
+    Put only the teardown in the block, after the last messages are out.
+    """
+    faulthandler.dump_traceback_later(timeout_s, exit=True)
+    try:
+        yield
+    finally:
+        faulthandler.cancel_dump_traceback_later()
 
 
 _PR_SET_PDEATHSIG = 1  # linux/prctl.h

@@ -23,7 +23,12 @@ from rclpy.node import Node
 from rclpy.signals import SignalHandlerOptions
 
 from rm_base.errors import ConfigError
-from rm_base.ros.env import init_error_line, params_file_error, prepare_ros_process
+from rm_base.ros.env import (
+    bounded_teardown,
+    init_error_line,
+    params_file_error,
+    prepare_ros_process,
+)
 from rm_base.runtime.realtime import prepare_loop_process
 
 
@@ -166,9 +171,10 @@ def run_node(
         # same clean stop, zero output first
         pass
     finally:
-        node.shutdown()
-        if executor is not None:
-            executor.shutdown()
-        node.destroy_node()
-        rclpy.try_shutdown()
+        node.shutdown()  # zero output first, unbounded: it is quick and it matters
+        with bounded_teardown():
+            if executor is not None:
+                executor.shutdown()
+            node.destroy_node()
+            rclpy.try_shutdown()
     return 0

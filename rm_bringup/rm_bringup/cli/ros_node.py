@@ -11,7 +11,7 @@ from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
 from typing import TYPE_CHECKING, Any
 
-from rm_base.ros.env import prepare_ros_process
+from rm_base.ros.env import bounded_teardown, prepare_ros_process
 
 from .errors import CliError
 
@@ -65,9 +65,11 @@ def cli_node(verb: str, *, name: str | None = None) -> Iterator[Node]:
         try:
             yield node
         finally:
-            node.destroy_node()
+            with bounded_teardown():
+                node.destroy_node()
     finally:
-        context.try_shutdown()
+        with bounded_teardown():
+            context.try_shutdown()
 
 
 def expand_topic(node: Node, topic: str) -> str:

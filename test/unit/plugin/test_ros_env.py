@@ -69,3 +69,37 @@ def test_params_file_error_rejects_anchors_as_rcl_does(tmp_path):
 def test_params_file_error_names_a_missing_file(tmp_path):
     line = params_file_error(['--params-file', str(tmp_path / 'nope.yaml')])
     assert line.startswith('cannot read parameter file') and 'nope.yaml' in line
+
+
+_TEARDOWN_CHILD = """
+import ctypes, sys
+from rm_base.ros.env import bounded_teardown
+with bounded_teardown(float(sys.argv[1])):
+    # a C call that keeps the interpreter lock, as Fast DDS's stuck destroy does
+    ctypes.PyDLL(None).usleep(int(float(sys.argv[2]) * 1e6))
+print('torn down', flush=True)
+"""
+
+
+@pytest.mark.parametrize(
+    ('timeout_s', 'teardown_s', 'code', 'out', 'err'),
+    [
+        (5.0, 0.1, 0, 'torn down\n', ''),  # in time: nothing said, nothing cut short
+        (0.3, 20.0, 1, '', 'Timeout (0:00:00.300000)!'),  # stuck: out within its bound
+    ],
+)
+def test_a_teardown_that_hangs_ends_the_process_with_its_stacks(
+    timeout_s, teardown_s, code, out, err
+):
+    import subprocess
+    import sys
+    import time
+
+    started = time.monotonic()
+    child = subprocess.run(
+        [sys.executable, '-c', _TEARDOWN_CHILD, str(timeout_s), str(teardown_s)],
+        capture_output=True, text=True, timeout=60, check=False,
+    )
+    assert (child.returncode, child.stdout) == (code, out), child.stderr
+    assert err in child.stderr
+    assert time.monotonic() - started < 15.0  # not the 20 s of the stuck call
