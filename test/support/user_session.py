@@ -156,6 +156,7 @@ class UserSession:
         try:
             process.wait(timeout=timeout)
         except subprocess.TimeoutExpired:
+            _signal_group(process, signal.SIGTERM)
             _stop(process)
             # what the user saw, and the robot's side, for the flake seen once
             raise AssertionError(
@@ -169,10 +170,9 @@ class UserSession:
         return text
 
     def close(self) -> None:
-        """Stop the typed scripts, then the robot with Ctrl-C."""
+        """Stop the typed scripts and all they started, then the robot with Ctrl-C."""
         for process in self._scripts:
-            if process.poll() is None:
-                os.killpg(process.pid, signal.SIGTERM)
+            _signal_group(process, signal.SIGTERM)
         for process in self._scripts:
             _stop(process)
         if self.robot.poll() is None:
@@ -184,12 +184,29 @@ class UserSession:
             self.robot.wait()
 
 
-def _stop(process: subprocess.Popen) -> None:
-    """SIGTERM to a typed script's process group; SIGKILL if it is not gone in 30 s."""
-    if process.poll() is None:
-        os.killpg(process.pid, signal.SIGTERM)
+def _signal_group(process: subprocess.Popen, signum: int) -> bool:
+    """Send signum to the process group of a typed script; False if the group is gone."""
     try:
-        process.wait(timeout=30)
-    except subprocess.TimeoutExpired:
-        os.killpg(process.pid, signal.SIGKILL)
-        process.wait()
+        os.killpg(process.pid, signum)
+    except ProcessLookupError:
+        return False
+    return True
+
+
+def _stop(process: subprocess.Popen, timeout_s: float = 30.0) -> None:
+    """Wait until a typed script's process group is gone: its commands too, not the script only.
+
+    A command it put in the background outlives the script, and an orphan left running
+    slows every test after it (an `rmcli topic pub` once spun a core for 11 minutes).
+    After close()'s SIGTERM, SIGKILL to whatever of the group is left after timeout_s.
+    """
+    deadline = time.monotonic() + timeout_s
+    while True:
+        process.poll()  # reaps the script: a zombie still counts as the group's
+        if not _signal_group(process, 0):
+            break
+        if time.monotonic() > deadline:
+            _signal_group(process, signal.SIGKILL)
+            break
+        time.sleep(0.1)
+    process.wait()
