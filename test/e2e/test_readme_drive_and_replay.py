@@ -69,6 +69,22 @@ def check_the_drive_examples(user: UserSession) -> None:
     assert later and shots(later) == 5, later  # five, not more
 
 
+def check_a_refused_command(user: UserSession) -> None:
+    """README: the status line says `refused chassis` after a refused command, the log
+    why, once (a bad message while there is no valid command: one warning, not two)."""
+    said = user.type("rmcli topic pub --once /chassis_cmd rm_msgs/msg/ChassisCmd "
+                     "'{header: auto, mode: 250}'", wait=True)
+    assert 'publishing #1' in said, said
+    line = user.status.wait_for(lambda s: 'refused chassis' in s)
+    assert line and 'chassis PASSIVE' in line, user.status.lines[-3:]
+    warnings = [text for text in user.log.splitlines()
+                if '[WARN]' in text and 'unknown mode 250' in text]
+    assert len(warnings) == 1, warnings
+    assert warnings[0].endswith('rejected /chassis_cmd: unknown mode 250 (known: 0=PASSIVE, '
+                                '1=RAW, 2=FOLLOW, 3=TWIST, 4=GYRO, 5=POSITION); no valid '
+                                'command has come yet'), warnings
+
+
 def test_readme_from_driving_to_replay_does_what_it_says(tmp_path):
     first, second = readme_blocks('Drive the simulated robot')[:2]
     assert 'mode: GYRO' in first and 'mode: POSITION' in second  # the README we test
@@ -76,10 +92,11 @@ def test_readme_from_driving_to_replay_does_what_it_says(tmp_path):
     assert '--restamp' in record and '--sim-time' in robot_on_clock and '--clock' in play_clock
     with UserSession(tmp_path) as user:
         user.wait_for_robot()
+        check_a_refused_command(user)
         work = user.workdir()
         user.type(f'{first}\nsleep 12\n{second}\nsleep 8\n{marked(record)}', cwd=work)
         check_the_drive_examples(user)
-        said = lambda: user.output(0)  # noqa: E731
+        said = lambda: user.output(1)  # noqa: E731  (script 0: the refused command)
 
         def after(text: str):
             mark = f'== line {line_of(record, text)}'
@@ -117,22 +134,3 @@ def test_readme_from_driving_to_replay_does_what_it_says(tmp_path):
         assert line, (user.status.lines[-3:], user.log[-2000:])
         assert not replayed_stale(user.log), replayed_stale(user.log)
 
-
-def test_a_command_the_robot_refuses_is_one_warning_and_shown_on_the_status_line(tmp_path):
-    # README, "Drive the simulated robot": the status line says `refused chassis` after a
-    # refused command, and the log why, once
-    with UserSession(tmp_path) as user:
-        user.wait_for_robot()
-        said = user.type("rmcli topic pub --once /chassis_cmd rm_msgs/msg/ChassisCmd "
-                         "'{header: auto, mode: 250}'", wait=True)
-        assert 'publishing #1' in said, said
-        line = user.status.wait_for(lambda s: 'refused chassis' in s)
-        assert line and 'chassis PASSIVE' in line, user.status.lines[-3:]
-        warnings = [text for text in user.log.splitlines()
-                    if '[WARN]' in text and 'unknown mode 250' in text]
-        assert len(warnings) == 1, warnings
-        assert warnings[0].endswith('rejected /chassis_cmd: unknown mode 250 (known: 0=PASSIVE, '
-                                    '1=RAW, 2=FOLLOW, 3=TWIST, 4=GYRO, 5=POSITION); no valid '
-                                    'command has come yet'), warnings
-        # the next report has no new refusal: the part goes
-        assert user.status.wait_for(lambda s: s.startswith('chassis ') and 'refused' not in s)
