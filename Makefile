@@ -5,7 +5,7 @@
 
 ROBOT ?= standard
 PYTEST_ARGS ?=
-# pytest-xdist workers of the suite's first pass: auto = one per CPU; 0 = this process
+# pytest-xdist workers of the suite's first pass: auto = one more than the CPUs; 0 = this process
 export TEST_WORKERS ?= auto
 
 .PHONY: all setup test test-kernel run lint lock clean bench meter soak
