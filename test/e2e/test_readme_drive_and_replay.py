@@ -133,4 +133,3 @@ def test_readme_from_driving_to_replay_does_what_it_says(tmp_path):
         line = user.status.wait_for(lambda s: 'chassis GYRO' in s and commanded(s))
         assert line, (user.status.lines[-3:], user.log[-2000:])
         assert not replayed_stale(user.log), replayed_stale(user.log)
-
