@@ -201,12 +201,16 @@ def _stop(process: subprocess.Popen, timeout_s: float = 30.0) -> None:
     After close()'s SIGTERM, SIGKILL to whatever of the group is left after timeout_s.
     """
     deadline = time.monotonic() + timeout_s
+    killed = False
     while True:
         process.poll()  # reaps the script: a zombie still counts as the group's
         if not _signal_group(process, 0):
             break
-        if time.monotonic() > deadline:
+        if not killed and time.monotonic() > deadline:
             _signal_group(process, signal.SIGKILL)
+            killed = True  # then until init has reaped the orphans: they count until then
+            deadline = time.monotonic() + 10.0
+        elif killed and time.monotonic() > deadline:
             break
         time.sleep(0.1)
     process.wait()
