@@ -9,6 +9,10 @@
 set -uo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
 
+# Bytecode caches on, whatever the environment says: with PYTHONDONTWRITEBYTECODE set, every
+# process of the suite (the workers' collection, each node and rmcli) compiled its sources
+# anew, and pytest rewrote every test file's asserts in each pass (9 s against 3 s a pass).
+export PYTHONDONTWRITEBYTECODE=
 workers=${TEST_WORKERS:-auto}
 if [ "$workers" = auto ]; then
   # Pass 1's tests wait on child processes and DDS discovery about as much as they
