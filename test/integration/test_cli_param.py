@@ -24,6 +24,8 @@ def tuned(ros_context):
         description='gain [1/s]', additional_constraints='>= 0.0; set while running'))
     node.declare_parameter('loop.limits', [1.0, 2.0])
     node.declare_parameter('joint', 'yaw', ParameterDescriptor(read_only=True))
+    # a parameter and a group at once, as can_bridge's `sim` and `sim.timing`
+    node.declare_parameter('loop', True, ParameterDescriptor(read_only=True))
 
     def check(parameters):
         for p in parameters:
@@ -81,7 +83,7 @@ def test_set_of_a_name_the_node_lacks_names_the_nearest_ones(tuned):
     code, _, err = rmcli('param', 'set', '/tuned', 'loop.kq', '1.0')
     assert code == 1
     assert err == ('rmcli: error: Setting parameter failed: /tuned has no parameter loop.kq '
-                   '(did you mean loop.kp?)\n')
+                   '(did you mean loop.kp, loop?)\n')
 
 
 def test_a_dump_loads_back_and_is_a_parameter_file(tuned, tmp_path):
@@ -89,8 +91,9 @@ def test_a_dump_loads_back_and_is_a_parameter_file(tuned, tmp_path):
     assert code == 0, err
     dumped = yaml.safe_load(out)
     params = dumped['/tuned']['ros__parameters']
-    assert params['loop'] == {'kp': 2.0, 'limits': [1.0, 2.0]} and params['joint'] == 'yaw'
-    params['loop']['kp'] = 3.0
+    assert params['loop.kp'] == 2.0 and params['loop.limits'] == [1.0, 2.0]
+    assert params['joint'] == 'yaw' and params['loop'] is True
+    params['loop.kp'] = 3.0
     del params['joint']  # read-only: a load would be refused for it
     path = tmp_path / 'tuned.yaml'
     path.write_text(yaml.safe_dump(dumped))
@@ -99,7 +102,7 @@ def test_a_dump_loads_back_and_is_a_parameter_file(tuned, tmp_path):
     # only what differs was set: the unchanged limits and read-only values were left alone
     assert out.splitlines() == ['Set parameter loop.kp successful']
     assert tuned.get_parameter('loop.kp').value == 3.0
-    params['loop']['kp'] = -5.0
+    params['loop.kp'] = -5.0
     path.write_text(yaml.safe_dump(dumped))
     code, out, _ = rmcli('param', 'load', '/tuned', str(path))
     assert code == 1

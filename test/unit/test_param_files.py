@@ -1,7 +1,7 @@
 """param_files: ROS parameter files read as rcl reads them, without rcl."""
 
 import pytest
-from rm_base.config.param_files import load_parameters
+from rm_base.config.param_files import flatten, load_parameters, nest
 from rm_base.errors import ConfigError
 
 
@@ -15,6 +15,25 @@ def test_later_files_override_key_by_key_and_nesting_becomes_dots(tmp_path):
     assert params == {
         'buses.can0.interface': 'rm_sim', 'publish_rate': 200.0, 'sim': True, 'sim.body.x': 1,
     }
+
+
+@pytest.mark.parametrize('flat', [
+    {'publish_rate': 200.0, 'buses.can0.interface': 'rm_sim', 'buses.can1.bitrate': 1000000},
+    # can_bridge's `sim` is a parameter and a group: its members stay dotted beside it
+    {'sim': True, 'sim.timing': 'realtime', 'sim.body.mass': 15.0, 'sim.body.inertia': 0.5},
+    {'a.b': 1, 'a.b.c': 2, 'a.b.d.e': 3, 'a.f': 4},
+    {},
+])
+def test_nest_writes_what_flatten_reads_back(flat):
+    tree = nest(flat)
+    assert flatten(tree) == flat
+    for key, value in tree.items():  # no dict where a parameter's value is
+        assert key in flat or isinstance(value, dict)
+
+
+def test_a_parameter_that_is_a_group_too_keeps_its_members_dotted():
+    assert nest({'sim': True, 'sim.timing': 'realtime', 'sim.body.mass': 15.0}) == {
+        'sim': True, 'sim.timing': 'realtime', 'sim.body': {'mass': 15.0}}
 
 
 @pytest.mark.parametrize(

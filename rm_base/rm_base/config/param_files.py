@@ -28,6 +28,30 @@ def flatten(tree: Mapping[str, Any], prefix: str = '') -> dict[str, Any]:
     return flat
 
 
+def nest(flat: Mapping[str, Any]) -> dict[str, Any]:
+    """{'a.b.c': value} -> nested parameters, as a parameter file writes them.
+
+    A name that is a parameter and a group at once (can_bridge's ``sim`` and
+    ``sim.timing``) cannot be one YAML key: its members keep dotted keys beside it
+    (``sim.timing:``), which rcl reads as the same names. :func:`flatten` undoes it.
+    """
+    tree: dict[str, Any] = {}
+    groups: dict[str, dict[str, Any]] = {}
+    for name, value in flat.items():
+        head, dot, rest = name.partition('.')
+        if dot:
+            groups.setdefault(head, {})[rest] = value
+        else:
+            tree[head] = value
+    for head, members in groups.items():
+        inner = nest(members)
+        if head in tree:
+            tree.update({f'{head}.{key}': value for key, value in inner.items()})
+        else:
+            tree[head] = inner
+    return tree
+
+
 def load_parameters(files: Iterable[str | Path]) -> dict[str, dict[str, Any]]:
     """{node name: flat parameters} of the files, later files overriding.
 

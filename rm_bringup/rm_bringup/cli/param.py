@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any
 
 import yaml
+from rm_base.config.param_files import nest
 
 from .errors import CliError
 from .graph import Verb
@@ -234,15 +235,9 @@ def run_dump(args: argparse.Namespace) -> int:
     def work(client: Any, wait: Callable[[Any], Any]) -> int:
         names = _names(client, wait)
         values = wait(client.get_parameters(names)).values
-        tree: dict[str, Any] = {}
-        for name, value in zip(names, values, strict=True):
-            if value.type == 0:  # not set: a parameter file cannot say "unset"
-                continue
-            *groups, leaf = name.split('.')
-            level = tree
-            for group in groups:
-                level = level.setdefault(group, {})
-            level[leaf] = _value(value)
+        # not set: a parameter file cannot say "unset"
+        tree = nest({name: _value(value) for name, value in zip(names, values, strict=True)
+                     if value.type != 0})
         node = args.node_name if args.node_name.startswith('/') else '/' + args.node_name
         print(yaml.safe_dump({node: {'ros__parameters': tree}}, sort_keys=True), end='')
         return 0
