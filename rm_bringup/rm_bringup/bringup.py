@@ -180,8 +180,9 @@ def _main(args: argparse.Namespace, files: list[pathlib.Path], console: Console 
                 print(f'[bringup] {err}', file=sys.stderr)
                 return 1
         try:
-            node_files = files if sim is None else [*files, sim.bridge_overlay]
-            node_files = [*node_files, *args.params_file]
+            node_files = [*files, *args.params_file]
+            if sim is not None:  # this run's rm_sim socket, after a dump of an earlier run's
+                node_files.append(sim.bridge_overlay)
             ros_args = ['--ros-args']
             for path in node_files:
                 ros_args += ['--params-file', str(path)]

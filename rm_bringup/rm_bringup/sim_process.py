@@ -15,6 +15,7 @@ overlay leaves the buses as the robot config has them: the robot runs unchanged.
 
 from __future__ import annotations
 
+import copy
 import os
 import pathlib
 import signal
@@ -62,7 +63,11 @@ class SimProcess:
             }
         self.bridge_overlay = workdir / 'rm_sim_bridge.yaml'
         self.bridge_overlay.write_text(
-            yaml.safe_dump({BRIDGE_SECTION: {'ros__parameters': parameters}})
+            # rcl applies a node's sections in the order their names first appear, so a
+            # dump's `/can_bridge:` after the config's `can_bridge:` wins whatever the file
+            # order: under both names, this run's socket wins over an earlier run's
+            yaml.safe_dump({name: {'ros__parameters': copy.deepcopy(parameters)}  # no alias
+                            for name in (BRIDGE_SECTION, f'/{BRIDGE_SECTION}')})
         )
         args = [sys.executable, '-m', 'rm_base.bridge.sim_process', '--socket', self.socket,
                 '--parent-pid', str(os.getpid())]

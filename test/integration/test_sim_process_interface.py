@@ -26,7 +26,9 @@ def test_rm_sim_on_an_interface_leaves_the_robots_buses_alone(tmp_path, monkeypa
     with SimProcess(files, tmp_path, interface='virtual') as sim:
         assert sim.process.poll() is None
         overlay = yaml.safe_load(sim.bridge_overlay.read_text())
-        assert overlay == {'can_bridge': {'ros__parameters': {'sim': False}}}
+        # under the relative and the absolute name, so that it wins over a dump's section
+        assert overlay == {name: {'ros__parameters': {'sim': False}}
+                           for name in ('can_bridge', '/can_bridge')}
         said = sim.log_path.read_text()
     assert '[rm_sim] can0, can1 on virtual' in said
     assert not (tmp_path / 'can.sock').exists()  # no socket: the buses are the interface's
