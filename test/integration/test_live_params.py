@@ -88,6 +88,38 @@ def test_a_joints_loop_gains_change_at_the_next_tick_and_the_rest_of_its_table_r
         assert wheel.loop_gains[0] == new
 
 
+def test_a_gain_written_as_a_whole_number_takes_a_fraction_and_an_unwritten_field_is_live():
+    # a team's config writes `kp: 20`; rclpy declared it an integer, which refused 20.5
+    overrides = {'can_bridge': {'joints.yaw.position_pid.kp': 20}}
+    with LockstepRobot('standard', plugins=('gimbal',), overrides=overrides) as r:
+        yaw = r.bridge.hardware.actuators['yaw']
+        assert r.bridge.get_parameter('joints.yaw.position_pid.kp').value == 20.0
+        result = r.bridge.set_parameters_atomically(
+            [Parameter('joints.yaw.position_pid.kp', value=20.5)])
+        assert result.successful, result.reason
+        # a field the config leaves out is declared with the value in use, and is live
+        assert r.bridge.get_parameter('joints.yaw.position_pid.deadband').value == 0.0
+        result = r.bridge.set_parameters_atomically(
+            [Parameter('joints.yaw.position_pid.deadband', value=0.001)])
+        assert result.successful, result.reason
+        r.step()
+        position = yaw.loop_gains[1]
+        assert (position.kp, position.deadband) == (20.5, 0.001)
+        # a whole number for a double (ros2 param set's `30`, a Foxglove client's JSON)
+        for node, name in ((r.bridge, 'joints.yaw.position_pid.kp'),
+                           (r.host, 'gimbal.yaw_pid.kp')):
+            (result,) = node.set_parameters([Parameter(name, value=30)])
+            assert result.successful, (name, result.reason)
+            held = node.get_parameter(name)
+            assert (held.type_, held.value) == (Parameter.Type.DOUBLE, 30.0), name
+        r.step()
+        assert yaw.loop_gains[1].kp == 30.0
+        described = r.bridge.describe_parameter('joints.yaw.position_pid.kd')
+        assert described.additional_constraints == 'type: double; set while running'
+        # a joint's loop the config does not give stays undeclared (the wheels' position)
+        assert not r.bridge.has_parameter('joints.wheel_fl.position_pid.kp')
+
+
 def test_the_gimbals_loop_gains_are_live_and_its_frames_are_not():
     with LockstepRobot('standard', plugins=('imu', 'gimbal')) as r:
         gimbal = r.plugin('gimbal')

@@ -34,7 +34,7 @@ from rm_base.bridge.messages import (
     state_msgs,
     time_msg,
 )
-from rm_base.bridge.node_params import read_parameters
+from rm_base.bridge.node_params import declare_live_gains, read_parameters
 from rm_base.bridge.params import SIM_CAN_DEFAULT, with_sim_world
 from rm_base.bridge.power_limits import RemotePowerLimits, parse_power_limit
 from rm_base.bridge.sim_config import world_config
@@ -49,6 +49,7 @@ from rm_base.loop.data import JOINT_STATES, JOINT_TARGETS
 from rm_base.plugin.inbox import Inbox
 from rm_base.plugin.inbox_status import InboxReport
 from rm_base.plugin.remote_power import POWER_LIMIT_QOS, POWER_LIMIT_TOPIC
+from rm_base.ros.double_parameters import integers_as_doubles
 from rm_base.ros.log import FastLogger
 from rm_base.ros.node_main import inbox_node
 from rm_base.ros.publish import publish
@@ -225,10 +226,12 @@ class CanBridgeNode(Node):
             hw.scheduler.add_stage(self._inbox)
         self._inbox_report = InboxReport(self.get_name())
         # joints.<joint>.<loop>.kp ... set while running, taken at the start of a tick
-        self._live_gains = LiveGains(hw.actuators, {
+        loops = {
             joint.name: {'velocity_pid': joint.velocity_pid, 'position_pid': joint.position_pid}
             for joint in settings.hardware_config.joints
-        })
+        }
+        self._live_gains = LiveGains(hw.actuators, loops)
+        declare_live_gains(self, loops)
         hw.scheduler.add_stage(self._live_gains)
         # rm_robot in a process of its own asks for its power stages here (rare: executor)
         self._power_limits = RemotePowerLimits(hw)
@@ -250,6 +253,8 @@ class CanBridgeNode(Node):
             for joint in sorted(self._joints)
         ]
         self.add_on_set_parameters_callback(self._on_set_parameters)
+        # `kp 30` from ros2 param set or Foxglove: the double a file's `kp: 30` gives
+        self.add_pre_set_parameters_callback(integers_as_doubles(self))
 
         if self.stepped:
             hw.open()

@@ -9,13 +9,15 @@ unit, bounds and default: docs/PARAMETERS.md.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from typing import Any
 
+from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from rm_base.bridge.errors import BridgeConfigError
+from rm_base.bridge.live_gains import FIELDS as LIVE_FIELDS
 from rm_base.bridge.params import (
     SIM_CAN_DEFAULT,
     BridgeSettings,
@@ -25,6 +27,7 @@ from rm_base.bridge.params import (
 )
 from rm_base.config.calibration import CalibrationFile, joint_zero_offsets
 from rm_base.config.schema import Schema
+from rm_base.control import PidGains
 from rm_base.hardware.config import SAFETY_SCHEMA, SCHEDULER_SCHEMA
 from rm_base.plugin.params import PluginParams
 from rm_base.runtime.realtime import EDGE_PRIORITY, LOOP_PRIORITY
@@ -190,6 +193,34 @@ def read_parameters(node: Node) -> tuple[BridgeSettings, CalibrationFile | None]
             open_params[f'joints.{joint}.zero_offset'] = zero
             node.get_logger().info(f'{joint}: zero_offset {zero:.6f} rad from {calibration.path}')
     return settings_from_parameters(typed, open_params), calibration
+
+
+def declare_live_gains(node: Node, loops: Mapping[str, Mapping[str, Any]]) -> None:
+    """Declare every live field of each positional PID the config gives, as a double.
+
+    rclpy declared the config's keys from the file, typed as written: ``kp: 20`` an
+    integer, which then refused a live ``20.5``, and a field the file left out (``kd``)
+    could not be set at all. Each is declared again with its value in use and a descriptor.
+
+    Args:
+        node: the bridge's node.
+        loops: ``{joint: {loop: PidConfig}}``, as read at start-up.
+    """
+    given = set(_parameters_under(node, 'joints'))  # 'yaw.position_pid.kp', ...
+    for joint, configs in loops.items():
+        for loop, gains in configs.items():
+            if not isinstance(gains, PidGains) or not any(
+                    name.startswith(f'{joint}.{loop}.') for name in given):
+                continue  # an incremental loop (read at start-up), or none configured
+            for field in sorted(LIVE_FIELDS):
+                name = f'joints.{joint}.{loop}.{field}'
+                if node.has_parameter(name):
+                    node.undeclare_parameter(name)
+                node.declare_parameter(name, float(getattr(gains, field)), ParameterDescriptor(
+                    name=name, type=Parameter.Type.DOUBLE.value,
+                    description=f"joint {joint}'s {loop.replace('_', ' ')}: {field}",
+                    additional_constraints='type: double; set while running',
+                ), ignore_override=True)
 
 
 def _parameters_under(node: Node, prefix: str) -> dict[str, Parameter]:

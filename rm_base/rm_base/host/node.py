@@ -34,6 +34,7 @@ from rm_base.plugin.inbox import Inbox
 from rm_base.plugin.inbox_status import InboxReport
 from rm_base.plugin.node_io import DdsJointIO, LocalJointIO, NodeIO
 from rm_base.plugin.outbox import Outbox
+from rm_base.ros.double_parameters import integers_as_doubles
 from rm_base.ros.log import FastLogger
 from rm_base.ros.node_main import inbox_node
 from rm_base.runtime.realtime import shorten_gil_switch_interval
@@ -325,6 +326,8 @@ class RobotHost(Node):
         self.get_logger().info(f'loop order: {" -> ".join(loop.order())}')
         # after every declaration: rclpy calls it for the declarations too
         self.add_on_set_parameters_callback(self._on_set_parameters)
+        # a live `max_hz 8` keeps the double that `max_hz: 8.0` in a file gave
+        self.add_pre_set_parameters_callback(integers_as_doubles(self))
         if self._own_loop:
             loop.start()
 
