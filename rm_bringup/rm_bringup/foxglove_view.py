@@ -169,17 +169,24 @@ class FoxgloveView:
         """
         from rclpy.parameter import Parameter as RosParameter
 
+        warn = self._node.get_logger().warning
         by_node: dict[str, list[Any]] = {}
         for parameter in parameters:
             fqn, _, name = parameter.name.partition('.')
             node = self._parameter_nodes.get(fqn)
             if node is None or not node.has_parameter(name):
+                warn(f'foxglove: no parameter {parameter.name}: not set')
                 continue
-            by_node.setdefault(fqn, []).append(RosParameter(name, value=parameter.get_value()))
+            try:
+                value = RosParameter(name, value=parameter.get_value())
+            except TypeError as err:  # a dict, or a list of no one type: no parameter holds it
+                warn(f'foxglove: {parameter.name}: not set: {err}')
+                continue
+            by_node.setdefault(fqn, []).append(value)
         for fqn, values in by_node.items():
             result = self._parameter_nodes[fqn].set_parameters_atomically(values)
             if not result.successful:
-                self._node.get_logger().warning(f'foxglove: {fqn}: {result.reason}')
+                warn(f'foxglove: {fqn}: {result.reason}')
         return self.get_parameters([p.name for p in parameters])
 
     def close(self) -> None:

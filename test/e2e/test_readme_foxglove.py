@@ -106,6 +106,10 @@ def test_a_client_gets_each_kind_of_message_live_and_sets_a_live_parameter(robot
         before = parameter(key, 'get')
         assert parameter(key, 'set', 7.0) == 7.0  # a live key: the node took it
         assert parameter(key, 'bad', -1.0) == 7.0  # out of bounds: refused, unchanged
+        assert parameter(key, 'no type', {'a': 1}) == 7.0  # no parameter holds it: unchanged
+        # JSON's 8 for a double: the double 8.0 (rclpy refused an integer for a double)
+        gain = '/can_bridge.joints.yaw.position_pid.kp'
+        assert parameter(gain, 'whole', 8) == 8.0
         slots = '/rm_robot.shooter.slots'
         start = parameter(slots, 'slots')
         assert parameter(slots, 'set slots', start + 1) == start  # read at start-up: refused
