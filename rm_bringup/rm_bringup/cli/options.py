@@ -4,24 +4,35 @@ from __future__ import annotations
 
 import argparse
 
+#: Bounds of a rate or a duration [Hz or s]: a wait of 1e9 s (31 years) still fits the
+#: clocks (time_t, a Duration's int64 ns), where `--keep-alive inf` or `-r 1e-300` raised.
+LARGEST = 1e9
+SMALLEST = 1.0 / LARGEST
 
-def positive_float(text: str) -> float:
-    """A float > 0 (rates, durations)."""
+
+def _number(text: str) -> float:
     try:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f'{text!r} is not a number') from None
+    if not abs(value) <= LARGEST:  # inf and nan too
+        raise argparse.ArgumentTypeError(f'{text} is not a number up to {LARGEST:g}')
+    return value
+
+
+def positive_float(text: str) -> float:
+    """A float > 0 (rates, durations), within [SMALLEST, LARGEST]."""
+    value = _number(text)
     if not value > 0.0:
         raise argparse.ArgumentTypeError(f'{text} is not positive')
+    if value < SMALLEST:
+        raise argparse.ArgumentTypeError(f'{text} is below {SMALLEST:g}')
     return value
 
 
 def nonnegative_float(text: str) -> float:
-    """A float >= 0 (offsets, delays)."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f'{text!r} is not a number') from None
+    """A float >= 0 (offsets, delays), up to LARGEST."""
+    value = _number(text)
     if not value >= 0.0:
         raise argparse.ArgumentTypeError(f'{text} is negative')
     return value
