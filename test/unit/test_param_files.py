@@ -1,7 +1,8 @@
 """param_files: ROS parameter files read as rcl reads them, without rcl."""
 
 import pytest
-from rm_base.config.param_files import flatten, load_parameters, nest
+from rm_base.bridge.sim_process import bridge_parameters
+from rm_base.config.param_files import flatten, load_parameters, nest, parameters_for
 from rm_base.errors import ConfigError
 
 
@@ -15,6 +16,22 @@ def test_later_files_override_key_by_key_and_nesting_becomes_dots(tmp_path):
     assert params == {
         'buses.can0.interface': 'rm_sim', 'publish_rate': 200.0, 'sim': True, 'sim.body.x': 1,
     }
+
+
+def test_a_dumps_absolute_section_wins_over_the_configs_relative_one_in_any_file_order(
+        tmp_path):
+    # as rcl merges them (measured with rclpy): one entry per section name, applied in the
+    # order the names first appear, each updated by every later file
+    config, dump, overlay = (tmp_path / f'{n}.yaml' for n in ('config', 'dump', 'overlay'))
+    config.write_text('can_bridge: {ros__parameters: {a: 1, b: 1}}\n')
+    dump.write_text("'/can_bridge': {ros__parameters: {a: 2}}\n")
+    overlay.write_text('can_bridge: {ros__parameters: {a: 3, b: 3}}\n')
+    assert parameters_for(load_parameters([config, dump, overlay]), 'can_bridge') == {
+        'a': 2, 'b': 3}
+    assert parameters_for(load_parameters([dump, overlay]), '/can_bridge') == {'a': 3, 'b': 3}
+    assert parameters_for(load_parameters([config]), '/rm_robot') == {}
+    # rm_sim builds its world from the same merge as the bridge's (a joint a dump adds)
+    assert bridge_parameters([config, dump, overlay]) == {'a': 2, 'b': 3}
 
 
 @pytest.mark.parametrize('flat', [

@@ -38,7 +38,7 @@ from rm_base.bridge.params import settings_from_parameters
 from rm_base.bridge.sim_config import world_config
 from rm_base.bridge.sim_remote import SimRemoteInput
 from rm_base.bridge.sim_services import SimFaultServices
-from rm_base.config.param_files import load_parameters
+from rm_base.config.param_files import load_parameters, parameters_for
 from rm_base.errors import ConfigError
 from rm_base.hardware.config import SAFETY_SCHEMA
 from rm_base.ros.env import bounded_teardown, die_with_parent
@@ -67,7 +67,7 @@ def bridge_parameters(files: Iterable[Path]) -> dict[str, Any]:
     Raises:
         ConfigError: a file is missing or not a ROS parameter file.
     """
-    return load_parameters(files).get(BRIDGE_SECTION, {})
+    return parameters_for(load_parameters(files), BRIDGE_SECTION)
 
 
 def build_world(params: Mapping[str, Any]) -> tuple[SimWorld, Any]:

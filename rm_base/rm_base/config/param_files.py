@@ -1,8 +1,10 @@
 """ROS 2 parameter files read without rcl: ``{node: {'a.b.c': value}}``, as rcl reads them.
 
-For the tools that need a robot config outside a node (the rm_sim process, tests, bench):
-each top-level key is a node, its ``ros__parameters`` are nested keys joined with ``.``,
-and a later file overrides an earlier one key by key. No rclpy here.
+For the tools that need a robot config outside a node (the rm_sim process, rmcli, tests,
+bench): each top-level key is a section (a node's name, or ``/**`` for every node), its
+``ros__parameters`` are nested keys joined with ``.``, and a later file overrides an
+earlier one key by key. A node takes its relative name's section, its absolute name's and
+the wildcard's, merged as rcl merges them (:func:`parameters_for`). No rclpy here.
 """
 
 from __future__ import annotations
@@ -52,8 +54,40 @@ def nest(flat: Mapping[str, Any]) -> dict[str, Any]:
     return tree
 
 
+#: The section that holds parameters for every node.
+WILDCARD = '/**'
+
+
+def section_names(node: str) -> tuple[str, ...]:
+    """The sections of a parameter file that hold node's parameters (``/rm_robot``)."""
+    relative = node.lstrip('/')
+    return (WILDCARD, relative, f'/{relative}')
+
+
+def parameters_for(sections: Mapping[str, Mapping[str, Any]], node: str) -> dict[str, Any]:
+    """{parameter: value} that the sections give node, as rcl merges them.
+
+    Args:
+        sections: ``{section name: flat parameters}``, in the order the names first
+            appeared in the files (:func:`load_parameters` keeps it).
+        node: the node's name (``can_bridge`` or ``/can_bridge``).
+
+    rcl keeps one entry per section name, which later files update, and applies a node's
+    entries in that order: a dump's ``/can_bridge:`` after the config's ``can_bridge:``
+    wins whatever the order of the files.
+    """
+    names = section_names(node)
+    merged: dict[str, Any] = {}
+    for name, values in sections.items():
+        if name in names:
+            merged.update(values)
+    return merged
+
+
 def load_parameters(files: Iterable[str | Path]) -> dict[str, dict[str, Any]]:
-    """{node name: flat parameters} of the files, later files overriding.
+    """{section name: flat parameters} of the files, later files overriding.
+
+    The sections come in the order their names first appeared (see :func:`parameters_for`).
 
     Raises:
         ConfigError: a file is missing, not YAML, or not a mapping of nodes.

@@ -11,24 +11,13 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from rm_base.config.param_files import flatten
+from rm_base.config.param_files import WILDCARD, flatten, parameters_for, section_names
 
 from .errors import CliError
 
-WILDCARD = '/**'
-
-
-def node_keys(node: str) -> tuple[str, ...]:
-    """The top-level keys that hold node's parameters, lowest priority first.
-
-    Args:
-        node: the node's absolute name (``/rm_robot``, ``/ns/rm_robot``).
-    """
-    return (WILDCARD, node.lstrip('/'), node)
-
 
 def node_parameters(document: Any, node: str, source: str) -> dict[str, Any]:
-    """{parameter name: value} that a parameter file gives node; a later key overrides.
+    """{parameter name: value} that a parameter file gives node, as rcl merges its sections.
 
     Args:
         document: the file as YAML loaded it.
@@ -41,22 +30,20 @@ def node_parameters(document: Any, node: str, source: str) -> dict[str, Any]:
     """
     if not isinstance(document, Mapping):
         raise CliError(f'{source}: not a ROS parameter file (a mapping of node names)')
-    parameters: dict[str, Any] = {}
-    found = False
-    for key in node_keys(node):
-        if key not in document:
+    names = section_names(node)
+    sections: dict[str, dict[str, Any]] = {}
+    for key, section in document.items():
+        if key not in names:
             continue
-        section = document[key]
         if not isinstance(section, Mapping) or not isinstance(
             section.get('ros__parameters'), Mapping
         ):
             raise CliError(f"{source}: '{key}' has no 'ros__parameters' mapping")
-        found = True
-        parameters.update(flatten(section['ros__parameters']))
-    if not found:
+        sections[key] = flatten(section['ros__parameters'])
+    if not sections:
         nodes = ', '.join(str(k) for k in document) or 'none'
         raise CliError(
             f'{source}: no parameters for {node} (keys {node.lstrip("/")}, {node} or '
             f'{WILDCARD}); the file has: {nodes}'
         )
-    return parameters
+    return parameters_for(sections, node)

@@ -13,7 +13,7 @@ ROBOT = {'rm_robot': {'ros__parameters': {'shooter': {'max_hz': 8.0}, 'rate': 20
         # the relative name, as rm_bringup/config/ writes it, and the absolute, as dump does
         (ROBOT, {'shooter.max_hz': 8.0, 'rate': 200}),
         ({'/rm_robot': {'ros__parameters': {'a.b': 1}}}, {'a.b': 1}),
-        # the wildcard first, the node's own sections over it, the absolute name last
+        # in the order written: the wildcard, the node's own sections over it
         (
             {
                 '/**': {'ros__parameters': {'use_sim_time': True, 'a': 1}},
@@ -24,6 +24,15 @@ ROBOT = {'rm_robot': {'ros__parameters': {'shooter': {'max_hz': 8.0}, 'rate': 20
             {'use_sim_time': True, 'a': 2, 'b': 3},
         ),
         ({'/**': {'ros__parameters': {'use_sim_time': True}}}, {'use_sim_time': True}),
+        # rcl applies the sections in the file's order: the last one of the node's wins
+        (
+            {
+                '/rm_robot': {'ros__parameters': {'a': 3}},
+                'rm_robot': {'ros__parameters': {'a': 2}},
+                '/**': {'ros__parameters': {'a': 1, 'b': 1}},
+            },
+            {'a': 1, 'b': 1},
+        ),
     ],
 )
 def test_the_nodes_sections_are_merged_as_rcl_merges_them(document, expected):
