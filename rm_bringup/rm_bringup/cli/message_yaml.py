@@ -24,6 +24,7 @@ field path (``accel.linear.x``). No rclpy import here.
 from __future__ import annotations
 
 import array
+import difflib
 import importlib
 import math
 import sys
@@ -208,8 +209,11 @@ def _constant_value(owner: type, field: str, typename: str, name: str, path: str
         pass
     if constants:
         valid = ', '.join(f'{k} ({v})' for k, v in constants.items())
+        close = difflib.get_close_matches(key, list(constants), n=1)
+        hint = f' (did you mean {close[0]}?)' if close else ''
         raise MessageFieldError(
-            f"'{path}': unknown name '{name}' for {type_name_of(owner)}; valid names: {valid}"
+            f"'{path}': unknown name '{name}' for {type_name_of(owner)}{hint}; "
+            f'valid names: {valid}'
         )
     raise MessageFieldError(f"'{path}' ({typename}): expected an integer, got {name!r}")
 

@@ -103,6 +103,14 @@ def test_when_mode_name_is_unknown_expect_error_listing_valid_names():
     assert "'mode'" in text and "'SPIN'" in text
     for name, value in [('PASSIVE', 0), ('RAW', 1), ('FOLLOW', 2), ('TWIST', 3), ('GYRO', 4)]:
         assert f'{name} ({value})' in text
+    assert 'did you mean' not in text  # nothing near SPIN
+
+
+def test_a_misspelled_mode_name_gets_the_nearest_one():
+    with pytest.raises(MessageFieldError) as info:
+        filled(ChassisCmd, '{mode: gyroo}')
+    assert "unknown name 'gyroo' for rm_msgs/msg/ChassisCmd (did you mean GYRO?); " \
+        'valid names: PASSIVE (0)' in str(info.value)
 
 
 def test_when_a_name_is_given_for_an_int_field_without_constants_expect_type_error():
