@@ -3,7 +3,7 @@
     bringup --robot standard --sim        # the standard robot on the simulated CAN bus
     bringup --robot hero                  # the hero on its real buses (socketcan)
     bringup --config my_robot.yaml --sim  # any robot config file
-    bringup --sim --params-file extra.yaml  # and overrides, loaded last
+    bringup --sim --params-file extra.yaml  # and overrides, after the robot's config
     bringup --sim --sim-time              # every node on /clock (`rmcli bag play --clock`)
     bringup --sim --foxglove              # and the robot live in Foxglove (ws://127.0.0.1:8765)
     bringup --sim --sim-can socketcan     # rm_sim on the kernel's CAN (vcan can0, can1)
@@ -105,7 +105,8 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     )
     parser.add_argument(
         '--params-file', action='append', default=[], type=pathlib.Path,
-        help='another parameter file, loaded last (repeatable), e.g. can_bridge: log_file',
+        help="another parameter file, after the robot's config (repeatable), e.g. "
+        'can_bridge: log_file',
     )
     parser.add_argument(
         '--sim-time', action='store_true',
