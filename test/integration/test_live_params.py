@@ -48,6 +48,11 @@ def test_a_tunable_key_changes_between_runs_and_the_others_refuse_with_the_reaso
         assert shooter.config.max_hz == 7.5
         assert r.host.get_parameter('shooter.max_hz').value == 7.5
 
+        # the wrong type: refused, and the parameter still describes itself as a double
+        result = _set(r, shooter__max_hz='fast')
+        assert not result.successful and 'max_hz must be double' in result.reason
+        assert r.host.describe_parameter('shooter.max_hz').type == Parameter.Type.DOUBLE.value
+
         # the set's own checks: a step tolerance over half a slot
         result = _set(r, shooter__step_tolerance=3.0)
         assert not result.successful and 'below half a slot' in result.reason

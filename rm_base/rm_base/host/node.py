@@ -351,7 +351,19 @@ class RobotHost(Node):
     # -- callbacks (executor thread) ----------------------------------------------------
 
     def _on_set_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
-        """``ros2 param set``: tunable plugin keys, all of one call together, or none.
+        """``ros2 param set``: the plugins take the call whole or refuse it (see below)."""
+        result = self._take_parameters(parameters)
+        if not result.successful:
+            # rclpy typed the stored descriptor (dynamic typing) after the value it was
+            # offered, so `param describe` said "string" for a double after a refused 'fast'
+            for parameter in parameters:
+                if self.has_parameter(parameter.name):
+                    self.describe_parameter(parameter.name).type = (
+                        self.get_parameter(parameter.name).type_.value)
+        return result
+
+    def _take_parameters(self, parameters: list[Parameter]) -> SetParametersResult:
+        """Tunable plugin keys, all of one call together, or none.
 
         Each plugin checks its keys against its parameter set (bounds, and the set's own
         checks) and takes the new set at the start of its next run, so the values of one
