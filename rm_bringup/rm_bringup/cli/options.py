@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 
 #: Bounds of a rate or a duration [Hz or s]: a wait of 1e9 s (31 years) still fits the
 #: clocks (time_t, a Duration's int64 ns), where `--keep-alive inf` or `-r 1e-300` raised.
@@ -15,9 +16,16 @@ def _number(text: str) -> float:
         value = float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f'{text!r} is not a number') from None
-    if not abs(value) <= LARGEST:  # inf and nan too
-        raise argparse.ArgumentTypeError(f'{text} is not a number up to {LARGEST:g}')
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f'{text} is not a finite number')
+    if abs(value) > LARGEST:
+        raise argparse.ArgumentTypeError(f'{text} is beyond {LARGEST:g}')
     return value
+
+
+def finite_float(text: str) -> float:
+    """A float of either sign, up to LARGEST (targets, gains)."""
+    return _number(text)
 
 
 def positive_float(text: str) -> float:

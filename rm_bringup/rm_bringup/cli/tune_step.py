@@ -29,7 +29,7 @@ from rm_base.control.step_response import StepError, StepFigures, step_figures
 from rm_base.sim.socket_bus import INTERFACE_NAME as SIM_INTERFACE
 
 from .errors import CliError
-from .options import positive_float
+from .options import finite_float, positive_float
 from .ros_node import DISCOVERY_TIMEOUT_S, cli_node
 from .sim_slip import SlipWatch
 
@@ -41,14 +41,14 @@ _GAINS = ('kp', 'ki', 'kd')
 def add_arguments(parser: argparse.ArgumentParser) -> None:
     """Add the options of ``tune step``."""
     parser.add_argument('joint', help='joint name, as in the robot config (e.g. yaw)')
-    parser.add_argument('target', type=float,
+    parser.add_argument('target', type=finite_float,
                         help='where to step to: position [rad] (or velocity [rad/s])')
-    parser.add_argument('--from', dest='start', type=float, default=None,
+    parser.add_argument('--from', dest='start', type=finite_float, default=None,
                         help='hold here first (default: where the joint is)')
     parser.add_argument('--loop', choices=('position', 'velocity'), default=None,
                         help="the joint's loop to step (default: position if it has one)")
     for gain in _GAINS:
-        parser.add_argument(f'--{gain}', type=float, default=None,
+        parser.add_argument(f'--{gain}', type=finite_float, default=None,
                             help=f"that loop's {gain} for this run only")
     parser.add_argument('--hold', type=positive_float, default=1.0,
                         help='seconds at the start before the step (default: 1)')
