@@ -12,11 +12,12 @@ table (its bus, id, type, the loops' form) is read at start-up.
 from __future__ import annotations
 
 import dataclasses
+import math
 import threading
 from collections.abc import Mapping
 from typing import Any
 
-from rm_base.config.schema import InvalidValueError, to_float
+from rm_base.config.schema import InvalidValueError
 from rm_base.control import PidGains
 from rm_base.errors import ConfigError
 from rm_base.hardware.actuators import Actuator
@@ -74,10 +75,10 @@ class LiveGains:
                 )
             if field not in FIELDS:
                 raise InvalidValueError(f'{name} is read at start-up: a change needs a restart')
-            try:
-                changes.setdefault((joint, loop), {})[field] = to_float(value)
-            except InvalidValueError as err:
-                raise InvalidValueError(f'{name} {str(err) or "must be a number"}') from None
+            if isinstance(value, bool) or not isinstance(value, int | float) or math.isnan(value):
+                raise InvalidValueError(f'{name} must be a number, got {value!r}')
+            # PidGains checks the rest as at start-up: a limit may be inf (off), a gain not
+            changes.setdefault((joint, loop), {})[field] = float(value)
         built: dict[str, dict[str, PidGains]] = {}
         for (joint, loop), fields in changes.items():
             try:

@@ -43,6 +43,8 @@ def test_a_call_is_applied_whole_at_the_next_tick_not_before(live):
 @pytest.mark.parametrize(('values', 'match'), [
     ({KP: -1.0}, r'joints\.wheel\.velocity_pid: .*kp'),
     ({KP: 'fast'}, rf'{KP} must be a number'),
+    ({KP: float('nan')}, rf'{KP} must be a number, got nan'),
+    ({KP: float('inf')}, r'joints\.wheel\.velocity_pid: PidGains\.kp must be finite'),
     ({'joints.wheel.velocity_pid.angle_mode': True}, 'needs a restart'),
     ({'joints.yaw.velocity_pid.kp': 1.0}, 'not a positional PID'),
     ({'joints.nobody.velocity_pid.kp': 1.0}, "no joint 'nobody'"),
@@ -52,6 +54,13 @@ def test_a_bad_value_refuses_the_whole_call_naming_the_key(live, values, match):
     with pytest.raises(InvalidValueError, match=match):
         gains.propose({'joints.wheel.velocity_pid.ki': 0.5, **values})
     assert gains(0, 0.001) is False and wheel.applied == []
+
+
+def test_a_limit_may_be_switched_off_live_as_at_start_up(live):
+    gains, wheel = live
+    gains.propose({'joints.wheel.velocity_pid.output_limit': float('inf')})
+    gains(0, 0.001)
+    assert wheel.applied[-1][0].output_limit == float('inf')
 
 
 def test_only_joint_loop_keys_are_taken():
