@@ -26,6 +26,10 @@ from .ros_node import (
 _WAIT_LOG_PERIOD_S = 1.0
 _WAIT_POLL_S = 0.1
 _ACK_TIMEOUT_S = 2.0
+#: After our side matched the subscribers, a wait for theirs [s]. Discovery is two-way,
+#: and a busy robot matched our writer 0.33 s after we had matched its reader: the
+#: message waited for that, arrived with a stale stamp and was refused as stale.
+MATCH_SETTLE_S = 1.0
 
 
 def add_arguments(parser: argparse.ArgumentParser) -> None:
@@ -172,8 +176,11 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _wait_for_subscriptions(
-    publisher, count: int, max_wait_s: float | None, unheard: UnheardWarning
+    publisher, count: int, max_wait_s: float | None, unheard: UnheardWarning, sleep=time.sleep
 ) -> None:
+    """Until count subscribers matched, then MATCH_SETTLE_S for them to match us."""
+    if count == 0:
+        return
     start = time.monotonic()
     last_log = None
     while publisher.get_subscription_count() < count:
@@ -187,7 +194,8 @@ def _wait_for_subscriptions(
                 f'timed out waiting for subscribers: expected {count} subscriber(s) but only got '
                 f'{publisher.get_subscription_count()} in {max_wait_s:g} s'
             )
-        time.sleep(_WAIT_POLL_S)
+        sleep(_WAIT_POLL_S)
+    sleep(MATCH_SETTLE_S)
 
 
 def _flush(publisher, keep_alive_s: float) -> None:
