@@ -12,13 +12,13 @@ table (its bus, id, type, the loops' form) is read at start-up.
 from __future__ import annotations
 
 import dataclasses
-import math
 import threading
 from collections.abc import Mapping
 from typing import Any
 
 from rm_base.config.schema import InvalidValueError
 from rm_base.control import PidGains
+from rm_base.control.validation import require_real
 from rm_base.errors import ConfigError
 from rm_base.hardware.actuators import Actuator
 from rm_base.loop.data import JOINT_GAINS
@@ -75,10 +75,12 @@ class LiveGains:
                 )
             if field not in FIELDS:
                 raise InvalidValueError(f'{name} is read at start-up: a change needs a restart')
-            if isinstance(value, bool) or not isinstance(value, int | float) or math.isnan(value):
-                raise InvalidValueError(f'{name} must be a number, got {value!r}')
-            # PidGains checks the rest as at start-up: a limit may be inf (off), a gain not
-            changes.setdefault((joint, loop), {})[field] = float(value)
+            try:  # a number, not NaN; PidGains checks the rest as at start-up (a limit may
+                # be inf: off; a gain may not)
+                number = require_real(f'joints.{joint}.{loop}', field, value)
+            except ConfigError as err:
+                raise InvalidValueError(str(err)) from None
+            changes.setdefault((joint, loop), {})[field] = number
         built: dict[str, dict[str, PidGains]] = {}
         for (joint, loop), fields in changes.items():
             try:

@@ -43,7 +43,7 @@ def test_a_call_is_applied_whole_at_the_next_tick_not_before(live):
 @pytest.mark.parametrize(('values', 'match'), [
     ({KP: -1.0}, r'joints\.wheel\.velocity_pid: .*kp'),
     ({KP: 'fast'}, rf'{KP} must be a number'),
-    ({KP: float('nan')}, rf'{KP} must be a number, got nan'),
+    ({KP: float('nan')}, rf'{KP} must not be NaN'),
     ({KP: float('inf')}, r'joints\.wheel\.velocity_pid: PidGains\.kp must be finite'),
     ({'joints.wheel.velocity_pid.angle_mode': True}, 'needs a restart'),
     ({'joints.yaw.velocity_pid.kp': 1.0}, 'not a positional PID'),
