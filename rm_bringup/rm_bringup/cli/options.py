@@ -11,7 +11,8 @@ LARGEST = 1e9
 SMALLEST = 1.0 / LARGEST
 
 
-def _number(text: str) -> float:
+def finite_float(text: str) -> float:
+    """A float of either sign, up to LARGEST (targets, gains)."""
     try:
         value = float(text)
     except ValueError:
@@ -23,14 +24,9 @@ def _number(text: str) -> float:
     return value
 
 
-def finite_float(text: str) -> float:
-    """A float of either sign, up to LARGEST (targets, gains)."""
-    return _number(text)
-
-
 def positive_float(text: str) -> float:
     """A float > 0 (rates, durations), within [SMALLEST, LARGEST]."""
-    value = _number(text)
+    value = finite_float(text)
     if not value > 0.0:
         raise argparse.ArgumentTypeError(f'{text} is not positive')
     if value < SMALLEST:
@@ -40,7 +36,7 @@ def positive_float(text: str) -> float:
 
 def nonnegative_float(text: str) -> float:
     """A float >= 0 (offsets, delays), up to LARGEST."""
-    value = _number(text)
+    value = finite_float(text)
     if not value >= 0.0:
         raise argparse.ArgumentTypeError(f'{text} is negative')
     return value
